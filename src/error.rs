@@ -1,0 +1,102 @@
+//! The one error type of the library. Every variant that comes from user input names the file
+//! or flag it came from, and its message says how to fix it.
+
+use std::path::PathBuf;
+
+/// What can go wrong in a knitfit run.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// An input file could not be read.
+    #[error("{path}: cannot read: {source}")]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// The scene file is not valid JSON, or does not match the scene schema.
+    #[error("{path}:{line}:{column}: {message}")]
+    SceneSyntax {
+        path: String,
+        line: usize,
+        column: usize,
+        message: String,
+    },
+    /// A scene field (or the flag that overrides it) has a value the run cannot use.
+    #[error("{path}: {field}: {message}")]
+    InvalidScene {
+        path: String,
+        field: String,
+        message: String,
+    },
+    /// A command-line argument has a value the run cannot use.
+    #[error("{flag}: {message}")]
+    InvalidArgument { flag: String, message: String },
+    /// The run would need more memory than the configured limit.
+    #[error("{what} needs about {estimate_gib:.1} GiB, over the {limit_gib:.1} GiB limit; {how_to_override}")]
+    TooLarge {
+        what: String,
+        estimate_gib: f64,
+        limit_gib: f64,
+        how_to_override: String,
+    },
+    /// The output directory cannot be created or written to.
+    #[error("{path}: output directory is not writable: {source}")]
+    OutputDir {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// An output would replace an input file.
+    #[error("{path}: refusing to overwrite an input file with an output")]
+    WouldOverwriteInput { path: PathBuf },
+    /// Writing an output file failed (nothing is left half-written).
+    #[error("{path}: cannot write: {source}")]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// The time step is above the explicit stability limit and the scene asked to stop rather
+    /// than sub-step.
+    #[error(
+        "solver.time_step {time_step} is above the explicit stability limit {limit:.4} for the \
+         stiffest spring (c1 = {stiffest}); use a time step of at most {limit:.4}, or set \
+         solver.on_unstable to \"substep\""
+    )]
+    TimeStepTooLarge {
+        time_step: f64,
+        limit: f64,
+        stiffest: f64,
+    },
+    /// The relaxation blew up (energy grew without bound, or a value stopped being finite).
+    #[error(
+        "relaxation diverged at step {step} ({what}); nothing was written. Lower solver.time_step \
+         (now {time_step}, stability limit {limit:.4}) or set solver.on_unstable to \"substep\""
+    )]
+    Diverged {
+        step: usize,
+        what: String,
+        time_step: f64,
+        limit: f64,
+    },
+    /// Encoding an output (PNG, glTF) failed.
+    #[error("{what}: {message}")]
+    Encode { what: String, message: String },
+}
+
+impl Error {
+    /// Process exit code: 2 for bad input (files, flags, values), 1 for a run that failed.
+    pub fn exit_code(&self) -> i32 {
+        match self {
+            Error::Read { .. }
+            | Error::SceneSyntax { .. }
+            | Error::InvalidScene { .. }
+            | Error::InvalidArgument { .. }
+            | Error::TooLarge { .. }
+            | Error::OutputDir { .. }
+            | Error::WouldOverwriteInput { .. }
+            | Error::TimeStepTooLarge { .. } => 2,
+            Error::Write { .. } | Error::Diverged { .. } | Error::Encode { .. } => 1,
+        }
+    }
+}
+
+/// Result with the library's error type.
+pub type Result<T> = std::result::Result<T, Error>;

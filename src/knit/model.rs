@@ -1,0 +1,344 @@
+//! The knit as a mass-spring system (Sakaguchi & Miyata §4, Fig. 5): a grid of mass points at the
+//! yarn crossings, joined to their four neighbours by springs that stand for yarn.
+//!
+//! Particle state is kept as parallel arrays ([`Particles`]); springs and the per-point lists the
+//! force loop gathers over are built once, here.
+
+use nalgebra::Vector3;
+
+use super::pattern::{Direction, Tile, YarnKind};
+
+/// 3-vector of `f64`, in metres unless a name says otherwise.
+pub type Vec3 = Vector3<f64>;
+
+/// Index of a mass point: `course * wales + wale`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub struct PointId(pub u32);
+
+impl PointId {
+    /// The index as `usize`, for slicing the particle arrays.
+    pub fn index(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// One piece of yarn between two neighbouring crossings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spring {
+    /// Lower-numbered end (left along a course, below along a wale).
+    pub a: PointId,
+    /// The other end.
+    pub b: PointId,
+    /// Rest length `l` of eq. (1), in metres.
+    pub rest: f64,
+    /// Which yarn this piece belongs to.
+    pub yarn: YarnKind,
+    /// Along the course or along the wale.
+    pub direction: Direction,
+}
+
+/// Particle state as parallel arrays, one entry per point.
+#[derive(Clone, Debug, Default)]
+pub struct Particles {
+    /// Positions, metres.
+    pub x: Vec<Vec3>,
+    /// Velocities, metres per solver time unit.
+    pub v: Vec<Vec3>,
+    /// Inverse mass; 0 pins the point (held edges). The paper uses unit mass.
+    pub inv_mass: Vec<f64>,
+}
+
+impl Particles {
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.x.len()
+    }
+
+    /// True when there are no points.
+    pub fn is_empty(&self) -> bool {
+        self.x.is_empty()
+    }
+}
+
+/// A spring incident to a point, seen from that point.
+#[derive(Clone, Copy, Debug)]
+pub struct Incident {
+    /// Index into [`Knit::springs`].
+    pub spring: u32,
+    /// The point at the other end.
+    pub other: PointId,
+}
+
+/// A connection-force term acting on a point `i` (eq. 2): the tension of spring `j–k`, where `j`
+/// is `i`'s neighbour along the same course and `k` is the next point on from `j`.
+#[derive(Clone, Copy, Debug)]
+pub struct Connection {
+    /// The middle point `j`, towards which `i` is drawn.
+    pub via: PointId,
+    /// Index into [`Knit::springs`] of spring `i–j` (its direction is the force's direction).
+    pub from: u32,
+    /// Index into [`Knit::springs`] of spring `j–k`.
+    pub spring: u32,
+}
+
+/// The knit: grid topology, springs, per-point classes and the particle state.
+#[derive(Clone, Debug)]
+pub struct Knit {
+    /// Points around / across a course.
+    pub wales: usize,
+    /// Points along a wale.
+    pub courses: usize,
+    /// True for a tube: the last wale joins the first (the seam is closed).
+    pub closed_courses: bool,
+    /// Positions, velocities, inverse masses.
+    pub particles: Particles,
+    /// All springs: course springs first (course by course), then wale springs.
+    pub springs: Vec<Spring>,
+    /// Point class 1–4 (paper Fig. 6), per point.
+    pub class: Vec<u8>,
+    /// Yarn of the course through each point.
+    pub course_yarn: Vec<YarnKind>,
+    incident_start: Vec<u32>,
+    incident: Vec<Incident>,
+    connection_start: Vec<u32>,
+    connections: Vec<Connection>,
+}
+
+impl Knit {
+    /// Builds a `wales × courses` grid. `position(wale, course)` gives each point's start position
+    /// in metres; `rest_course` / `rest_wale` are the rest lengths of course and wale springs.
+    pub fn grid(
+        wales: usize,
+        courses: usize,
+        closed_courses: bool,
+        tile: &Tile,
+        rest_course: f64,
+        rest_wale: f64,
+        position: impl Fn(usize, usize) -> Vec3,
+    ) -> Knit {
+        let n = wales * courses;
+        let id = |w: usize, c: usize| PointId((c * wales + w) as u32);
+        let mut x = Vec::with_capacity(n);
+        let mut class = Vec::with_capacity(n);
+        let mut course_yarn = Vec::with_capacity(n);
+        for c in 0..courses {
+            for w in 0..wales {
+                x.push(position(w, c));
+                class.push(tile.point_class(w as isize, c as isize));
+                course_yarn.push(tile.course_yarn(w as isize, c as isize));
+            }
+        }
+
+        let mut springs = Vec::new();
+        // A closed ring needs at least 3 points, or the wrap spring would duplicate another.
+        let wraps = closed_courses && wales >= 3;
+        let course_springs_per_row = if wraps {
+            wales
+        } else {
+            wales.saturating_sub(1)
+        };
+        for c in 0..courses {
+            for w in 0..course_springs_per_row {
+                springs.push(Spring {
+                    a: id(w, c),
+                    b: id((w + 1) % wales, c),
+                    rest: rest_course,
+                    yarn: tile.spring_kind(w as isize, c as isize, Direction::Course),
+                    direction: Direction::Course,
+                });
+            }
+        }
+        for c in 0..courses.saturating_sub(1) {
+            for w in 0..wales {
+                springs.push(Spring {
+                    a: id(w, c),
+                    b: id(w, c + 1),
+                    rest: rest_wale,
+                    yarn: tile.spring_kind(w as isize, c as isize, Direction::Wale),
+                    direction: Direction::Wale,
+                });
+            }
+        }
+
+        let mut per_point: Vec<Vec<Incident>> = vec![Vec::new(); n];
+        for (s, spring) in springs.iter().enumerate() {
+            per_point[spring.a.index()].push(Incident {
+                spring: s as u32,
+                other: spring.b,
+            });
+            per_point[spring.b.index()].push(Incident {
+                spring: s as u32,
+                other: spring.a,
+            });
+        }
+        // Connection terms: for i, each course neighbour j, and j's other course spring j–k.
+        let mut per_point_connections: Vec<Vec<Connection>> = vec![Vec::new(); n];
+        for (i, incident) in per_point.iter().enumerate() {
+            for inc in incident {
+                if springs[inc.spring as usize].direction != Direction::Course {
+                    continue;
+                }
+                let j = inc.other;
+                for onward in &per_point[j.index()] {
+                    let s = &springs[onward.spring as usize];
+                    if s.direction == Direction::Course && onward.other.index() != i {
+                        per_point_connections[i].push(Connection {
+                            via: j,
+                            from: inc.spring,
+                            spring: onward.spring,
+                        });
+                    }
+                }
+            }
+        }
+        let (incident_start, incident) = flatten(per_point);
+        let (connection_start, connections) = flatten(per_point_connections);
+
+        Knit {
+            wales,
+            courses,
+            closed_courses: wraps,
+            particles: Particles {
+                v: vec![Vec3::zeros(); n],
+                inv_mass: vec![1.0; n],
+                x,
+            },
+            springs,
+            class,
+            course_yarn,
+            incident_start,
+            incident,
+            connection_start,
+            connections,
+        }
+    }
+
+    /// Number of mass points.
+    pub fn len(&self) -> usize {
+        self.particles.len()
+    }
+
+    /// True for an empty knit.
+    pub fn is_empty(&self) -> bool {
+        self.particles.is_empty()
+    }
+
+    /// The point at `(wale, course)`.
+    pub fn point(&self, wale: usize, course: usize) -> PointId {
+        PointId((course * self.wales + wale) as u32)
+    }
+
+    /// `(wale, course)` of a point.
+    pub fn grid_coords(&self, p: PointId) -> (usize, usize) {
+        (p.index() % self.wales, p.index() / self.wales)
+    }
+
+    /// Springs incident to point `p`, in a fixed order (the order the force loop sums them in).
+    pub fn incident(&self, p: PointId) -> &[Incident] {
+        let i = p.index();
+        &self.incident[self.incident_start[i] as usize..self.incident_start[i + 1] as usize]
+    }
+
+    /// Connection-force terms acting on point `p` (eq. 2), in a fixed order.
+    pub fn connections(&self, p: PointId) -> &[Connection] {
+        let i = p.index();
+        &self.connections[self.connection_start[i] as usize..self.connection_start[i + 1] as usize]
+    }
+
+    /// Pins point `p` in place (inverse mass 0, velocity 0).
+    pub fn pin(&mut self, p: PointId) {
+        self.particles.inv_mass[p.index()] = 0.0;
+        self.particles.v[p.index()] = Vec3::zeros();
+    }
+
+    /// Indices of points that are free to move.
+    pub fn is_free(&self, p: PointId) -> bool {
+        self.particles.inv_mass[p.index()] > 0.0
+    }
+}
+
+/// Turns per-point lists into a compressed (start offsets + flat entries) layout.
+fn flatten<T>(lists: Vec<Vec<T>>) -> (Vec<u32>, Vec<T>) {
+    let mut start = Vec::with_capacity(lists.len() + 1);
+    let mut flat = Vec::new();
+    start.push(0);
+    for list in lists {
+        flat.extend(list);
+        start.push(flat.len() as u32);
+    }
+    (start, flat)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::knit::pattern::Pattern;
+
+    fn flat(wales: usize, courses: usize, closed: bool) -> Knit {
+        Knit::grid(
+            wales,
+            courses,
+            closed,
+            &Tile::of(Pattern::Alternating),
+            1.0,
+            1.0,
+            |w, c| Vec3::new(w as f64, c as f64, 0.0),
+        )
+    }
+
+    #[test]
+    fn grid_has_four_neighbours_inside_and_fewer_on_the_border() {
+        let knit = flat(4, 3, false);
+        assert_eq!(knit.springs.len(), 3 * 3 + 2 * 4);
+        assert_eq!(knit.incident(knit.point(1, 1)).len(), 4);
+        assert_eq!(knit.incident(knit.point(0, 0)).len(), 2);
+        assert_eq!(knit.incident(knit.point(3, 1)).len(), 3);
+    }
+
+    #[test]
+    fn closed_courses_join_the_seam() {
+        let knit = flat(4, 3, true);
+        assert_eq!(knit.springs.len(), 4 * 3 + 2 * 4);
+        assert_eq!(knit.incident(knit.point(0, 1)).len(), 4);
+        // Every point on a closed course has two connection terms (one through each neighbour).
+        assert_eq!(knit.connections(knit.point(0, 1)).len(), 2);
+    }
+
+    #[test]
+    fn connections_follow_the_course_only() {
+        let knit = flat(4, 3, false);
+        let i = knit.point(0, 1);
+        let terms = knit.connections(i);
+        assert_eq!(
+            terms.len(),
+            1,
+            "end of a course: only one neighbour with a further spring"
+        );
+        assert_eq!(terms[0].via, knit.point(1, 1));
+        let s = knit.springs[terms[0].spring as usize];
+        assert_eq!((s.a, s.b), (knit.point(1, 1), knit.point(2, 1)));
+        assert_eq!(s.direction, Direction::Course);
+    }
+
+    #[test]
+    fn spring_kinds_and_classes_come_from_the_tile() {
+        let knit = flat(4, 4, false);
+        let tile = Tile::of(Pattern::Alternating);
+        for s in &knit.springs {
+            let (w, c) = knit.grid_coords(s.a);
+            assert_eq!(
+                s.yarn,
+                tile.spring_kind(w as isize, c as isize, s.direction)
+            );
+        }
+        for c in 0..4 {
+            for w in 0..4 {
+                let p = knit.point(w, c);
+                assert_eq!(
+                    knit.class[p.index()],
+                    tile.point_class(w as isize, c as isize)
+                );
+            }
+        }
+    }
+}

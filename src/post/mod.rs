@@ -1,0 +1,6 @@
+//! Post-processing of a relaxed knit: measurements now; penetration fix and per-vertex
+//! attributes when fitting exists.
+
+pub mod stitches;
+
+pub use stitches::{anisotropy, measure_stitches, StitchStats};

@@ -1,0 +1,91 @@
+//! Stitch shape measurements on a relaxed grid knit.
+//!
+//! A stitch is a grid cell: points `(w, c)`, `(w+1, c)`, `(w, c+1)`, `(w+1, c+1)`. Its width is the
+//! mean length of its two course edges, its height the mean length of its two wale edges, and its
+//! aspect ratio width / height (1 for a square stitch at equal rest spacing).
+
+use serde::Serialize;
+
+use crate::knit::Knit;
+
+/// Summary of the stitch shapes of a knit. Lengths in metres.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StitchStats {
+    /// Number of stitches (cells) measured.
+    pub stitches: usize,
+    /// Mean stitch width (along the course), metres.
+    pub mean_width_m: f64,
+    /// Mean stitch height (along the wale), metres.
+    pub mean_height_m: f64,
+    /// Mean aspect ratio width / height.
+    pub mean_aspect: f64,
+    /// Smallest aspect ratio.
+    pub min_aspect: f64,
+    /// Largest aspect ratio.
+    pub max_aspect: f64,
+    /// Coefficient of variation (std / mean) of stitch widths: 0 for a uniform stretch.
+    pub width_variation: f64,
+    /// Coefficient of variation of stitch heights.
+    pub height_variation: f64,
+    /// Every stitch's aspect ratio, sorted ascending (not serialised).
+    #[serde(skip)]
+    pub sorted_aspects: Vec<f64>,
+}
+
+/// Measures every cell of an open grid knit. Returns `None` for a knit with no cell.
+pub fn measure_stitches(knit: &Knit) -> Option<StitchStats> {
+    let x = &knit.particles.x;
+    let at = |w: usize, c: usize| x[knit.point(w, c).index()];
+    let mut widths = Vec::new();
+    let mut heights = Vec::new();
+    for c in 0..knit.courses.saturating_sub(1) {
+        for w in 0..knit.wales.saturating_sub(1) {
+            let width =
+                ((at(w + 1, c) - at(w, c)).norm() + (at(w + 1, c + 1) - at(w, c + 1)).norm()) / 2.0;
+            let height =
+                ((at(w, c + 1) - at(w, c)).norm() + (at(w + 1, c + 1) - at(w + 1, c)).norm()) / 2.0;
+            widths.push(width);
+            heights.push(height);
+        }
+    }
+    if widths.is_empty() {
+        return None;
+    }
+    let mut aspects: Vec<f64> = widths.iter().zip(&heights).map(|(w, h)| w / h).collect();
+    aspects.sort_by(f64::total_cmp);
+    let n = widths.len() as f64;
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / n;
+    let variation = |v: &[f64]| {
+        let m = mean(v);
+        (v.iter().map(|a| (a - m).powi(2)).sum::<f64>() / n).sqrt() / m
+    };
+    Some(StitchStats {
+        stitches: widths.len(),
+        mean_width_m: mean(&widths),
+        mean_height_m: mean(&heights),
+        mean_aspect: mean(&aspects),
+        min_aspect: aspects[0],
+        max_aspect: aspects[aspects.len() - 1],
+        width_variation: variation(&widths),
+        height_variation: variation(&heights),
+        sorted_aspects: aspects,
+    })
+}
+
+/// Asymmetry between two patches stretched by the same factor, one along the course and one
+/// along the wale: the RMS difference between the sorted log aspect ratios of the first and the
+/// sorted log inverse aspect ratios of the second. A knit that responds alike in both directions
+/// turns the wale-stretched patch into the transpose of the course-stretched one (for a square
+/// patch), giving 0. Dimensionless; 0.01 is a 1% difference in stitch shape.
+pub fn anisotropy(course_stretched: &StitchStats, wale_stretched: &StitchStats) -> f64 {
+    let a = &course_stretched.sorted_aspects;
+    // 1/aspect sorted ascending is aspect sorted descending.
+    let b = wale_stretched.sorted_aspects.iter().rev();
+    let n = a.len().min(wale_stretched.sorted_aspects.len()).max(1) as f64;
+    let sum_sq: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (x.ln() + y.ln()).powi(2))
+        .sum();
+    (sum_sq / n).sqrt()
+}

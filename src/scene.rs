@@ -1,0 +1,525 @@
+//! The scene file: what to knit, with which yarns, how to solve, which effects to simulate and
+//! which files to write.
+//!
+//! JSON, read with serde. Unknown fields are errors (a typo must not be silently ignored); every
+//! field has a default, so `{}` is a complete scene. Each field's doc gives its unit and default.
+//! [`Scene::validate`] checks values after parsing and names the offending field.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Error, Result};
+use crate::knit::{Pattern, YarnKind};
+
+/// The scene bundled with the binary (`samples/scene.json`), used when no scene file is given.
+pub const BUNDLED_SCENE: &str = include_str!("../samples/scene.json");
+/// How the bundled scene is named in messages and reports.
+pub const BUNDLED_SCENE_NAME: &str = "samples/scene.json (bundled)";
+
+/// A whole scene.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct Scene {
+    /// Knit structure: pattern, rest spacing, connection factor.
+    pub knit: KnitSettings,
+    /// Yarn materials.
+    pub yarns: Yarns,
+    /// Relaxation solver settings.
+    pub solver: SolverSettings,
+    /// Physical effects to simulate (default: `["yarn_connection", "alternating_yarns"]`). The
+    /// spring force of eq. (1) always runs; everything else runs only when listed here.
+    #[serde(default = "default_effects")]
+    pub effects: Vec<Effect>,
+    /// Files to write besides `report.json`, which is always written
+    /// (default: `["ply", "glb", "picture"]`).
+    #[serde(default = "default_outputs")]
+    pub outputs: Vec<Output>,
+    /// The flat-patch experiment (`knitfit patch`).
+    pub patch: PatchSettings,
+}
+
+/// Knit structure.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct KnitSettings {
+    /// `"plain"` (one nylon yarn) or `"alternating"` (nylon and support yarn in alternate courses,
+    /// the paper's 交編). Default: `"alternating"`.
+    pub pattern: Pattern,
+    /// Rest length of a course spring: the distance between neighbouring wales along a course,
+    /// in metres (default: 0.0005, i.e. 20 wales per cm, typical of a sheer stocking).
+    pub course_spacing_m: f64,
+    /// Rest length of a wale spring: the distance between neighbouring courses along a wale,
+    /// in metres (default: 0.0005).
+    pub wale_spacing_m: f64,
+    /// Connection factor c2 of eq. (2), dimensionless (default: 0.2, the paper's value). Used only
+    /// when `effects` lists `yarn_connection`.
+    pub connection_factor: f64,
+}
+
+impl Default for KnitSettings {
+    fn default() -> Self {
+        KnitSettings {
+            pattern: Pattern::Alternating,
+            course_spacing_m: 0.0005,
+            wale_spacing_m: 0.0005,
+            connection_factor: 0.2,
+        }
+    }
+}
+
+/// The two yarn materials.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Yarns {
+    /// Nylon yarn (default: c1 = 1, radius 0.03 mm). The only yarn of a plain pattern.
+    pub nylon: Yarn,
+    /// Support yarn (default: c1 = 10, radius 0.04 mm). Used by the alternating pattern.
+    pub support: Yarn,
+}
+
+impl Default for Yarns {
+    fn default() -> Self {
+        Yarns {
+            nylon: Yarn {
+                stiffness: 1.0,
+                radius_m: 0.00003,
+                colour: [0.16, 0.11, 0.09],
+            },
+            support: Yarn {
+                stiffness: 10.0,
+                radius_m: 0.00004,
+                colour: [0.08, 0.07, 0.10],
+            },
+        }
+    }
+}
+
+impl Yarns {
+    /// The material of a yarn kind.
+    pub fn get(&self, kind: YarnKind) -> &Yarn {
+        match kind {
+            YarnKind::Nylon => &self.nylon,
+            YarnKind::Support => &self.support,
+        }
+    }
+}
+
+/// One yarn material.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Yarn {
+    /// Spring stiffness c1 of eq. (1), per solver time unit squared for a unit mass point
+    /// (force per metre of extension per unit mass). The paper uses 1 for nylon, 10 for support.
+    pub stiffness: f64,
+    /// Yarn radius, metres. Used for drawing and, later, contact offset and coverage.
+    pub radius_m: f64,
+    /// Linear-RGB base colour, each channel 0–1.
+    #[serde(default = "default_colour")]
+    pub colour: [f64; 3],
+}
+
+fn default_colour() -> [f64; 3] {
+    [0.15, 0.1, 0.1]
+}
+
+/// What the solver does when the time step is above the explicit stability limit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum OnUnstable {
+    /// Split each step into equal sub-steps below the limit (default).
+    #[default]
+    Substep,
+    /// Stop with an error naming the limit.
+    Error,
+    /// Run at the given step anyway; the divergence watchdog stops the run if it blows up. For
+    /// experiments that show why the limit matters.
+    Ignore,
+}
+
+/// Relaxation solver settings (the paper's explicit damped steps, §5).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SolverSettings {
+    /// Time step t, in solver time units (default: 0.1, the paper's value).
+    pub time_step: f64,
+    /// Velocity damper: velocities decay as `exp(-damping · t)` each step; per solver time unit
+    /// (default: 1.0, close to the fastest settling of the paper's 10×10 patch; see README).
+    pub damping: f64,
+    /// Convergence tolerance on the relative residual (RMS net force on free points over RMS
+    /// spring-force magnitude) and on the largest move per step relative to the shortest rest
+    /// length (default: 0.001).
+    pub tolerance: f64,
+    /// Step limit; a run that reaches it is reported as not converged (default: 100000).
+    pub max_steps: usize,
+    /// What to do when `time_step` is above the explicit stability limit (default: `"substep"`).
+    pub on_unstable: OnUnstable,
+}
+
+impl Default for SolverSettings {
+    fn default() -> Self {
+        SolverSettings {
+            time_step: 0.1,
+            damping: 1.0,
+            tolerance: 1e-3,
+            max_steps: 100_000,
+            on_unstable: OnUnstable::Substep,
+        }
+    }
+}
+
+/// A physical effect a scene can ask for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Effect {
+    /// The connection force of eq. (2): tension drawn along the course yarn.
+    YarnConnection,
+    /// Nylon and support yarn have their own stiffness. Without it, every spring uses the nylon
+    /// yarn's stiffness even where the pattern lays support yarn (an ablation of the paper).
+    AlternatingYarns,
+}
+
+impl Effect {
+    /// Name as written in scene files and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Effect::YarnConnection => "yarn_connection",
+            Effect::AlternatingYarns => "alternating_yarns",
+        }
+    }
+}
+
+fn default_effects() -> Vec<Effect> {
+    vec![Effect::YarnConnection, Effect::AlternatingYarns]
+}
+
+/// A file a run can write (besides `report.json`, which every run writes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Output {
+    /// PLY: yarn points with an edge element (`patch.ply`).
+    Ply,
+    /// Binary glTF: yarns as line primitives (`patch.glb`).
+    Glb,
+    /// PNG picture of the relaxed stitches (`patch.png`).
+    Picture,
+}
+
+fn default_outputs() -> Vec<Output> {
+    vec![Output::Ply, Output::Glb, Output::Picture]
+}
+
+/// Direction a patch is stretched in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StretchAxis {
+    /// Along the course: the two end wales are held and pulled apart.
+    Course,
+    /// Along the wale: the first and last courses are held and pulled apart.
+    Wale,
+}
+
+impl StretchAxis {
+    /// Name as in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            StretchAxis::Course => "course",
+            StretchAxis::Wale => "wale",
+        }
+    }
+}
+
+/// One stretch of the patch experiment.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Stretch {
+    /// Which pair of edges is held and pulled apart.
+    pub axis: StretchAxis,
+    /// Held-edge distance over rest distance, dimensionless (1 = unstretched).
+    pub factor: f64,
+}
+
+impl std::fmt::Display for Stretch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}={}", self.axis.name(), self.factor)
+    }
+}
+
+/// The flat-patch experiment (paper §5, Fig. 8/9).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PatchSettings {
+    /// Patch size as `[wales, courses]`, points (default: `[10, 10]`, the paper's patch).
+    pub size: [usize; 2],
+    /// Stretches to run, each on a fresh patch; drawn side by side (default: course ×1.5 and
+    /// wale ×1.5, the paper's Fig. 9).
+    pub stretch: Vec<Stretch>,
+}
+
+impl Default for PatchSettings {
+    fn default() -> Self {
+        PatchSettings {
+            size: [10, 10],
+            stretch: vec![
+                Stretch {
+                    axis: StretchAxis::Course,
+                    factor: 1.5,
+                },
+                Stretch {
+                    axis: StretchAxis::Wale,
+                    factor: 1.5,
+                },
+            ],
+        }
+    }
+}
+
+/// Largest stretch factor accepted: beyond it the mass-spring model has long stopped being yarn.
+pub const MAX_STRETCH: f64 = 10.0;
+/// Largest patch accepted without an override, in points.
+pub const MAX_PATCH_POINTS: usize = 4_000_000;
+
+impl Scene {
+    /// Reads and validates a scene file. `name` is how the file is called in messages.
+    pub fn from_json(text: &str, name: &str) -> Result<Scene> {
+        let scene: Scene = serde_json::from_str(text).map_err(|e| syntax_error(name, &e))?;
+        scene.validate(name)?;
+        Ok(scene)
+    }
+
+    /// Reads a scene from a file, or the bundled sample scene when `path` is `None`.
+    pub fn load(path: Option<&Path>) -> Result<Scene> {
+        match path {
+            None => Scene::from_json(BUNDLED_SCENE, BUNDLED_SCENE_NAME),
+            Some(path) => {
+                let text = std::fs::read_to_string(path).map_err(|source| Error::Read {
+                    path: path.to_path_buf(),
+                    source,
+                })?;
+                Scene::from_json(&text, &path.display().to_string())
+            }
+        }
+    }
+
+    /// True when the scene lists `effect`.
+    pub fn has(&self, effect: Effect) -> bool {
+        self.effects.contains(&effect)
+    }
+
+    /// True when the scene asks for `output`.
+    pub fn wants(&self, output: Output) -> bool {
+        self.outputs.contains(&output)
+    }
+
+    /// Checks every value; the error names the field (dotted path) and the scene.
+    pub fn validate(&self, name: &str) -> Result<()> {
+        let bad = |field: &str, message: String| Error::InvalidScene {
+            path: name.to_string(),
+            field: field.to_string(),
+            message,
+        };
+        let positive = |field: &str, value: f64| {
+            if value.is_finite() && value > 0.0 {
+                Ok(())
+            } else {
+                Err(bad(
+                    field,
+                    format!("must be a positive number, got {value}"),
+                ))
+            }
+        };
+        positive("knit.course_spacing_m", self.knit.course_spacing_m)?;
+        positive("knit.wale_spacing_m", self.knit.wale_spacing_m)?;
+        let c2 = self.knit.connection_factor;
+        if !(c2.is_finite() && (0.0..1.0).contains(&c2)) {
+            return Err(bad(
+                "knit.connection_factor",
+                format!("must be in [0, 1), got {c2}"),
+            ));
+        }
+        for kind in YarnKind::ALL {
+            let yarn = self.yarns.get(kind);
+            positive(&format!("yarns.{}.stiffness", kind.name()), yarn.stiffness)?;
+            positive(&format!("yarns.{}.radius_m", kind.name()), yarn.radius_m)?;
+            if yarn
+                .colour
+                .iter()
+                .any(|c| !(c.is_finite() && (0.0..=1.0).contains(c)))
+            {
+                return Err(bad(
+                    &format!("yarns.{}.colour", kind.name()),
+                    format!("each channel must be in [0, 1], got {:?}", yarn.colour),
+                ));
+            }
+        }
+        positive("solver.time_step", self.solver.time_step)?;
+        let damping = self.solver.damping;
+        if !(damping.is_finite() && damping >= 0.0) {
+            return Err(bad(
+                "solver.damping",
+                format!("must be zero or positive, got {damping}"),
+            ));
+        }
+        let tol = self.solver.tolerance;
+        if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
+            return Err(bad(
+                "solver.tolerance",
+                format!("must be in (0, 1), got {tol}"),
+            ));
+        }
+        if self.solver.max_steps == 0 {
+            return Err(bad("solver.max_steps", "must be at least 1".into()));
+        }
+        if self.knit.pattern == Pattern::Plain && self.has(Effect::AlternatingYarns) {
+            return Err(bad(
+                "effects",
+                "\"alternating_yarns\" needs knit.pattern \"alternating\" (a plain pattern has \
+                 one yarn)"
+                    .into(),
+            ));
+        }
+        self.validate_patch(name)
+    }
+
+    fn validate_patch(&self, name: &str) -> Result<()> {
+        let [wales, courses] = self.patch.size;
+        if wales < 2 || courses < 2 {
+            return Err(Error::InvalidScene {
+                path: name.to_string(),
+                field: "patch.size".into(),
+                message: format!(
+                    "must be at least 2×2 points (two held edges), got {wales}×{courses}"
+                ),
+            });
+        }
+        check_patch_points(wales, courses).map_err(|message| Error::InvalidScene {
+            path: name.to_string(),
+            field: "patch.size".into(),
+            message,
+        })?;
+        if self.patch.stretch.is_empty() {
+            return Err(Error::InvalidScene {
+                path: name.to_string(),
+                field: "patch.stretch".into(),
+                message: "needs at least one stretch, e.g. {\"axis\": \"course\", \"factor\": 1.5}"
+                    .into(),
+            });
+        }
+        for (i, s) in self.patch.stretch.iter().enumerate() {
+            check_stretch_factor(s.factor).map_err(|message| Error::InvalidScene {
+                path: name.to_string(),
+                field: format!("patch.stretch[{i}].factor"),
+                message,
+            })?;
+        }
+        Ok(())
+    }
+}
+
+/// Checks a patch size against [`MAX_PATCH_POINTS`].
+pub fn check_patch_points(wales: usize, courses: usize) -> std::result::Result<(), String> {
+    match wales.checked_mul(courses) {
+        Some(n) if n <= MAX_PATCH_POINTS => Ok(()),
+        _ => Err(format!(
+            "{wales}×{courses} points is over the patch limit of {MAX_PATCH_POINTS} points"
+        )),
+    }
+}
+
+/// Checks a stretch factor is usable.
+pub fn check_stretch_factor(factor: f64) -> std::result::Result<(), String> {
+    if factor.is_finite() && factor > 0.0 && factor <= MAX_STRETCH {
+        Ok(())
+    } else {
+        Err(format!("must be in (0, {MAX_STRETCH}], got {factor}"))
+    }
+}
+
+/// Turns a serde_json error into a one-line `path:line:column: message` error.
+fn syntax_error(name: &str, e: &serde_json::Error) -> Error {
+    let full = e.to_string();
+    // serde_json appends " at line L column C"; we print the position in front instead.
+    let message = match full.rfind(" at line ") {
+        Some(at) => full[..at].to_string(),
+        None => full,
+    };
+    Error::SceneSyntax {
+        path: name.to_string(),
+        line: e.line(),
+        column: e.column(),
+        message,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn empty_object_is_the_default_scene() {
+        let scene = Scene::from_json("{}", "t").unwrap();
+        assert_eq!(
+            scene,
+            Scene {
+                effects: default_effects(),
+                outputs: default_outputs(),
+                ..Scene::default()
+            }
+        );
+    }
+
+    #[test]
+    fn bundled_scene_is_valid() {
+        Scene::load(None).unwrap();
+    }
+
+    #[test]
+    fn malformed_json_reports_line_and_column() {
+        let err = Scene::from_json(
+            "{\n  \"knit\": {\n    \"pattern\": \"plain\",,\n}",
+            "s.json",
+        )
+        .unwrap_err();
+        let text = err.to_string();
+        assert!(text.starts_with("s.json:3:"), "{text}");
+        assert!(!text.contains(" at line "), "{text}");
+    }
+
+    #[test]
+    fn unknown_field_is_named() {
+        let err = Scene::from_json("{\"solver\": {\"timestep\": 0.1}}", "s.json").unwrap_err();
+        assert!(
+            err.to_string().contains("unknown field `timestep`"),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn negative_stiffness_names_the_field() {
+        let err = Scene::from_json(
+            r#"{"yarns": {"support": {"stiffness": -1, "radius_m": 1e-5}}}"#,
+            "s.json",
+        )
+        .unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "s.json: yarns.support.stiffness: must be a positive number, got -1"
+        );
+    }
+
+    #[test]
+    fn plain_pattern_with_alternating_yarns_is_refused() {
+        let err = Scene::from_json(
+            r#"{"knit": {"pattern": "plain"}, "effects": ["alternating_yarns"]}"#,
+            "s.json",
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("alternating_yarns"), "{err}");
+    }
+
+    #[test]
+    fn zero_patch_size_is_refused() {
+        let err = Scene::from_json(r#"{"patch": {"size": [0, 10]}}"#, "s.json").unwrap_err();
+        assert!(err.to_string().contains("patch.size"), "{err}");
+    }
+}
