@@ -1,0 +1,88 @@
+//! Writers for the files a run produces. One [`YarnGeometry`] feeds every format, so PLY and glTF
+//! carry the same points, segments and attributes.
+//!
+//! Every writer returns bytes; [`atomic::write_all`] puts them on disk (temporary name, then
+//! rename), so a failed run leaves nothing half-written.
+
+pub mod atomic;
+pub mod gltf;
+pub mod ply;
+
+use std::collections::BTreeMap;
+
+use crate::knit::{Direction, Knit, YarnKind};
+
+/// Yarn points, the segments between them and per-point attributes, ready to write.
+///
+/// Positions are in metres, glTF convention (Y up). Attribute names are written as-is to PLY
+/// (`course`) and upper-cased with a `_` prefix to glTF (`_COURSE`). A `BTreeMap` keeps the
+/// order, and so the bytes, deterministic.
+#[derive(Clone, Debug, PartialEq)]
+pub struct YarnGeometry {
+    /// Name of this part (a glTF node name, a PLY comment).
+    pub name: String,
+    /// Where the part is placed for viewing, metres: a glTF node translation; added to the PLY
+    /// positions (and said so in the PLY header), as PLY has no transforms.
+    pub offset_m: [f64; 3],
+    /// Point positions, metres.
+    pub positions: Vec<[f64; 3]>,
+    /// Per-point attributes, one value per position: `course`, `wale`, `class`, `yarn_kind`, ….
+    pub point_attributes: BTreeMap<String, Vec<f32>>,
+    /// Yarn segments (springs).
+    pub segments: Vec<Segment>,
+}
+
+/// One yarn segment between two points of a [`YarnGeometry`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Segment {
+    /// Index of the first point.
+    pub a: u32,
+    /// Index of the second point.
+    pub b: u32,
+    /// The yarn this segment belongs to.
+    pub yarn: YarnKind,
+    /// Along the course or along the wale.
+    pub direction: Direction,
+}
+
+impl YarnGeometry {
+    /// The yarn geometry of a knit: every point with its `course`, `wale`, `class` and
+    /// `yarn_kind` (the yarn of its course), every spring as a segment.
+    pub fn from_knit(name: &str, knit: &Knit, offset_m: [f64; 3]) -> YarnGeometry {
+        let n = knit.len();
+        let mut course = Vec::with_capacity(n);
+        let mut wale = Vec::with_capacity(n);
+        for i in 0..n {
+            let (w, c) = knit.grid_coords(crate::knit::PointId(i as u32));
+            course.push(c as f32);
+            wale.push(w as f32);
+        }
+        let mut point_attributes = BTreeMap::new();
+        point_attributes.insert("course".to_string(), course);
+        point_attributes.insert("wale".to_string(), wale);
+        point_attributes.insert(
+            "class".to_string(),
+            knit.class.iter().map(|&c| c as f32).collect(),
+        );
+        point_attributes.insert(
+            "yarn_kind".to_string(),
+            knit.course_yarn.iter().map(|k| k.index() as f32).collect(),
+        );
+        YarnGeometry {
+            name: name.to_string(),
+            offset_m,
+            positions: knit.particles.x.iter().map(|p| [p.x, p.y, p.z]).collect(),
+            point_attributes,
+            segments: knit
+                .springs
+                .iter()
+                .map(|s| Segment {
+                    a: s.a.0,
+                    b: s.b.0,
+                    yarn: s.yarn,
+                    direction: s.direction,
+                })
+                .collect(),
+        }
+    }
+}

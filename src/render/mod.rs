@@ -1,0 +1,3 @@
+//! Pictures: the flat-patch drawing now; the yarn-level preview renderer later.
+
+pub mod patch_picture;
