@@ -1,0 +1,313 @@
+//! The command line's contract: outputs, report, determinism, and clean refusals of bad input.
+
+use crate::util::{files_in, knitfit, knitfit_env, report, stderr, stdout, write};
+
+const ALL_FILES: [&str; 4] = ["patch.glb", "patch.ply", "patch.png", "report.json"];
+
+#[test]
+fn no_arguments_runs_the_bundled_sample_and_says_where_outputs_went() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = knitfit(dir.path(), &[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(files_in(&dir.path().join("out")), ALL_FILES);
+    let text = stdout(&out);
+    assert!(text.contains("wrote to out/"), "{text}");
+    assert!(text.contains("converged"), "{text}");
+}
+
+#[test]
+fn help_lists_the_subcommands() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = knitfit(dir.path(), &["--help"]);
+    assert!(out.status.success());
+    assert!(stdout(&out).contains("patch"));
+}
+
+#[test]
+fn report_has_the_agreed_fields_and_stages_in_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = knitfit(
+        dir.path(),
+        &[
+            "patch",
+            "--size",
+            "8x6",
+            "--stretch",
+            "wale=1.2",
+            "--out",
+            "o",
+            "-q",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stdout(&out).is_empty(), "-q prints nothing");
+    let r = report(&dir.path().join("o"));
+    assert_eq!(r["command"], "patch");
+    assert_eq!(
+        r["effects"],
+        serde_json::json!(["yarn_connection", "alternating_yarns"])
+    );
+    let stages: Vec<&str> = r["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        stages,
+        [
+            "knit wale=1.2",
+            "relax wale=1.2",
+            "measure stitches",
+            "encode patch.ply",
+            "encode patch.glb",
+            "encode patch.png",
+            "write files"
+        ]
+    );
+    assert!(r["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .all(|s| s["seconds"].as_f64().unwrap() >= 0.0));
+    assert_eq!(r["metrics"]["points"], 48);
+    assert_eq!(r["metrics"]["converged"], true);
+    assert!(r["metrics"]["residual"].as_f64().unwrap() < 1e-3);
+    assert!(r["metrics"]["steps"].as_u64().unwrap() > 0);
+    assert_eq!(
+        r["outputs"],
+        serde_json::json!(["patch.ply", "patch.glb", "patch.png", "report.json"])
+    );
+    assert!(r["wall_seconds"].as_f64().unwrap() > 0.0);
+}
+
+#[test]
+fn only_the_outputs_and_effects_the_scene_names_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write(
+        dir.path(),
+        "s.json",
+        r#"{"effects": ["alternating_yarns"], "outputs": ["glb"]}"#,
+    );
+    let out = knitfit(
+        dir.path(),
+        &["patch", scene.to_str().unwrap(), "--out", "o"],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(
+        files_in(&dir.path().join("o")),
+        ["patch.glb", "report.json"]
+    );
+    let r = report(&dir.path().join("o"));
+    assert_eq!(r["effects"], serde_json::json!(["alternating_yarns"]));
+    let stages = r["stages"].to_string();
+    assert!(
+        !stages.contains("ply") && !stages.contains("png"),
+        "{stages}"
+    );
+    assert!(r["details"].get("anisotropy").is_some());
+}
+
+#[test]
+fn outputs_are_byte_identical_across_runs_and_thread_counts() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write(
+        dir.path(),
+        "s.json",
+        r#"{"patch": {"size": [70, 70]}, "solver": {"max_steps": 300}}"#,
+    );
+    let run = |out: &str, threads: &str| {
+        let o = knitfit_env(
+            dir.path(),
+            &["patch", "s.json", "--out", out, "-q"],
+            &[("RAYON_NUM_THREADS", threads)],
+        );
+        // 300 steps do not settle 70×70: exit 3, files written.
+        assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    };
+    let _ = scene;
+    run("a", "1");
+    run("b", "2");
+    run("c", "2");
+    for file in ["patch.ply", "patch.glb", "patch.png"] {
+        let a = std::fs::read(dir.path().join("a").join(file)).unwrap();
+        assert_eq!(
+            a,
+            std::fs::read(dir.path().join("b").join(file)).unwrap(),
+            "{file}: 1 vs 2 threads"
+        );
+        assert_eq!(
+            a,
+            std::fs::read(dir.path().join("c").join(file)).unwrap(),
+            "{file}: run to run"
+        );
+    }
+    assert_eq!(report(&dir.path().join("a"))["metrics"]["converged"], false);
+}
+
+/// Runs knitfit expecting a one-line error with exit code 2 and no output directory.
+fn refused(args: &[&str], files: &[(&str, &str)], expect: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, text) in files {
+        write(dir.path(), name, text);
+    }
+    let out = knitfit(dir.path(), args);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert_eq!(err.lines().count(), 1, "one line: {err}");
+    assert!(
+        err.contains(expect),
+        "{args:?}: expected {expect:?} in {err}"
+    );
+    assert!(
+        files_in(&dir.path().join("out")).is_empty(),
+        "nothing written for {args:?}"
+    );
+}
+
+#[test]
+fn malformed_json_is_refused_with_line_and_column() {
+    refused(
+        &["patch", "bad.json"],
+        &[(
+            "bad.json",
+            "{\n  \"knit\": {\n    \"pattern\": \"plain\",,\n  }\n}",
+        )],
+        "bad.json:3:",
+    );
+}
+
+#[test]
+fn unknown_field_is_refused() {
+    refused(
+        &["patch", "s.json"],
+        &[("s.json", r#"{"solver": {"step": 0.1}}"#)],
+        "unknown field `step`",
+    );
+}
+
+#[test]
+fn negative_stiffness_is_refused() {
+    refused(
+        &["patch", "s.json"],
+        &[(
+            "s.json",
+            r#"{"yarns": {"nylon": {"stiffness": -1, "radius_m": 3e-5}}}"#,
+        )],
+        "s.json: yarns.nylon.stiffness: must be a positive number, got -1",
+    );
+}
+
+#[test]
+fn zero_size_is_refused() {
+    refused(
+        &["patch", "--size", "0x10"],
+        &[],
+        "--size: a patch needs at least 2x2 points",
+    );
+    refused(
+        &["patch", "s.json"],
+        &[("s.json", r#"{"patch": {"size": [10, 0]}}"#)],
+        "patch.size",
+    );
+}
+
+#[test]
+fn bad_stretch_flag_is_refused() {
+    refused(
+        &["patch", "--stretch", "diagonal=2"],
+        &[],
+        "--stretch: axis must be course or wale",
+    );
+    refused(
+        &["patch", "--stretch", "course=-1"],
+        &[],
+        "--stretch: must be in (0, 10]",
+    );
+}
+
+#[test]
+fn missing_scene_file_is_refused() {
+    refused(&["patch", "nope.json"], &[], "nope.json: cannot read");
+}
+
+#[test]
+fn unwritable_output_directory_is_refused_and_nothing_is_written() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "file", "not a directory");
+    let out = knitfit(dir.path(), &["patch", "--out", "file/out"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert_eq!(stderr(&out).lines().count(), 1);
+    assert!(
+        stderr(&out).contains("file/out: output directory is not writable"),
+        "{}",
+        stderr(&out)
+    );
+    assert_eq!(files_in(dir.path()), ["file"]);
+}
+
+#[test]
+fn unstable_step_with_on_unstable_error_is_refused_before_writing() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "s.json",
+        r#"{"solver": {"time_step": 2.0, "on_unstable": "error"}}"#,
+    );
+    let out = knitfit(dir.path(), &["patch", "s.json"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("above the explicit stability limit"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(files_in(&dir.path().join("out")).is_empty());
+}
+
+#[test]
+fn diverging_run_stops_with_a_clear_message_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "s.json",
+        r#"{"solver": {"time_step": 2.0, "on_unstable": "ignore"}}"#,
+    );
+    let out = knitfit(dir.path(), &["patch", "s.json"]);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(stderr(&out).contains("diverged"), "{}", stderr(&out));
+    assert!(files_in(&dir.path().join("out")).is_empty());
+}
+
+#[test]
+fn written_files_read_back() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = knitfit(
+        dir.path(),
+        &["patch", "--size", "6x5", "--stretch", "course=1.4", "-q"],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let o = dir.path().join("out");
+
+    let (doc, buffers, _) = gltf::import(o.join("patch.glb")).unwrap();
+    let node = doc.nodes().next().unwrap();
+    assert_eq!(node.name(), Some("patch course=1.4"));
+    let mesh = node.mesh().unwrap();
+    let mut segments = 0;
+    for prim in mesh.primitives() {
+        assert_eq!(prim.mode(), gltf::mesh::Mode::Lines);
+        let reader = prim.reader(|b| Some(&buffers[b.index()]));
+        assert_eq!(reader.read_positions().unwrap().count(), 30);
+        segments += reader.read_indices().unwrap().into_u32().count() / 2;
+    }
+    assert_eq!(segments, 5 * 5 + 4 * 6, "every spring once");
+
+    let mut file = std::fs::File::open(o.join("patch.ply")).unwrap();
+    let ply = ply_rs_bw::parser::Parser::<ply_rs_bw::ply::DefaultElement>::new()
+        .read_ply(&mut file)
+        .unwrap();
+    assert_eq!(ply.payload["vertex"].len(), 30);
+    assert_eq!(ply.payload["edge"].len(), 49);
+
+    let png = image::open(o.join("patch.png")).unwrap();
+    assert!(png.width() > 0 && png.height() > 0);
+}

@@ -1,0 +1,6 @@
+//! Integration tests: the physics the paper claims, the command line's contract, and the files.
+//! One test binary (see ripgrep); modules by topic.
+
+mod cli;
+mod physics;
+mod util;
