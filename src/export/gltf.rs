@@ -21,17 +21,23 @@ use crate::knit::YarnKind;
 /// `offset_m`. `yarn_colours` are linear RGB per yarn kind (nylon, support).
 pub fn write_glb(parts: &[YarnGeometry], yarn_colours: [[f64; 3]; 2]) -> Result<Vec<u8>> {
     let mut doc = GlbBuilder::default();
+    // A material per yarn kind that some segment uses (an unused one is a validator notice).
     let materials = YarnKind::ALL.map(|kind| {
-        let [r, g, b] = yarn_colours[kind.index() as usize].map(|c| c as f32);
-        doc.root.push(json::Material {
-            name: Some(kind.name().to_string()),
-            pbr_metallic_roughness: json::material::PbrMetallicRoughness {
-                base_color_factor: json::material::PbrBaseColorFactor([r, g, b, 1.0]),
-                metallic_factor: json::material::StrengthFactor(0.0),
-                roughness_factor: json::material::StrengthFactor(0.6),
+        let used = parts
+            .iter()
+            .any(|p| p.segments.iter().any(|s| s.yarn == kind));
+        used.then(|| {
+            let [r, g, b] = yarn_colours[kind.index() as usize].map(|c| c as f32);
+            doc.root.push(json::Material {
+                name: Some(kind.name().to_string()),
+                pbr_metallic_roughness: json::material::PbrMetallicRoughness {
+                    base_color_factor: json::material::PbrBaseColorFactor([r, g, b, 1.0]),
+                    metallic_factor: json::material::StrengthFactor(0.0),
+                    roughness_factor: json::material::StrengthFactor(0.6),
+                    ..Default::default()
+                },
                 ..Default::default()
-            },
-            ..Default::default()
+            })
         })
     });
 
@@ -64,7 +70,7 @@ pub fn write_glb(parts: &[YarnGeometry], yarn_colours: [[f64; 3]; 2]) -> Result<
                 extensions: None,
                 extras: Default::default(),
                 indices: Some(doc.indices(&indices)),
-                material: Some(materials[kind.index() as usize]),
+                material: materials[kind.index() as usize],
                 mode: Valid(json::mesh::Mode::Lines),
                 targets: None,
             });
@@ -299,6 +305,19 @@ mod tests {
         let view = course.view().unwrap();
         let data = &buffers[0][view.offset()..view.offset() + view.length()];
         assert_eq!(f32::from_le_bytes(data[8..12].try_into().unwrap()), 1.0);
+    }
+
+    #[test]
+    fn only_used_yarn_kinds_get_a_material() {
+        let mut nylon_only = part("a", 0.0);
+        nylon_only.segments.retain(|s| s.yarn == YarnKind::Nylon);
+        let bytes = write_glb(&[nylon_only], [[0.1; 3]; 2]).unwrap();
+        let (doc, _, _) = gltf::import_slice(&bytes).unwrap();
+        let names: Vec<_> = doc
+            .materials()
+            .map(|m| m.name().unwrap().to_string())
+            .collect();
+        assert_eq!(names, ["nylon"]);
     }
 
     #[test]
