@@ -119,9 +119,16 @@ fn patch(args: PatchArgs, quiet: bool) -> Result<ExitCode, Error> {
     if m.converged {
         Ok(ExitCode::SUCCESS)
     } else {
+        // A patch squeezed in its plane has no stable flat rest state: the square spring grid
+        // has no shear stiffness, so it buckles instead of settling.
+        let hint = if scene.patch.stretch.iter().any(|s| s.factor < 1.0) {
+            "a patch compressed below its rest size (stretch < 1) buckles and has no flat rest state"
+        } else {
+            "raise solver.max_steps, or solver.damping if the residual oscillates"
+        };
         eprintln!(
             "knitfit: warning: did not converge within solver.max_steps = {} (residual {:.2e}, \
-             tolerance {:.0e}); raise max_steps or damping",
+             tolerance {:.0e}); {hint}",
             scene.solver.max_steps, m.residual, scene.solver.tolerance
         );
         Ok(ExitCode::from(EXIT_NOT_CONVERGED))

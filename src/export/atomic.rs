@@ -6,13 +6,15 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 
-/// Creates `dir` if needed and proves it is writable, before any work is done, so that a run
-/// whose outputs cannot be written fails at once and writes nothing.
-pub fn prepare_dir(dir: &Path) -> Result<()> {
+/// Creates `dir` if needed, proves it is writable, and checks that none of the `files` it will
+/// receive is one of the `inputs`: all before any work is done, so that a run whose outputs
+/// cannot be written fails at once and writes nothing.
+pub fn prepare_dir(dir: &Path, files: &[&str], inputs: &[PathBuf]) -> Result<()> {
     let fail = |source| Error::OutputDir {
         path: dir.to_path_buf(),
         source,
     };
+    refuse_inputs(dir, files.iter().copied(), inputs)?;
     std::fs::create_dir_all(dir).map_err(fail)?;
     let probe = dir.join(format!(".knitfit-probe-{}", std::process::id()));
     std::fs::File::create(&probe).map_err(fail)?;
@@ -28,14 +30,8 @@ pub fn write_all(
     files: &[(String, Vec<u8>)],
     inputs: &[PathBuf],
 ) -> Result<Vec<PathBuf>> {
+    refuse_inputs(dir, files.iter().map(|(name, _)| name.as_str()), inputs)?;
     let targets: Vec<PathBuf> = files.iter().map(|(name, _)| dir.join(name)).collect();
-    for target in &targets {
-        if inputs.iter().any(|input| same_file(input, target)) {
-            return Err(Error::WouldOverwriteInput {
-                path: target.clone(),
-            });
-        }
-    }
     let mut temps: Vec<PathBuf> = Vec::new();
     let cleanup = |temps: &[PathBuf]| {
         for t in temps {
@@ -66,6 +62,21 @@ pub fn write_all(
     Ok(targets)
 }
 
+/// Fails if any `dir/name` is one of the `inputs`.
+fn refuse_inputs<'a>(
+    dir: &Path,
+    names: impl Iterator<Item = &'a str>,
+    inputs: &[PathBuf],
+) -> Result<()> {
+    for name in names {
+        let target = dir.join(name);
+        if inputs.iter().any(|input| same_file(input, &target)) {
+            return Err(Error::WouldOverwriteInput { path: target });
+        }
+    }
+    Ok(())
+}
+
 /// True when both paths name the same existing file.
 fn same_file(a: &Path, b: &Path) -> bool {
     match (a.canonicalize(), b.canonicalize()) {
@@ -91,7 +102,7 @@ mod tests {
     fn writes_every_file_and_leaves_no_temporaries() {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("new/sub");
-        prepare_dir(&out).unwrap();
+        prepare_dir(&out, &["a.txt", "b.txt"], &[]).unwrap();
         let files = vec![
             ("a.txt".to_string(), b"A".to_vec()),
             ("b.txt".to_string(), b"B".to_vec()),
@@ -106,7 +117,7 @@ mod tests {
     fn directory_under_a_file_is_refused() {
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(dir.path().join("f"), "x").unwrap();
-        let err = prepare_dir(&dir.path().join("f/out")).unwrap_err();
+        let err = prepare_dir(&dir.path().join("f/out"), &[], &[]).unwrap_err();
         assert!(matches!(err, Error::OutputDir { .. }), "{err}");
     }
 

@@ -46,7 +46,13 @@ pub fn run_patch(
 ) -> Result<PatchOutcome> {
     let plan = Plan::patch(scene);
     let mut clock = StageClock::default();
-    export::atomic::prepare_dir(&paths.out_dir)?;
+    let file_names: Vec<&str> = plan
+        .files
+        .iter()
+        .map(|(_, name)| *name)
+        .chain(["report.json"])
+        .collect();
+    export::atomic::prepare_dir(&paths.out_dir, &file_names, &paths.inputs)?;
 
     let spec = PatchSpec {
         wales: scene.patch.size[0],

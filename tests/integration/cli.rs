@@ -247,6 +247,23 @@ fn unwritable_output_directory_is_refused_and_nothing_is_written() {
 }
 
 #[test]
+fn an_output_never_overwrites_the_scene_file() {
+    // The scene lives where report.json would be written.
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("o")).unwrap();
+    let scene = write(&dir.path().join("o"), "report.json", "{}");
+    let out = knitfit(dir.path(), &["patch", "o/report.json", "--out", "o"]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("refusing to overwrite an input"),
+        "{}",
+        stderr(&out)
+    );
+    assert_eq!(std::fs::read_to_string(scene).unwrap(), "{}");
+    assert_eq!(files_in(&dir.path().join("o")), ["report.json"]);
+}
+
+#[test]
 fn unstable_step_with_on_unstable_error_is_refused_before_writing() {
     let dir = tempfile::tempdir().unwrap();
     write(
