@@ -245,34 +245,8 @@ impl GlbBuilder {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::export::Segment;
-    use crate::knit::Direction;
 
-    fn part(name: &str, offset_x: f64) -> YarnGeometry {
-        let mut point_attributes = BTreeMap::new();
-        point_attributes.insert("course".to_string(), vec![0.0, 0.0, 1.0]);
-        point_attributes.insert("yarn_kind".to_string(), vec![0.0, 0.0, 1.0]);
-        YarnGeometry {
-            name: name.into(),
-            offset_m: [offset_x, 0.0, 0.0],
-            positions: vec![[0.0, 0.0, 0.0], [0.001, 0.0, 0.0], [0.0, 0.002, 0.0]],
-            point_attributes,
-            segments: vec![
-                Segment {
-                    a: 0,
-                    b: 1,
-                    yarn: YarnKind::Nylon,
-                    direction: Direction::Course,
-                },
-                Segment {
-                    a: 0,
-                    b: 2,
-                    yarn: YarnKind::Support,
-                    direction: Direction::Wale,
-                },
-            ],
-        }
-    }
+    use crate::export::sample_geometry as part;
 
     #[test]
     fn round_trips_through_the_gltf_reader() {

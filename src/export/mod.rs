@@ -86,3 +86,33 @@ impl YarnGeometry {
         }
     }
 }
+
+/// A three-point, two-segment geometry (one nylon course segment, one support wale segment)
+/// with `course`, `wale` and `yarn_kind` attributes, for the writers' tests.
+#[cfg(test)]
+pub(crate) fn sample_geometry(name: &str, offset_x: f64) -> YarnGeometry {
+    let mut point_attributes = BTreeMap::new();
+    point_attributes.insert("course".to_string(), vec![0.0, 0.0, 1.0]);
+    point_attributes.insert("wale".to_string(), vec![0.0, 1.0, 0.0]);
+    point_attributes.insert("yarn_kind".to_string(), vec![0.0, 0.0, 1.0]);
+    YarnGeometry {
+        name: name.into(),
+        offset_m: [offset_x, 0.0, 0.0],
+        positions: vec![[0.0, 0.0, 0.0], [0.001, 0.0, 0.0], [0.0, 0.002, 0.0]],
+        point_attributes,
+        segments: vec![
+            Segment {
+                a: 0,
+                b: 1,
+                yarn: YarnKind::Nylon,
+                direction: Direction::Course,
+            },
+            Segment {
+                a: 0,
+                b: 2,
+                yarn: YarnKind::Support,
+                direction: Direction::Wale,
+            },
+        ],
+    }
+}

@@ -145,15 +145,21 @@ fn outputs_are_byte_identical_across_runs_and_thread_counts() {
     assert_eq!(report(&dir.path().join("a"))["metrics"]["converged"], false);
 }
 
-/// Runs knitfit expecting a one-line error with exit code 2 and no output directory.
+/// Runs knitfit expecting a one-line error with exit code 2 (bad input) and no output.
 fn refused(args: &[&str], files: &[(&str, &str)], expect: &str) {
+    fails(2, args, files, expect);
+}
+
+/// Runs knitfit in a fresh directory holding `files`, expecting exit `code`, a one-line error
+/// containing `expect`, and nothing written to `out/`.
+fn fails(code: i32, args: &[&str], files: &[(&str, &str)], expect: &str) {
     let dir = tempfile::tempdir().unwrap();
     for (name, text) in files {
         write(dir.path(), name, text);
     }
     let out = knitfit(dir.path(), args);
     let err = stderr(&out);
-    assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+    assert_eq!(out.status.code(), Some(code), "{args:?}: {err}");
     assert_eq!(err.lines().count(), 1, "one line: {err}");
     assert!(
         err.contains(expect),
@@ -265,34 +271,18 @@ fn an_output_never_overwrites_the_scene_file() {
 
 #[test]
 fn unstable_step_with_on_unstable_error_is_refused_before_writing() {
-    let dir = tempfile::tempdir().unwrap();
-    write(
-        dir.path(),
-        "s.json",
-        r#"{"solver": {"time_step": 2.0, "on_unstable": "error"}}"#,
+    let scene = r#"{"solver": {"time_step": 2.0, "on_unstable": "error"}}"#;
+    refused(
+        &["patch", "s.json"],
+        &[("s.json", scene)],
+        "above the explicit stability limit",
     );
-    let out = knitfit(dir.path(), &["patch", "s.json"]);
-    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
-    assert!(
-        stderr(&out).contains("above the explicit stability limit"),
-        "{}",
-        stderr(&out)
-    );
-    assert!(files_in(&dir.path().join("out")).is_empty());
 }
 
 #[test]
 fn diverging_run_stops_with_a_clear_message_and_writes_nothing() {
-    let dir = tempfile::tempdir().unwrap();
-    write(
-        dir.path(),
-        "s.json",
-        r#"{"solver": {"time_step": 2.0, "on_unstable": "ignore"}}"#,
-    );
-    let out = knitfit(dir.path(), &["patch", "s.json"]);
-    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
-    assert!(stderr(&out).contains("diverged"), "{}", stderr(&out));
-    assert!(files_in(&dir.path().join("out")).is_empty());
+    let scene = r#"{"solver": {"time_step": 2.0, "on_unstable": "ignore"}}"#;
+    fails(1, &["patch", "s.json"], &[("s.json", scene)], "diverged");
 }
 
 #[test]
