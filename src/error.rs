@@ -27,6 +27,10 @@ pub enum Error {
         field: String,
         message: String,
     },
+    /// The leg file cannot be used: not glTF, no triangles, compressed geometry, bad values, or
+    /// implausible units.
+    #[error("{path}: {message}")]
+    Leg { path: PathBuf, message: String },
     /// A command-line argument has a value the run cannot use.
     #[error("{flag}: {message}")]
     InvalidArgument { flag: String, message: String },
@@ -89,6 +93,7 @@ impl Error {
             | Error::SceneSyntax { .. }
             | Error::InvalidScene { .. }
             | Error::InvalidArgument { .. }
+            | Error::Leg { .. }
             | Error::TooLarge { .. }
             | Error::OutputDir { .. }
             | Error::WouldOverwriteInput { .. }

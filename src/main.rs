@@ -8,8 +8,13 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
-use knitfit::run::{run_patch, Progress, RunPaths};
-use knitfit::scene::{check_patch_points, check_stretch_factor, Stretch, StretchAxis};
+use knitfit::leg::AxisSource;
+use knitfit::run::fit::scene_dir;
+use knitfit::run::{run_fit, run_patch, FitInputs, Progress, RunPaths};
+use knitfit::scene::{
+    check_axis, check_patch_points, check_stretch_factor, check_tube_points, ContactMethod,
+    LegAxis, Stretch, StretchAxis,
+};
 use knitfit::{Error, Scene};
 
 /// Exit code of a run that finished but did not converge (its files are written and its report
@@ -17,7 +22,7 @@ use knitfit::{Error, Scene};
 const EXIT_NOT_CONVERGED: u8 = 3;
 
 /// Fits a knitted stocking onto a 3D leg (Sakaguchi & Miyata) and writes files artists' tools
-/// read. With no subcommand, runs the main job on the bundled sample scene into `out/`.
+/// read. With no subcommand, fits the bundled sample scene into `out/`.
 #[derive(Parser, Debug)]
 #[command(name = "knitfit", version, about, long_about = None)]
 #[command(
@@ -34,8 +39,33 @@ struct Cli {
 
 #[derive(Subcommand, Debug)]
 enum Command {
+    /// Fit the stocking onto a leg from a glTF file; write stocking.glb, stocking.ply, leg.ply.
+    Fit(FitArgs),
     /// The paper's flat-patch experiment: hold two edges of a knit patch, pull them apart, relax.
     Patch(PatchArgs),
+}
+
+#[derive(clap::Args, Debug, Default)]
+struct FitArgs {
+    /// Scene file (JSON). Default: the bundled samples/scene.json.
+    scene: Option<PathBuf>,
+    /// Leg file (.glb or .gltf). Overrides leg.file.
+    #[arg(long)]
+    leg: Option<PathBuf>,
+    /// Tube size, WALESxCOURSES (e.g. 150x150). Overrides tube.wales and tube.courses.
+    #[arg(long, value_name = "WxC")]
+    resolution: Option<String>,
+    /// Bottom and top of the stocking on the leg's axis, in the leg file's coordinates:
+    /// BX,BY,BZ,TX,TY,TZ. Overrides leg.axis.
+    #[arg(long, value_name = "BX,BY,BZ,TX,TY,TZ", allow_hyphen_values = true)]
+    axis: Option<String>,
+    /// Contact queries: bvh (fast) or brute (the paper's all-triangles test). Overrides
+    /// contact.method.
+    #[arg(long, value_name = "bvh|brute")]
+    contact: Option<String>,
+    /// Output directory (created if missing).
+    #[arg(long, default_value = "out")]
+    out: PathBuf,
 }
 
 #[derive(clap::Args, Debug, Default)]
@@ -57,14 +87,18 @@ struct PatchArgs {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let quiet = cli.quiet;
-    let args = match cli.command {
-        Some(Command::Patch(args)) => args,
-        None => PatchArgs {
-            out: PathBuf::from("out"),
-            ..PatchArgs::default()
-        },
+    let result = match cli.command {
+        Some(Command::Patch(args)) => patch(args, quiet),
+        Some(Command::Fit(args)) => fit(args, quiet),
+        None => fit(
+            FitArgs {
+                out: PathBuf::from("out"),
+                ..FitArgs::default()
+            },
+            quiet,
+        ),
     };
-    match patch(args, quiet) {
+    match result {
         Ok(code) => code,
         Err(e) => {
             eprintln!("knitfit: error: {e}");
@@ -86,10 +120,7 @@ fn patch(args: PatchArgs, quiet: bool) -> Result<ExitCode, Error> {
             .collect::<Result<_, _>>()?;
     }
     let paths = RunPaths {
-        scene_name: match &args.scene {
-            Some(p) => p.display().to_string(),
-            None => knitfit::scene::BUNDLED_SCENE_NAME.to_string(),
-        },
+        scene_name: scene_name(&args.scene),
         inputs: args.scene.iter().cloned().collect(),
         out_dir: args.out.clone(),
     };
@@ -111,55 +142,167 @@ fn patch(args: PatchArgs, quiet: bool) -> Result<ExitCode, Error> {
             },
             outcome.report.wall_seconds
         );
-        println!("wrote to {}/:", args.out.display());
-        for path in &outcome.written {
-            println!("  {}", path.display());
-        }
+        print_written(&args.out, &outcome.written);
     }
-    if m.converged {
-        Ok(ExitCode::SUCCESS)
+    // A patch squeezed in its plane has no stable flat rest state: the square spring grid has no
+    // shear stiffness, so it buckles instead of settling.
+    let hint = if scene.patch.stretch.iter().any(|s| s.factor < 1.0) {
+        "a patch compressed below its rest size (stretch < 1) buckles and has no flat rest state"
     } else {
-        // A patch squeezed in its plane has no stable flat rest state: the square spring grid
-        // has no shear stiffness, so it buckles instead of settling.
-        let hint = if scene.patch.stretch.iter().any(|s| s.factor < 1.0) {
-            "a patch compressed below its rest size (stretch < 1) buckles and has no flat rest state"
-        } else {
-            "raise solver.max_steps, or solver.damping if the residual oscillates"
+        "raise solver.max_steps, or solver.damping if the residual oscillates"
+    };
+    Ok(finish(m.converged, &scene, hint))
+}
+
+fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
+    let mut scene = Scene::load(args.scene.as_deref())?;
+    if let Some(text) = &args.resolution {
+        let [w, c] = parse_grid("--resolution", text, 3, 2)?;
+        check_tube_points(w, c).map_err(|message| Error::InvalidArgument {
+            flag: "--resolution".into(),
+            message,
+        })?;
+        scene.tube.wales = w;
+        scene.tube.courses = c;
+    }
+    let mut axis_source = AxisSource::Scene;
+    if let Some(text) = &args.axis {
+        scene.leg.axis = Some(parse_axis(text)?);
+        axis_source = AxisSource::CommandLine;
+    }
+    if let Some(method) = &args.contact {
+        scene.contact.method = match method.as_str() {
+            "bvh" => ContactMethod::Bvh,
+            "brute" => ContactMethod::Brute,
+            other => {
+                return Err(Error::InvalidArgument {
+                    flag: "--contact".into(),
+                    message: format!("must be bvh or brute, got {other:?}"),
+                })
+            }
         };
-        eprintln!(
-            "knitfit: warning: did not converge within solver.max_steps = {} (residual {:.2e}, \
-             tolerance {:.0e}); {hint}",
-            scene.solver.max_steps, m.residual, scene.solver.tolerance
+    }
+    let leg = match &args.leg {
+        Some(path) => path.clone(),
+        None => scene_dir(args.scene.as_deref()).join(&scene.leg.file),
+    };
+    let paths = RunPaths {
+        scene_name: scene_name(&args.scene),
+        inputs: args.scene.iter().cloned().collect(),
+        out_dir: args.out.clone(),
+    };
+    let inputs = FitInputs { leg, axis_source };
+    let mut bar = Bar::new(quiet);
+    let outcome = run_fit(&scene, &inputs, &paths, &mut bar)?;
+    let m = &outcome.report.metrics;
+    if !quiet {
+        println!(
+            "fit {}x{} on {} ({} triangles): {} steps, residual {:.2e}, max penetration {:.4} mm, \
+             {} in {:.2} s",
+            scene.tube.wales,
+            scene.tube.courses,
+            inputs.leg.display(),
+            m.leg_triangles.unwrap_or(0),
+            m.steps,
+            m.residual,
+            m.max_penetration_m.unwrap_or(0.0) * 1000.0,
+            if m.converged {
+                "converged"
+            } else {
+                "NOT converged"
+            },
+            outcome.report.wall_seconds
         );
-        Ok(ExitCode::from(EXIT_NOT_CONVERGED))
+        print_written(&args.out, &outcome.written);
+    }
+    Ok(finish(
+        m.converged,
+        &scene,
+        "raise solver.max_steps, or solver.damping if the residual oscillates",
+    ))
+}
+
+fn scene_name(scene: &Option<PathBuf>) -> String {
+    match scene {
+        Some(p) => p.display().to_string(),
+        None => knitfit::scene::BUNDLED_SCENE_NAME.to_string(),
     }
 }
 
-/// Parses `WxH` into `[wales, courses]`.
-fn parse_size(text: &str) -> Result<[usize; 2], Error> {
+fn print_written(out: &std::path::Path, written: &[PathBuf]) {
+    println!("wrote to {}/:", out.display());
+    for path in written {
+        println!("  {}", path.display());
+    }
+}
+
+/// Exit code for a finished run; warns when it did not converge.
+fn finish(converged: bool, scene: &Scene, hint: &str) -> ExitCode {
+    if converged {
+        return ExitCode::SUCCESS;
+    }
+    eprintln!(
+        "knitfit: warning: did not converge within solver.max_steps = {} (tolerance {:.0e}); \
+         {hint}",
+        scene.solver.max_steps, scene.solver.tolerance
+    );
+    ExitCode::from(EXIT_NOT_CONVERGED)
+}
+
+/// Parses `BX,BY,BZ,TX,TY,TZ`.
+fn parse_axis(text: &str) -> Result<LegAxis, Error> {
     let bad = |message: String| Error::InvalidArgument {
-        flag: "--size".into(),
+        flag: "--axis".into(),
         message,
     };
-    let (w, h) = text.split_once(['x', 'X']).ok_or_else(|| {
-        bad(format!(
-            "expected WALESxCOURSES such as 10x10, got {text:?}"
-        ))
-    })?;
-    let parse = |s: &str| {
-        s.trim().parse::<usize>().map_err(|_| {
+    let numbers: Vec<f64> = text
+        .split(',')
+        .map(|s| s.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| {
             bad(format!(
-                "expected WALESxCOURSES such as 10x10, got {text:?}"
+                "expected six numbers BX,BY,BZ,TX,TY,TZ, got {text:?}"
             ))
-        })
-    };
-    let size = [parse(w)?, parse(h)?];
-    if size[0] < 2 || size[1] < 2 {
+        })?;
+    let [bx, by, bz, tx, ty, tz] = numbers[..] else {
         return Err(bad(format!(
-            "a patch needs at least 2x2 points (two held edges), got {text}"
+            "expected six numbers BX,BY,BZ,TX,TY,TZ, got {}",
+            numbers.len()
+        )));
+    };
+    let axis = LegAxis {
+        bottom: [bx, by, bz],
+        top: [tx, ty, tz],
+    };
+    check_axis(&axis).map_err(bad)?;
+    Ok(axis)
+}
+
+/// Parses `AxB` into two counts of at least `min_a` and `min_b`.
+fn parse_grid(flag: &str, text: &str, min_a: usize, min_b: usize) -> Result<[usize; 2], Error> {
+    let bad = |message: String| Error::InvalidArgument {
+        flag: flag.into(),
+        message,
+    };
+    let example = || format!("expected two counts such as 150x150, got {text:?}");
+    let (a, b) = text.split_once(['x', 'X']).ok_or_else(|| bad(example()))?;
+    let parse = |s: &str| s.trim().parse::<usize>().map_err(|_| bad(example()));
+    let size = [parse(a)?, parse(b)?];
+    if size[0] < min_a || size[1] < min_b {
+        return Err(bad(format!(
+            "needs at least {min_a}x{min_b} points, got {text}"
         )));
     }
-    check_patch_points(size[0], size[1]).map_err(bad)?;
+    Ok(size)
+}
+
+/// Parses `WxH` into `[wales, courses]` of a patch.
+fn parse_size(text: &str) -> Result<[usize; 2], Error> {
+    let size = parse_grid("--size", text, 2, 2)?;
+    check_patch_points(size[0], size[1]).map_err(|message| Error::InvalidArgument {
+        flag: "--size".into(),
+        message,
+    })?;
     Ok(size)
 }
 

@@ -34,7 +34,9 @@ impl Plan {
     /// The plan of `knitfit patch` for `scene`: for each stretch, build a patch and relax it;
     /// then measure stitches and encode the asked-for files.
     pub fn patch(scene: &Scene) -> Plan {
-        let effects = dedup(&scene.effects);
+        // A flat patch has no leg to touch.
+        let mut effects = dedup(&scene.effects);
+        effects.retain(|&e| e != Effect::Contact);
         let forces = force_terms(scene, &effects);
         let mut stages = Vec::new();
         let mut add = |name: String, why: String| stages.push(PlannedStage { name, why });
@@ -70,6 +72,79 @@ impl Plan {
         add("write files".into(), "every run writes report.json".into());
         Plan {
             command: "patch",
+            effects,
+            forces,
+            stages,
+            files,
+        }
+    }
+}
+
+impl Plan {
+    /// The plan of `knitfit fit` for `scene`: load the leg, find its axis, build the collider and
+    /// the tube, fit with contact, measure, and encode the asked-for files.
+    pub fn fit(scene: &Scene) -> Plan {
+        let mut effects = dedup(&scene.effects);
+        // Contact is what a fit is; it runs whether or not the scene lists it.
+        if !effects.contains(&Effect::Contact) {
+            effects.push(Effect::Contact);
+        }
+        let forces = force_terms(scene, &effects);
+        let mut stages = Vec::new();
+        let mut add = |name: &str, why: String| {
+            stages.push(PlannedStage {
+                name: name.to_string(),
+                why,
+            })
+        };
+        add("load leg", format!("leg.file = {:?}", scene.leg.file));
+        add(
+            "find axis",
+            match scene.leg.axis {
+                Some(_) => "leg.axis is given: convert it to world space".into(),
+                None => "leg.axis is absent: detect the principal axis".into(),
+            },
+        );
+        add(
+            "build collider",
+            format!("contact ({} queries)", scene.contact.method.name()),
+        );
+        add(
+            "knit tube",
+            format!("tube {}×{}", scene.tube.wales, scene.tube.courses),
+        );
+        let terms = match forces.connection_factor {
+            Some(c2) => format!("spring force + yarn connection (c2 = {c2}) + sliding contact"),
+            None => "spring force + sliding contact".to_string(),
+        };
+        add("fit", terms);
+        add(
+            "check penetration",
+            "report.json: max_penetration_m against the exact triangles".into(),
+        );
+        let mut files = Vec::new();
+        if scene.wants(Output::Glb) || scene.wants(Output::Ply) {
+            add(
+                "stitch density",
+                "the leg's _STITCH_DENSITY / stitch_density attribute".into(),
+            );
+        }
+        for (output, file) in [
+            (Output::Glb, "stocking.glb"),
+            (Output::Ply, "stocking.ply"),
+            (Output::Ply, "leg.ply"),
+        ] {
+            if scene.wants(output) {
+                add(
+                    &format!("encode {file}"),
+                    format!("outputs lists \"{}\"", output_name(output)),
+                );
+                files.push((output, file));
+            }
+        }
+        add("write files", "every run writes report.json".into());
+        Plan {
+            command: "fit",
             effects,
             forces,
             stages,

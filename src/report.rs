@@ -27,6 +27,13 @@ pub struct Metrics {
     pub max_move: f64,
     /// True when every relaxation converged below the tolerance.
     pub converged: bool,
+    /// Fit only: deepest yarn point inside the leg after the fit, measured against the exact
+    /// triangles, metres (0 when none is inside).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_penetration_m: Option<f64>,
+    /// Fit only: triangles of the leg mesh.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub leg_triangles: Option<usize>,
 }
 
 /// The report of one run.

@@ -16,6 +16,8 @@ use crate::knit::{Pattern, YarnKind};
 pub const BUNDLED_SCENE: &str = include_str!("../samples/scene.json");
 /// How the bundled scene is named in messages and reports.
 pub const BUNDLED_SCENE_NAME: &str = "samples/scene.json (bundled)";
+/// Where the bundled scene's relative paths (its leg) are found: the crate's `samples/`.
+pub const BUNDLED_SCENE_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/samples");
 
 /// A whole scene.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, Default)]
@@ -37,6 +39,206 @@ pub struct Scene {
     pub outputs: Vec<Output>,
     /// The flat-patch experiment (`knitfit patch`).
     pub patch: PatchSettings,
+    /// The leg to fit onto (`knitfit fit`).
+    pub leg: LegSettings,
+    /// The stocking tube (`knitfit fit`).
+    pub tube: TubeSettings,
+    /// Contact between yarn and leg (`knitfit fit`).
+    pub contact: ContactSettings,
+}
+
+/// Length units a leg file can be in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum Units {
+    /// Metres (glTF's unit; default).
+    #[default]
+    #[serde(rename = "m")]
+    Metres,
+    /// Decimetres (the MakeHuman base mesh).
+    #[serde(rename = "dm")]
+    Decimetres,
+    /// Centimetres.
+    #[serde(rename = "cm")]
+    Centimetres,
+    /// Millimetres.
+    #[serde(rename = "mm")]
+    Millimetres,
+    /// Inches.
+    #[serde(rename = "in")]
+    Inches,
+}
+
+impl Units {
+    /// Metres per unit.
+    pub fn metres(self) -> f64 {
+        match self {
+            Units::Metres => 1.0,
+            Units::Decimetres => 0.1,
+            Units::Centimetres => 0.01,
+            Units::Millimetres => 0.001,
+            Units::Inches => 0.0254,
+        }
+    }
+
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Units::Metres => "m",
+            Units::Decimetres => "dm",
+            Units::Centimetres => "cm",
+            Units::Millimetres => "mm",
+            Units::Inches => "in",
+        }
+    }
+}
+
+/// Which file axis points up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+pub enum UpAxis {
+    /// +Y, glTF's convention (default).
+    #[default]
+    #[serde(rename = "+y")]
+    PosY,
+    /// −Y.
+    #[serde(rename = "-y")]
+    NegY,
+    /// +Z (Blender's and many CAD tools' convention).
+    #[serde(rename = "+z")]
+    PosZ,
+    /// −Z.
+    #[serde(rename = "-z")]
+    NegZ,
+    /// +X.
+    #[serde(rename = "+x")]
+    PosX,
+    /// −X.
+    #[serde(rename = "-x")]
+    NegX,
+}
+
+impl UpAxis {
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            UpAxis::PosY => "+y",
+            UpAxis::NegY => "-y",
+            UpAxis::PosZ => "+z",
+            UpAxis::NegZ => "-z",
+            UpAxis::PosX => "+x",
+            UpAxis::NegX => "-x",
+        }
+    }
+}
+
+/// Two points on the leg's long axis, in the leg file's coordinates and units.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LegAxis {
+    /// Bottom of the stocking (near the ankle).
+    pub bottom: [f64; 3],
+    /// Top of the stocking (upper thigh).
+    pub top: [f64; 3],
+}
+
+/// The leg to fit onto.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LegSettings {
+    /// glTF file (`.glb` or `.gltf`), relative to the scene file (default:
+    /// `"procedural_leg.glb"`, next to the bundled scene).
+    pub file: String,
+    /// Units of the file's coordinates (default: `"m"`, as glTF specifies).
+    pub units: Units,
+    /// Which file axis points up (default: `"+y"`, as glTF specifies).
+    pub up_axis: UpAxis,
+    /// Bottom and top of the stocking on the leg's long axis, in file coordinates; detected from
+    /// the mesh when absent (default: absent).
+    pub axis: Option<LegAxis>,
+}
+
+impl Default for LegSettings {
+    fn default() -> Self {
+        LegSettings {
+            file: "procedural_leg.glb".into(),
+            units: Units::Metres,
+            up_axis: UpAxis::PosY,
+            axis: None,
+        }
+    }
+}
+
+/// The stocking tube before fitting (paper §6.1).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TubeSettings {
+    /// Points around the tube (wales) (default: 150, the paper's smaller fit).
+    pub wales: usize,
+    /// Rings along the tube (courses) (default: 150).
+    pub courses: usize,
+    /// Circumference of the stocking lying relaxed, metres (default: 0.20, a typical sheer
+    /// stocking's leg measured flat and doubled).
+    pub relaxed_circumference_m: f64,
+    /// Length of the stocking lying relaxed between the two axis points, metres (default: 0.50).
+    pub relaxed_length_m: f64,
+}
+
+impl Default for TubeSettings {
+    fn default() -> Self {
+        TubeSettings {
+            wales: 150,
+            courses: 150,
+            relaxed_circumference_m: 0.20,
+            relaxed_length_m: 0.50,
+        }
+    }
+}
+
+/// How yarn/leg contact is found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum ContactMethod {
+    /// Bounding-volume hierarchy (parry) queries (default).
+    #[default]
+    Bvh,
+    /// The paper's test of every point against every triangle: a slow reference.
+    Brute,
+}
+
+impl ContactMethod {
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            ContactMethod::Bvh => "bvh",
+            ContactMethod::Brute => "brute",
+        }
+    }
+}
+
+/// Contact between yarn and leg (paper §6.2).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ContactSettings {
+    /// How contact is found (default: `"bvh"`).
+    pub method: ContactMethod,
+    /// Distance kept between yarn centre line and skin, metres; absent means the nylon yarn
+    /// radius (default: absent).
+    pub offset_m: Option<f64>,
+}
+
+impl Default for ContactSettings {
+    fn default() -> Self {
+        ContactSettings {
+            method: ContactMethod::Bvh,
+            offset_m: None,
+        }
+    }
+}
+
+impl ContactSettings {
+    /// The contact offset in metres.
+    pub fn offset(&self, yarns: &Yarns) -> f64 {
+        self.offset_m.unwrap_or(yarns.nylon.radius_m)
+    }
 }
 
 /// Knit structure.
@@ -177,6 +379,8 @@ pub enum Effect {
     /// Nylon and support yarn have their own stiffness. Without it, every spring uses the nylon
     /// yarn's stiffness even where the pattern lays support yarn (an ablation of the paper).
     AlternatingYarns,
+    /// Yarn slides on the leg and never enters it (paper §6.2). Always on for a fit.
+    Contact,
 }
 
 impl Effect {
@@ -185,6 +389,7 @@ impl Effect {
         match self {
             Effect::YarnConnection => "yarn_connection",
             Effect::AlternatingYarns => "alternating_yarns",
+            Effect::Contact => "contact",
         }
     }
 }
@@ -197,11 +402,12 @@ fn default_effects() -> Vec<Effect> {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Output {
-    /// PLY: yarn points with an edge element (`patch.ply`).
+    /// PLY: yarn points with an edge element (`patch.ply`; `stocking.ply` and `leg.ply` for a
+    /// fit).
     Ply,
-    /// Binary glTF: yarns as line primitives (`patch.glb`).
+    /// Binary glTF (`patch.glb`; `stocking.glb` for a fit).
     Glb,
-    /// PNG picture of the relaxed stitches (`patch.png`).
+    /// PNG picture of the relaxed stitches (`patch.png`; the patch only, for now).
     Picture,
 }
 
@@ -378,7 +584,53 @@ impl Scene {
                     .into(),
             ));
         }
-        self.validate_patch(name)
+        self.validate_patch(name)?;
+        self.validate_fit(name)
+    }
+
+    fn validate_fit(&self, name: &str) -> Result<()> {
+        let bad = |field: &str, message: String| Error::InvalidScene {
+            path: name.to_string(),
+            field: field.to_string(),
+            message,
+        };
+        let (w, c) = (self.tube.wales, self.tube.courses);
+        if w < 3 || c < 2 {
+            return Err(bad(
+                "tube",
+                format!("needs at least 3 wales and 2 courses, got {w}×{c}"),
+            ));
+        }
+        check_tube_points(w, c).map_err(|m| bad("tube", m))?;
+        for (field, value) in [
+            (
+                "tube.relaxed_circumference_m",
+                self.tube.relaxed_circumference_m,
+            ),
+            ("tube.relaxed_length_m", self.tube.relaxed_length_m),
+        ] {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(bad(
+                    field,
+                    format!("must be a positive number, got {value}"),
+                ));
+            }
+        }
+        if let Some(offset) = self.contact.offset_m {
+            if !(offset.is_finite() && offset >= 0.0) {
+                return Err(bad(
+                    "contact.offset_m",
+                    format!("must be zero or positive, got {offset}"),
+                ));
+            }
+        }
+        if let Some(axis) = &self.leg.axis {
+            check_axis(axis).map_err(|m| bad("leg.axis", m))?;
+        }
+        if self.leg.file.is_empty() {
+            return Err(bad("leg.file", "must name a .glb or .gltf file".into()));
+        }
+        Ok(())
     }
 
     fn validate_patch(&self, name: &str) -> Result<()> {
@@ -424,6 +676,31 @@ pub fn check_patch_points(wales: usize, courses: usize) -> std::result::Result<(
             "{wales}×{courses} points is over the patch limit of {MAX_PATCH_POINTS} points"
         )),
     }
+}
+
+/// Largest tube accepted without an override, in points.
+pub const MAX_TUBE_POINTS: usize = 4_000_000;
+
+/// Checks a tube size against [`MAX_TUBE_POINTS`].
+pub fn check_tube_points(wales: usize, courses: usize) -> std::result::Result<(), String> {
+    match wales.checked_mul(courses) {
+        Some(n) if n <= MAX_TUBE_POINTS => Ok(()),
+        _ => Err(format!(
+            "{wales}×{courses} points is over the tube limit of {MAX_TUBE_POINTS} points"
+        )),
+    }
+}
+
+/// Checks that axis points are finite and distinct.
+pub fn check_axis(axis: &LegAxis) -> std::result::Result<(), String> {
+    let finite = axis.bottom.iter().chain(&axis.top).all(|c| c.is_finite());
+    if !finite {
+        return Err("coordinates must be finite numbers".into());
+    }
+    if axis.bottom == axis.top {
+        return Err("bottom and top must be different points".into());
+    }
+    Ok(())
 }
 
 /// Checks a stretch factor is usable.

@@ -13,93 +13,70 @@ use gltf_json as json;
 use json::validation::{Checked::Valid, USize64};
 use json::Index;
 
-use super::YarnGeometry;
+use super::{SurfaceMesh, YarnGeometry};
 use crate::error::{Error, Result};
 use crate::knit::YarnKind;
 
-/// Encodes `parts` as one GLB: a root node per part, named after it and translated by its
-/// `offset_m`. `yarn_colours` are linear RGB per yarn kind (nylon, support).
+/// One root node of a GLB file.
+pub enum GlbNode<'a> {
+    /// A triangle surface (the leg, the stocking surface).
+    Surface(&'a SurfaceMesh),
+    /// Yarn polylines.
+    Yarns(&'a YarnGeometry),
+}
+
+/// Encodes `parts` as one GLB of yarns only (the patch experiment): a root node per part, named
+/// after it and translated by its `offset_m`. `yarn_colours` are linear RGB per yarn kind.
 pub fn write_glb(parts: &[YarnGeometry], yarn_colours: [[f64; 3]; 2]) -> Result<Vec<u8>> {
+    let nodes: Vec<GlbNode> = parts.iter().map(GlbNode::Yarns).collect();
+    write_nodes_glb(&nodes, yarn_colours)
+}
+
+/// Encodes surfaces and yarns as one GLB, a root node each, in the given order.
+pub fn write_nodes_glb(nodes: &[GlbNode], yarn_colours: [[f64; 3]; 2]) -> Result<Vec<u8>> {
     let mut doc = GlbBuilder::default();
     // A material per yarn kind that some segment uses (an unused one is a validator notice).
     let materials = YarnKind::ALL.map(|kind| {
-        let used = parts
-            .iter()
-            .any(|p| p.segments.iter().any(|s| s.yarn == kind));
+        let used = nodes.iter().any(|n| match n {
+            GlbNode::Yarns(p) => p.segments.iter().any(|s| s.yarn == kind),
+            GlbNode::Surface(_) => false,
+        });
         used.then(|| {
             let [r, g, b] = yarn_colours[kind.index() as usize].map(|c| c as f32);
-            doc.root.push(json::Material {
-                name: Some(kind.name().to_string()),
-                pbr_metallic_roughness: json::material::PbrMetallicRoughness {
-                    base_color_factor: json::material::PbrBaseColorFactor([r, g, b, 1.0]),
-                    metallic_factor: json::material::StrengthFactor(0.0),
-                    roughness_factor: json::material::StrengthFactor(0.6),
-                    ..Default::default()
-                },
-                ..Default::default()
-            })
+            doc.material(kind.name(), [r, g, b])
         })
     });
-
-    let mut nodes = Vec::new();
-    for part in parts {
-        let mut attributes = BTreeMap::new();
-        attributes.insert(
-            Valid(json::mesh::Semantic::Positions),
-            doc.positions(&part.positions),
-        );
-        for (name, values) in &part.point_attributes {
-            attributes.insert(
-                Valid(json::mesh::Semantic::Extras(name.to_uppercase())),
-                doc.scalars(values),
-            );
-        }
-        let mut primitives = Vec::new();
-        for kind in YarnKind::ALL {
-            let indices: Vec<u32> = part
-                .segments
-                .iter()
-                .filter(|s| s.yarn == kind)
-                .flat_map(|s| [s.a, s.b])
-                .collect();
-            if indices.is_empty() {
-                continue;
-            }
-            primitives.push(json::mesh::Primitive {
-                attributes: attributes.clone(),
-                extensions: None,
-                extras: Default::default(),
-                indices: Some(doc.indices(&indices)),
-                material: materials[kind.index() as usize],
-                mode: Valid(json::mesh::Mode::Lines),
-                targets: None,
-            });
-        }
-        let mesh = (!primitives.is_empty()).then(|| {
-            doc.root.push(json::Mesh {
-                extensions: None,
-                extras: Default::default(),
-                name: Some(part.name.clone()),
-                primitives,
-                weights: None,
-            })
-        });
-        let [x, y, z] = part.offset_m.map(|c| c as f32);
-        nodes.push(doc.root.push(json::Node {
-            mesh,
-            name: Some(part.name.clone()),
-            translation: (part.offset_m != [0.0; 3]).then_some([x, y, z]),
-            ..Default::default()
-        }));
-    }
+    let roots = nodes
+        .iter()
+        .map(|node| match node {
+            GlbNode::Yarns(part) => doc.yarn_node(part, &materials),
+            GlbNode::Surface(mesh) => doc.surface_node(mesh),
+        })
+        .collect();
     let scene = doc.root.push(json::Scene {
         extensions: None,
         extras: Default::default(),
         name: Some("knitfit".into()),
-        nodes,
+        nodes: roots,
     });
     doc.root.scene = Some(scene);
     doc.finish()
+}
+
+/// Custom attributes as glTF wants them: `_UPPERCASE` float scalars.
+fn custom_attributes(
+    doc: &mut GlbBuilder,
+    attributes: &BTreeMap<String, Vec<f32>>,
+) -> BTreeMap<json::validation::Checked<json::mesh::Semantic>, Index<json::Accessor>> {
+    attributes
+        .iter()
+        .map(|(name, values)| {
+            (
+                Valid(json::mesh::Semantic::Extras(name.to_uppercase())),
+                doc.scalars(values),
+            )
+        })
+        .collect()
 }
 
 /// A glTF document under construction and its binary chunk.
@@ -153,6 +130,129 @@ impl GlbBuilder {
             normalized: false,
             sparse: None,
         })
+    }
+
+    /// A metallic-free material of a base colour (linear RGB).
+    pub fn material(&mut self, name: &str, [r, g, b]: [f32; 3]) -> Index<json::Material> {
+        self.root.push(json::Material {
+            name: Some(name.to_string()),
+            pbr_metallic_roughness: json::material::PbrMetallicRoughness {
+                base_color_factor: json::material::PbrBaseColorFactor([r, g, b, 1.0]),
+                metallic_factor: json::material::StrengthFactor(0.0),
+                roughness_factor: json::material::StrengthFactor(0.6),
+                ..Default::default()
+            },
+            ..Default::default()
+        })
+    }
+
+    /// A node of yarn polylines: `LINES`, one primitive per yarn kind, shared vertex accessors.
+    fn yarn_node(
+        &mut self,
+        part: &YarnGeometry,
+        materials: &[Option<Index<json::Material>>; 2],
+    ) -> Index<json::Node> {
+        let mut attributes = custom_attributes(self, &part.point_attributes);
+        attributes.insert(
+            Valid(json::mesh::Semantic::Positions),
+            self.positions(&part.positions),
+        );
+        let mut primitives = Vec::new();
+        for kind in YarnKind::ALL {
+            let indices: Vec<u32> = part
+                .segments
+                .iter()
+                .filter(|s| s.yarn == kind)
+                .flat_map(|s| [s.a, s.b])
+                .collect();
+            if indices.is_empty() {
+                continue;
+            }
+            primitives.push(json::mesh::Primitive {
+                attributes: attributes.clone(),
+                extensions: None,
+                extras: Default::default(),
+                indices: Some(self.indices(&indices)),
+                material: materials[kind.index() as usize],
+                mode: Valid(json::mesh::Mode::Lines),
+                targets: None,
+            });
+        }
+        let [x, y, z] = part.offset_m.map(|c| c as f32);
+        let translation = (part.offset_m != [0.0; 3]).then_some([x, y, z]);
+        self.node(&part.name, primitives, translation)
+    }
+
+    /// A node of one `TRIANGLES` primitive with normals, optional texture coordinates and
+    /// colours, and the custom attributes.
+    fn surface_node(&mut self, mesh: &SurfaceMesh) -> Index<json::Node> {
+        use json::mesh::Semantic;
+        let mut attributes = custom_attributes(self, &mesh.point_attributes);
+        attributes.insert(Valid(Semantic::Positions), self.positions(&mesh.positions));
+        attributes.insert(Valid(Semantic::Normals), self.vectors(&mesh.normals));
+        if let Some(uv) = &mesh.texcoords {
+            attributes.insert(Valid(Semantic::TexCoords(0)), self.vectors(uv));
+        }
+        if let Some(colours) = &mesh.colours {
+            attributes.insert(Valid(Semantic::Colors(0)), self.vectors(colours));
+        }
+        let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+        let primitive = json::mesh::Primitive {
+            attributes,
+            extensions: None,
+            extras: Default::default(),
+            indices: Some(self.indices(&indices)),
+            material: None,
+            mode: Valid(json::mesh::Mode::Triangles),
+            targets: None,
+        };
+        self.node(&mesh.name, vec![primitive], None)
+    }
+
+    /// A node holding a mesh of `primitives` (none: an empty node).
+    fn node(
+        &mut self,
+        name: &str,
+        primitives: Vec<json::mesh::Primitive>,
+        translation: Option<[f32; 3]>,
+    ) -> Index<json::Node> {
+        let mesh = (!primitives.is_empty()).then(|| {
+            self.root.push(json::Mesh {
+                extensions: None,
+                extras: Default::default(),
+                name: Some(name.to_string()),
+                primitives,
+                weights: None,
+            })
+        });
+        self.root.push(json::Node {
+            mesh,
+            name: Some(name.to_string()),
+            translation,
+            ..Default::default()
+        })
+    }
+
+    /// A float `VEC2`/`VEC3` accessor (normals, colours, texture coordinates): no bounds.
+    pub fn vectors<const N: usize>(&mut self, values: &[[f32; N]]) -> Index<json::Accessor> {
+        let bytes: Vec<u8> = values
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let view = self.view(&bytes, json::buffer::Target::ArrayBuffer);
+        let type_ = match N {
+            2 => json::accessor::Type::Vec2,
+            3 => json::accessor::Type::Vec3,
+            _ => json::accessor::Type::Vec4,
+        };
+        self.accessor(
+            view,
+            values.len(),
+            json::accessor::ComponentType::F32,
+            type_,
+            None,
+        )
     }
 
     /// A `VEC3` float accessor of positions (metres, stored as f32) with the min/max glTF needs.

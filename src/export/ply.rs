@@ -7,7 +7,7 @@ use ply_rs_bw::ply::{
 };
 use ply_rs_bw::writer::Writer;
 
-use super::YarnGeometry;
+use super::{SurfaceMesh, YarnGeometry};
 use crate::error::{Error, Result};
 use crate::knit::Direction;
 
@@ -105,6 +105,84 @@ pub fn write_ply(parts: &[YarnGeometry], comments: &[String]) -> Result<Vec<u8>>
     ply.payload.insert("vertex".into(), vertices);
     ply.payload.insert("edge".into(), edges);
 
+    let mut bytes = Vec::new();
+    Writer::new()
+        .write_ply(&mut bytes, &mut ply)
+        .map_err(|e| encode_error(e.to_string()))?;
+    Ok(bytes)
+}
+
+/// Encodes a triangle surface as a PLY file: `vertex` (x, y, z, nx, ny, nz, every point
+/// attribute, and red/green/blue when the mesh has colours) and `face` (vertex_indices).
+pub fn write_mesh_ply(mesh: &SurfaceMesh, comments: &[String]) -> Result<Vec<u8>> {
+    let encode_error = |message: String| Error::Encode {
+        what: "PLY".into(),
+        message,
+    };
+    let mut ply = Ply::<DefaultElement>::new();
+    ply.header.encoding = Encoding::BinaryLittleEndian;
+    ply.header.comments.extend(comments.iter().cloned());
+    ply.header
+        .comments
+        .push("units: metres; PLY has no axis convention: +Y is up as in glTF".into());
+    let scalar =
+        |name: &str, t: ScalarType| PropertyDef::new(name.to_string(), PropertyType::Scalar(t));
+    let mut vertex = ElementDef::new("vertex".into());
+    for name in ["x", "y", "z", "nx", "ny", "nz"] {
+        vertex.properties.add(scalar(name, ScalarType::Float));
+    }
+    for name in mesh.point_attributes.keys() {
+        vertex.properties.add(scalar(name, ScalarType::Float));
+    }
+    if mesh.colours.is_some() {
+        for name in ["red", "green", "blue"] {
+            vertex.properties.add(scalar(name, ScalarType::UChar));
+        }
+    }
+    ply.header.elements.add(vertex);
+    let mut face = ElementDef::new("face".into());
+    face.properties.add(PropertyDef::new(
+        "vertex_indices".into(),
+        PropertyType::List(ScalarType::UChar, ScalarType::Int),
+    ));
+    ply.header.elements.add(face);
+
+    let mut vertices = Vec::with_capacity(mesh.positions.len());
+    for (i, p) in mesh.positions.iter().enumerate() {
+        let mut v = DefaultElement::new();
+        let n = mesh.normals[i];
+        for (name, value) in ["x", "y", "z"].iter().zip(p) {
+            v.insert(name.to_string(), Property::Float(*value as f32));
+        }
+        for (name, value) in ["nx", "ny", "nz"].iter().zip(n) {
+            v.insert(name.to_string(), Property::Float(value));
+        }
+        for (name, values) in &mesh.point_attributes {
+            v.insert(name.clone(), Property::Float(values[i]));
+        }
+        if let Some(colours) = &mesh.colours {
+            let srgb = colours[i].map(crate::render::colormap::linear_to_srgb8);
+            for (name, value) in ["red", "green", "blue"].iter().zip(srgb) {
+                v.insert(name.to_string(), Property::UChar(value));
+            }
+        }
+        vertices.push(v);
+    }
+    let faces = mesh
+        .triangles
+        .iter()
+        .map(|t| {
+            let mut f = DefaultElement::new();
+            let indices = t
+                .iter()
+                .map(|&i| i32::try_from(i).map_err(|_| encode_error("index past 2^31".into())))
+                .collect::<Result<Vec<i32>>>()?;
+            f.insert("vertex_indices".into(), Property::ListInt(indices));
+            Ok(f)
+        })
+        .collect::<Result<Vec<_>>>()?;
+    ply.payload.insert("vertex".into(), vertices);
+    ply.payload.insert("face".into(), faces);
     let mut bytes = Vec::new();
     Writer::new()
         .write_ply(&mut bytes, &mut ply)

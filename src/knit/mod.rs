@@ -4,6 +4,7 @@
 pub mod model;
 pub mod patch;
 pub mod pattern;
+pub mod tube;
 
 pub use model::{Connection, Incident, Knit, Particles, PointId, Spring, Vec3};
 pub use pattern::{Direction, Pattern, Tile, YarnKind};

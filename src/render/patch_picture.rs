@@ -6,6 +6,7 @@
 
 use image::{ImageEncoder, RgbImage};
 
+use super::colormap::linear_to_srgb8;
 use crate::error::{Error, Result};
 use crate::export::YarnGeometry;
 use crate::knit::Direction;
@@ -225,17 +226,8 @@ impl Canvas {
     }
 
     fn to_srgb(&self) -> RgbImage {
-        let encode = |c: f32| {
-            let c = c.clamp(0.0, 1.0);
-            let s = if c <= 0.003_130_8 {
-                12.92 * c
-            } else {
-                1.055 * c.powf(1.0 / 2.4) - 0.055
-            };
-            (s * 255.0 + 0.5) as u8
-        };
         RgbImage::from_fn(self.width as u32, self.height as u32, |x, y| {
-            image::Rgb(self.pixels[y as usize * self.width + x as usize].map(encode))
+            image::Rgb(self.pixels[y as usize * self.width + x as usize].map(linear_to_srgb8))
         })
     }
 }

@@ -2,10 +2,12 @@
 //! load → knit → solve → post-process → export. The library prints nothing; long stages report
 //! to a [`Progress`] the caller supplies (the CLI draws a progress bar with it).
 
+pub mod fit;
 pub mod patch;
 
 use std::path::PathBuf;
 
+pub use fit::{run_fit, FitInputs, FitOutcome};
 pub use patch::{run_patch, PatchOutcome};
 
 /// Receives progress of long stages.

@@ -193,6 +193,8 @@ fn metrics(runs: &[Relaxed]) -> Metrics {
         residual: runs.iter().map(|r| r.stats.residual).fold(0.0, f64::max),
         max_move: runs.iter().map(|r| r.stats.max_move).fold(0.0, f64::max),
         converged: runs.iter().all(|r| r.stats.converged),
+        max_penetration_m: None,
+        leg_triangles: None,
     }
 }
 

@@ -61,6 +61,26 @@ pub struct RelaxStats {
     pub converged: bool,
 }
 
+/// Limits on where points may go, applied after each sub-step's unconstrained update (the
+/// paper's "modified move", §6.2), and the forces those limits hold.
+pub trait Constraints {
+    /// Moves each free point from `from[i]` towards `x[i]` as far as the constraints allow,
+    /// writing the allowed position into `x[i]`.
+    fn constrain(&mut self, from: &[Vec3], x: &mut [Vec3], inv_mass: &[f64]);
+    /// Removes from each `force[i]` the part the constraints balance at positions `x` (a
+    /// contact's reaction, a locked direction), so the residual measures only what can still
+    /// move points.
+    fn remove_held_force(&self, x: &[Vec3], force: &mut [Vec3]);
+}
+
+/// No constraints: points go wherever the forces take them.
+pub struct Unconstrained;
+
+impl Constraints for Unconstrained {
+    fn constrain(&mut self, _from: &[Vec3], _x: &mut [Vec3], _inv_mass: &[f64]) {}
+    fn remove_held_force(&self, _x: &[Vec3], _force: &mut [Vec3]) {}
+}
+
 /// Told about each step, e.g. to drive a progress bar. The library itself prints nothing.
 pub trait RelaxObserver {
     /// Called after each residual evaluation, with the step number and the residual.
@@ -143,6 +163,17 @@ pub fn relax(
     settings: &SolverSettings,
     observer: &mut dyn RelaxObserver,
 ) -> Result<RelaxStats> {
+    relax_constrained(knit, terms, settings, &mut Unconstrained, observer)
+}
+
+/// [`relax`] with `constraints` applied after every sub-step.
+pub fn relax_constrained(
+    knit: &mut Knit,
+    terms: &ForceTerms,
+    settings: &SolverSettings,
+    constraints: &mut dyn Constraints,
+    observer: &mut dyn RelaxObserver,
+) -> Result<RelaxStats> {
     let limit = stability_limit(knit, terms);
     let substeps = substeps_for(settings, limit, terms)?;
     let h = settings.time_step / substeps as f64;
@@ -171,9 +202,13 @@ pub fn relax(
     };
     let mut start_energy = None;
     let mut step = 0;
+    let mut held = Vec::new();
+    let mut from = Vec::new();
     loop {
         let eval = evaluate(knit, terms, &mut ws);
-        let residual = relative_residual(knit, &ws.force, eval.spring_force_sq, force_floor);
+        held.clone_from(&ws.force);
+        constraints.remove_held_force(&knit.particles.x, &mut held);
+        let residual = relative_residual(knit, &held, eval.spring_force_sq, force_floor);
         let (max_speed, kinetic_energy) = motion(knit);
         let max_move = max_speed * settings.time_step / shortest_rest;
         let energy = eval.potential_energy + kinetic_energy;
@@ -211,7 +246,17 @@ pub fn relax(
             if sub > 0 {
                 evaluate(knit, terms, &mut ws);
             }
+            from.clone_from(&knit.particles.x);
             integrate(knit, &ws.force, h, decay);
+            let p = &mut knit.particles;
+            constraints.constrain(&from, &mut p.x, &p.inv_mass);
+            // Where a constraint changed the move, the velocity is the move that was allowed.
+            for (((x, v), from), &inv_mass) in p.x.iter().zip(&mut p.v).zip(&from).zip(&p.inv_mass)
+            {
+                if inv_mass > 0.0 && *x != from + *v * h {
+                    *v = (x - from) / h;
+                }
+            }
         }
         step += 1;
     }

@@ -1,0 +1,128 @@
+//! The stocking as a tube of mass points (Sakaguchi & Miyata §6.1–6.2, Fig. 10–11): `wales`
+//! points around × `courses` rings along, stretched between the two axis points and widened so
+//! that every ring encloses the leg before the fit starts.
+//!
+//! Rest lengths come from a physical stocking lying relaxed: a course spring is the relaxed
+//! circumference over the number of wales, a wale spring the relaxed length over the number of
+//! courses minus one. The paper instead scaled one rest length to the leg; ours keeps the
+//! stocking's own size, so a thinner ankle really is covered by more stitches per cm².
+
+use nalgebra::{Point3, Vector3};
+
+use super::{Knit, Pattern, Tile, Vec3};
+use crate::leg::Axis;
+
+/// Gap kept between the leg and a ring before the fit, as a fraction of the ring radius.
+const RADIAL_MARGIN: f64 = 0.08;
+/// Gap kept in any case, metres (a ring must start clear of the skin).
+const MIN_GAP_M: f64 = 0.003;
+
+/// Size and rest lengths of the tube.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TubeSpec {
+    /// Points around.
+    pub wales: usize,
+    /// Rings along.
+    pub courses: usize,
+    /// Knit pattern.
+    pub pattern: Pattern,
+    /// Circumference of the relaxed stocking, metres.
+    pub relaxed_circumference_m: f64,
+    /// Length of the relaxed stocking between the axis points, metres.
+    pub relaxed_length_m: f64,
+}
+
+/// A tube ready to fit: the knit and, per point, whether it is on an end ring (held at its
+/// height along the axis).
+pub struct Tube {
+    /// The knit, closed around its courses.
+    pub knit: Knit,
+    /// True for points of the first and last ring.
+    pub end_ring: Vec<bool>,
+    /// Orthonormal frame: `u`, `v` across the axis.
+    pub frame: (Vector3<f64>, Vector3<f64>),
+}
+
+/// Two unit vectors perpendicular to `a` and to each other, with `u × v = a`.
+pub fn perpendicular_frame(a: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let helper = if a.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let u = a.cross(&helper).normalize();
+    let v = a.cross(&u);
+    (u, v)
+}
+
+/// Builds the tube around `leg_vertices` (world space) between the axis points.
+pub fn build_tube(spec: &TubeSpec, axis: &Axis, leg_vertices: &[Point3<f64>]) -> Tube {
+    let (w_count, c_count) = (spec.wales, spec.courses);
+    let bottom = axis.bottom();
+    let a = axis.direction();
+    let length = axis.length();
+    let (u, v) = perpendicular_frame(&a);
+    let radii = enclosing_radii(c_count, &bottom.coords, &a, length, leg_vertices);
+    let tile = Tile::of(spec.pattern);
+    let rest_course = spec.relaxed_circumference_m / w_count as f64;
+    let rest_wale = spec.relaxed_length_m / (c_count - 1).max(1) as f64;
+    let knit = Knit::grid(
+        w_count,
+        c_count,
+        true,
+        &tile,
+        rest_course,
+        rest_wale,
+        |w, c| {
+            let s = length * c as f64 / (c_count - 1).max(1) as f64;
+            let theta = std::f64::consts::TAU * w as f64 / w_count as f64;
+            bottom.coords + a * s + (u * theta.cos() + v * theta.sin()) * radii[c]
+        },
+    );
+    let end_ring = (0..knit.len())
+        .map(|i| {
+            let c = i / w_count;
+            c == 0 || c == c_count - 1
+        })
+        .collect();
+    Tube {
+        knit,
+        end_ring,
+        frame: (u, v),
+    }
+}
+
+/// Per ring, a radius that clears every leg vertex near that ring's height, with margin.
+/// Vertices are binned by height along the axis; each ring takes the largest radius of its own
+/// and the neighbouring bins, so a ring also clears the skin between it and the next.
+fn enclosing_radii(
+    courses: usize,
+    bottom: &Vec3,
+    a: &Vec3,
+    length: f64,
+    leg_vertices: &[Point3<f64>],
+) -> Vec<f64> {
+    let bins = courses.max(2);
+    let mut bin_radius = vec![0.0f64; bins];
+    for p in leg_vertices {
+        let d = p.coords - bottom;
+        let s = d.dot(a);
+        let r = (d - a * s).norm();
+        let t = (s / length * (bins - 1) as f64).round();
+        if t >= -1.0 && t <= bins as f64 {
+            let b = t.clamp(0.0, (bins - 1) as f64) as usize;
+            bin_radius[b] = bin_radius[b].max(r);
+        }
+    }
+    let widest = bin_radius.iter().copied().fold(0.0, f64::max);
+    (0..courses)
+        .map(|c| {
+            let lo = c.saturating_sub(1);
+            let hi = (c + 1).min(bins - 1);
+            let r = bin_radius[lo..=hi].iter().copied().fold(0.0, f64::max);
+            // A ring with no vertex near it (a gap in the mesh) takes the widest ring.
+            let r = if r > 0.0 { r } else { widest };
+            r + (r * RADIAL_MARGIN).max(MIN_GAP_M)
+        })
+        .collect()
+}

@@ -1,0 +1,181 @@
+//! The leg as something to collide with: closest point with inside/outside, and the first
+//! surface a straight move meets.
+//!
+//! Two methods answer the same questions. `Bvh` uses parry's bounding-volume hierarchy over the
+//! triangles. `Brute` tests every triangle, as the paper did (§6.2, §9): it is the slow reference
+//! that the fast path is checked against. Inside/outside comes from angle-weighted pseudo-normals
+//! (Bærentzen & Aanæs), which parry computes for an oriented mesh.
+
+use nalgebra::{Point3, Vector3};
+use parry3d_f64::query::{PointQuery, PointQueryWithLocation, Ray, RayCast};
+use parry3d_f64::shape::{TriMesh, TriMeshFlags, TrianglePointLocation};
+
+use super::Leg;
+use crate::error::{Error, Result};
+use crate::scene::ContactMethod;
+
+/// The closest point of the leg to a query point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Closest {
+    /// The closest surface point, metres.
+    pub point: Point3<f64>,
+    /// Distance to it, negative when the query point is inside the leg.
+    pub signed_distance: f64,
+    /// Unit vector pointing out of the leg at the closest point.
+    pub outward: Vector3<f64>,
+}
+
+/// A leg prepared for contact queries.
+pub struct Collider {
+    mesh: TriMesh,
+    method: ContactMethod,
+}
+
+impl Collider {
+    /// Builds the collider (the BVH and pseudo-normals). Duplicate vertices are merged and
+    /// zero-area triangles dropped first.
+    pub fn new(leg: &Leg, method: ContactMethod) -> Result<Collider> {
+        let flags = TriMeshFlags::ORIENTED
+            | TriMeshFlags::MERGE_DUPLICATE_VERTICES
+            | TriMeshFlags::DELETE_DEGENERATE_TRIANGLES;
+        let mesh = TriMesh::with_flags(leg.positions.clone(), leg.triangles.clone(), flags)
+            .map_err(|e| Error::Leg {
+                path: leg.path.clone(),
+                message: format!("cannot use the mesh for contact: {e}"),
+            })?;
+        Ok(Collider { mesh, method })
+    }
+
+    /// Number of triangles used for contact (after dropping degenerate ones).
+    pub fn triangle_count(&self) -> usize {
+        self.mesh.indices().len()
+    }
+
+    /// The contact method in use.
+    pub fn method(&self) -> ContactMethod {
+        self.method
+    }
+
+    /// The closest point of the leg to `p`, or `None` if it is further than `max_distance`.
+    pub fn closest_within(&self, p: &Point3<f64>, max_distance: f64) -> Option<Closest> {
+        let (projection, (triangle, location)) = match self.method {
+            ContactMethod::Bvh => self
+                .mesh
+                .project_local_point_and_get_location_with_max_dist(p, false, max_distance)?,
+            ContactMethod::Brute => {
+                let (proj, loc) = self.brute_closest(p)?;
+                if (proj.point - p).norm() > max_distance {
+                    return None;
+                }
+                (proj, loc)
+            }
+        };
+        let offset = p - projection.point;
+        let distance = offset.norm();
+        let inside = self.is_inside(p, &projection.point, triangle, location);
+        let outward = if distance > 1e-12 {
+            if inside {
+                -offset / distance
+            } else {
+                offset / distance
+            }
+        } else {
+            self.face_normal(triangle)
+        };
+        Some(Closest {
+            point: projection.point,
+            signed_distance: if inside { -distance } else { distance },
+            outward,
+        })
+    }
+
+    /// The closest point of the leg to `p`.
+    pub fn closest(&self, p: &Point3<f64>) -> Closest {
+        self.closest_within(p, f64::MAX)
+            .expect("a non-empty mesh always has a closest point")
+    }
+
+    /// The first surface met moving from `from` along the unit vector `dir` within `max_distance`:
+    /// the distance travelled and the surface normal facing `from`.
+    pub fn first_hit(
+        &self,
+        from: &Point3<f64>,
+        dir: &Vector3<f64>,
+        max_distance: f64,
+    ) -> Option<(f64, Vector3<f64>)> {
+        let ray = Ray::new(*from, *dir);
+        let hit = match self.method {
+            ContactMethod::Bvh => {
+                self.mesh
+                    .cast_local_ray_and_get_normal(&ray, max_distance, false)
+            }
+            ContactMethod::Brute => self
+                .mesh
+                .triangles()
+                .filter_map(|t| t.cast_local_ray_and_get_normal(&ray, max_distance, false))
+                .min_by(|a, b| a.time_of_impact.total_cmp(&b.time_of_impact)),
+        }?;
+        Some((hit.time_of_impact, hit.normal))
+    }
+
+    fn brute_closest(
+        &self,
+        p: &Point3<f64>,
+    ) -> Option<(
+        parry3d_f64::query::PointProjection,
+        (u32, TrianglePointLocation),
+    )> {
+        self.mesh
+            .triangles()
+            .enumerate()
+            .map(|(i, t)| {
+                let (proj, loc) = t.project_local_point_and_get_location(p, false);
+                (proj, (i as u32, loc))
+            })
+            .min_by(|a, b| {
+                (a.0.point - p)
+                    .norm_squared()
+                    .total_cmp(&(b.0.point - p).norm_squared())
+            })
+    }
+
+    /// Inside test by the pseudo-normal of the closest feature (face, edge or vertex).
+    fn is_inside(
+        &self,
+        p: &Point3<f64>,
+        closest: &Point3<f64>,
+        triangle: u32,
+        location: TrianglePointLocation,
+    ) -> bool {
+        let normal = match (self.mesh.pseudo_normals_if_oriented(), location) {
+            (Some(pn), TrianglePointLocation::OnEdge(i, _)) => {
+                pn.edges_pseudo_normal[triangle as usize][i as usize]
+            }
+            (Some(pn), TrianglePointLocation::OnVertex(i)) => {
+                let v = self.mesh.indices()[triangle as usize][i as usize];
+                pn.vertices_pseudo_normal[v as usize]
+            }
+            _ => self.face_normal(triangle),
+        };
+        (p - closest).dot(&normal) < 0.0
+    }
+
+    fn face_normal(&self, triangle: u32) -> Vector3<f64> {
+        self.mesh
+            .triangle(triangle)
+            .normal()
+            .map(|n| n.into_inner())
+            .unwrap_or_else(Vector3::y)
+    }
+
+    /// True when `p` is inside the leg (a cheaper question than [`Collider::closest`] only in
+    /// name: it needs the closest feature too).
+    pub fn contains(&self, p: &Point3<f64>) -> bool {
+        self.closest(p).signed_distance < 0.0
+    }
+
+    /// Plain distance from `p` to the surface (no sign), for tests and checks.
+    pub fn distance(&self, p: &Point3<f64>) -> f64 {
+        self.mesh.distance_to_local_point(p, false)
+    }
+}

@@ -1,0 +1,291 @@
+//! Loading a leg from glTF 2.0 (`.glb`, or `.gltf` with external or embedded buffers).
+//!
+//! Every triangle primitive under the default scene's nodes is taken, with node transforms
+//! applied, then converted from the file's units and up axis to ours: metres, Y up (glTF's own
+//! convention, so a well-formed glTF file needs no conversion). The mesh is checked: it must have
+//! triangles, finite coordinates, no compressed geometry, and a plausible height.
+
+use std::path::{Path, PathBuf};
+
+use nalgebra::{Matrix4, Point3};
+
+use crate::error::{Error, Result};
+use crate::scene::{Units, UpAxis};
+
+/// A leg mesh in world space: metres, Y up.
+#[derive(Clone, Debug)]
+pub struct Leg {
+    /// The file it came from.
+    pub path: PathBuf,
+    /// Vertex positions, metres, Y up.
+    pub positions: Vec<Point3<f64>>,
+    /// Triangles as vertex indices, counter-clockwise seen from outside.
+    pub triangles: Vec<[u32; 3]>,
+    /// The units the file was read in.
+    pub units: Units,
+    /// The up axis the file was read with.
+    pub up_axis: UpAxis,
+}
+
+/// Shortest and tallest leg accepted, metres: outside this range the file is almost certainly
+/// in other units than assumed.
+pub const PLAUSIBLE_HEIGHT_M: (f64, f64) = (0.2, 3.0);
+
+/// Geometry compression extensions we cannot decode.
+const COMPRESSION_EXTENSIONS: [&str; 3] = [
+    "KHR_draco_mesh_compression",
+    "EXT_meshopt_compression",
+    "KHR_mesh_quantization",
+];
+
+impl Leg {
+    /// Converts a point given in the file's coordinates and units to world space.
+    pub fn world_from_file(&self, p_file: &Point3<f64>) -> Point3<f64> {
+        world_from_file(self.units, self.up_axis, p_file)
+    }
+
+    /// Axis-aligned bounds of the vertices, world space.
+    pub fn bounds(&self) -> (Point3<f64>, Point3<f64>) {
+        let mut lo = Point3::from([f64::INFINITY; 3]);
+        let mut hi = Point3::from([f64::NEG_INFINITY; 3]);
+        for p in &self.positions {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        (lo, hi)
+    }
+}
+
+/// Converts file coordinates to world space: scale to metres, then rotate the file's up axis
+/// onto +Y (right-handed rotations only, so winding and handedness are kept).
+pub fn world_from_file(units: Units, up: UpAxis, p: &Point3<f64>) -> Point3<f64> {
+    let s = units.metres();
+    let (x, y, z) = (p.x * s, p.y * s, p.z * s);
+    let [x, y, z] = match up {
+        UpAxis::PosY => [x, y, z],
+        UpAxis::NegY => [x, -y, -z],
+        UpAxis::PosZ => [x, z, -y],
+        UpAxis::NegZ => [x, -z, y],
+        UpAxis::PosX => [-y, x, z],
+        UpAxis::NegX => [y, -x, z],
+    };
+    Point3::new(x, y, z)
+}
+
+/// Loads the leg in `path`, read in `units` with `up` as its up axis.
+pub fn load_leg(path: &Path, units: Units, up: UpAxis) -> Result<Leg> {
+    let fail = |message: String| Error::Leg {
+        path: path.to_path_buf(),
+        message,
+    };
+    let bytes = std::fs::read(path).map_err(|source| Error::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    // Look at the extensions before validating: the validator rejects unsupported required
+    // extensions with a message that does not say which one.
+    let unchecked = gltf::Gltf::from_slice_without_validation(&bytes)
+        .map_err(|e| fail(format!("not a readable glTF file: {e}")))?;
+    let mut extensions: Vec<&str> = unchecked
+        .extensions_used()
+        .chain(unchecked.extensions_required())
+        .collect();
+    extensions.sort_unstable();
+    extensions.dedup();
+    if let Some(ext) = extensions
+        .iter()
+        .find(|e| COMPRESSION_EXTENSIONS.contains(e))
+    {
+        return Err(fail(format!(
+            "uses compressed geometry ({ext}), which knitfit cannot decode; re-export the leg \
+             without mesh compression"
+        )));
+    }
+    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| fail(format!("invalid glTF: {e}")))?;
+    let base = path.parent().filter(|p| !p.as_os_str().is_empty());
+    let buffers = gltf::import_buffers(
+        &gltf.document,
+        base.or(Some(Path::new("."))),
+        gltf.blob.clone(),
+    )
+    .map_err(|e| fail(format!("cannot load buffers: {e}")))?;
+
+    let mut mesh = MeshCollector::default();
+    let scene = gltf
+        .document
+        .default_scene()
+        .or_else(|| gltf.document.scenes().next())
+        .ok_or_else(|| fail("has no scene".into()))?;
+    for node in scene.nodes() {
+        mesh.node(&node, &Matrix4::identity(), &buffers)
+            .map_err(fail)?;
+    }
+    if mesh.triangles.is_empty() {
+        return Err(fail(if mesh.other_primitives > 0 {
+            format!(
+                "has only line or point primitives ({}), no triangles to fit onto",
+                mesh.other_primitives
+            )
+        } else {
+            "has no triangles under its default scene".into()
+        }));
+    }
+    let positions: Vec<Point3<f64>> = mesh
+        .positions
+        .iter()
+        .map(|p| world_from_file(units, up, p))
+        .collect();
+    let leg = Leg {
+        path: path.to_path_buf(),
+        positions,
+        triangles: mesh.triangles,
+        units,
+        up_axis: up,
+    };
+    check_height(&leg)?;
+    Ok(leg)
+}
+
+/// Refuses a leg whose height is implausible in the assumed units, and says which units would fit.
+fn check_height(leg: &Leg) -> Result<()> {
+    let (lo, hi) = leg.bounds();
+    let height = hi.y - lo.y;
+    let (min, max) = PLAUSIBLE_HEIGHT_M;
+    if (min..=max).contains(&height) {
+        return Ok(());
+    }
+    let file_height = height / leg.units.metres();
+    let fitting: Vec<&str> = [
+        Units::Metres,
+        Units::Decimetres,
+        Units::Centimetres,
+        Units::Millimetres,
+        Units::Inches,
+    ]
+    .into_iter()
+    .filter(|u| (min..=max).contains(&(file_height * u.metres())))
+    .map(Units::name)
+    .collect();
+    let hint = if fitting.is_empty() {
+        format!("check leg.up_axis (now \"{}\")", leg.up_axis.name())
+    } else {
+        format!(
+            "it is probably in other units: set leg.units to \"{}\" (now \"{}\"), or check \
+             leg.up_axis (now \"{}\")",
+            fitting[0],
+            leg.units.name(),
+            leg.up_axis.name()
+        )
+    };
+    Err(Error::Leg {
+        path: leg.path.clone(),
+        message: format!(
+            "the leg is {height:.4} m tall along its up axis, outside the plausible {min}–{max} m; \
+             {hint}"
+        ),
+    })
+}
+
+/// Gathers triangles from a node tree, in the file's coordinates.
+#[derive(Default)]
+struct MeshCollector {
+    positions: Vec<Point3<f64>>,
+    triangles: Vec<[u32; 3]>,
+    other_primitives: usize,
+}
+
+impl MeshCollector {
+    fn node(
+        &mut self,
+        node: &gltf::Node,
+        parent: &Matrix4<f64>,
+        buffers: &[gltf::buffer::Data],
+    ) -> std::result::Result<(), String> {
+        let local = Matrix4::from(node.transform().matrix()).cast::<f64>();
+        let file_from_node = parent * local;
+        if let Some(mesh) = node.mesh() {
+            for prim in mesh.primitives() {
+                self.primitive(&prim, &file_from_node, buffers)
+                    .map_err(|e| {
+                        format!("mesh {} primitive {}: {e}", mesh.index(), prim.index())
+                    })?;
+            }
+        }
+        for child in node.children() {
+            self.node(&child, &file_from_node, buffers)?;
+        }
+        Ok(())
+    }
+
+    fn primitive(
+        &mut self,
+        prim: &gltf::Primitive,
+        file_from_node: &Matrix4<f64>,
+        buffers: &[gltf::buffer::Data],
+    ) -> std::result::Result<(), String> {
+        use gltf::mesh::Mode;
+        let mode = prim.mode();
+        if !matches!(
+            mode,
+            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+        ) {
+            self.other_primitives += 1;
+            return Ok(());
+        }
+        let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+        let positions: Vec<[f32; 3]> = reader
+            .read_positions()
+            .ok_or("has no POSITION attribute")?
+            .collect();
+        let n = positions.len() as u32;
+        let indices: Vec<u32> = match reader.read_indices() {
+            Some(i) => i.into_u32().collect(),
+            None => (0..n).collect(),
+        };
+        if let Some(bad) = indices.iter().find(|&&i| i >= n) {
+            return Err(format!("index {bad} is past its {n} vertices"));
+        }
+        // A mirroring transform (negative determinant) flips the winding; undo it.
+        let flip = file_from_node.fixed_view::<3, 3>(0, 0).determinant() < 0.0;
+        let first = self.positions.len() as u32;
+        for p in &positions {
+            if !p.iter().all(|c| c.is_finite()) {
+                return Err(format!("has a non-finite vertex coordinate {p:?}"));
+            }
+            let p = Point3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+            let q = file_from_node.transform_point(&p);
+            if !q.iter().all(|c| c.is_finite()) {
+                return Err("its node transform gives non-finite coordinates".into());
+            }
+            self.positions.push(q);
+        }
+        let mut push = |a: u32, b: u32, c: u32| {
+            let t = if flip { [a, c, b] } else { [a, b, c] };
+            self.triangles.push(t.map(|i| first + i));
+        };
+        match mode {
+            Mode::Triangles => {
+                for t in indices.chunks_exact(3) {
+                    push(t[0], t[1], t[2]);
+                }
+            }
+            Mode::TriangleStrip => {
+                for (k, t) in indices.windows(3).enumerate() {
+                    if k % 2 == 0 {
+                        push(t[0], t[1], t[2]);
+                    } else {
+                        push(t[1], t[0], t[2]);
+                    }
+                }
+            }
+            _ => {
+                for k in 1..indices.len().saturating_sub(1) {
+                    push(indices[0], indices[k], indices[k + 1]);
+                }
+            }
+        }
+        Ok(())
+    }
+}

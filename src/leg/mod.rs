@@ -1,0 +1,10 @@
+//! The leg: glTF loading into world space (metres, Y up), the long axis, and the collider the
+//! yarn slides on.
+
+pub mod axis;
+pub mod collider;
+pub mod load;
+
+pub use axis::{detect_axis, Axis, AxisSource};
+pub use collider::{Closest, Collider};
+pub use load::{load_leg, Leg};

@@ -1,0 +1,370 @@
+//! `knitfit fit`: the product's main job (Sakaguchi & Miyata §6.1–6.2). Load the leg, find its
+//! axis, build the tube around it, let the springs shrink it onto the leg with sliding contact,
+//! measure it, and write the leg with stitch-density attributes, the yarns and the stocking
+//! surface.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use nalgebra::Point3;
+use serde_json::json;
+
+use super::{Progress, RunPaths, StepProgress};
+use crate::error::{Error, Result};
+use crate::export::gltf::GlbNode;
+use crate::export::{self, SurfaceMesh, YarnGeometry};
+use crate::knit::tube::{build_tube, Tube, TubeSpec};
+use crate::knit::Knit;
+use crate::leg::{detect_axis, load_leg, Axis, AxisSource, Collider, Leg};
+use crate::plan::Plan;
+use crate::post::fields;
+use crate::render::colormap;
+use crate::report::{Metrics, Report, StageClock};
+use crate::scene::{Output, Scene};
+use crate::sim::contact::LegContact;
+use crate::sim::relax_constrained;
+
+/// Where the leg comes from and who chose the axis.
+#[derive(Clone, Debug)]
+pub struct FitInputs {
+    /// The leg file.
+    pub leg: PathBuf,
+    /// Who set `scene.leg.axis` (ignored when it is `None`).
+    pub axis_source: AxisSource,
+}
+
+/// The result of a fit.
+#[derive(Debug)]
+pub struct FitOutcome {
+    /// The report, as written to `report.json`.
+    pub report: Report,
+    /// Every file written, report included.
+    pub written: Vec<PathBuf>,
+}
+
+/// Runs the fit of `scene` and writes its files into `paths.out_dir`.
+pub fn run_fit(
+    scene: &Scene,
+    inputs: &FitInputs,
+    paths: &RunPaths,
+    progress: &mut dyn Progress,
+) -> Result<FitOutcome> {
+    let plan = Plan::fit(scene);
+    let mut clock = StageClock::default();
+    let mut all_inputs = paths.inputs.clone();
+    all_inputs.push(inputs.leg.clone());
+    let file_names: Vec<&str> = plan
+        .files
+        .iter()
+        .map(|(_, name)| *name)
+        .chain(["report.json"])
+        .collect();
+    export::atomic::prepare_dir(&paths.out_dir, &file_names, &all_inputs)?;
+
+    let leg = clock.time("load leg", || {
+        load_leg(&inputs.leg, scene.leg.units, scene.leg.up_axis)
+    })?;
+    let axis = clock.time("find axis", || choose_axis(scene, inputs, &leg))?;
+    let collider = clock.time("build collider", || {
+        Collider::new(&leg, scene.contact.method)
+    })?;
+    let spec = TubeSpec {
+        wales: scene.tube.wales,
+        courses: scene.tube.courses,
+        pattern: scene.knit.pattern,
+        relaxed_circumference_m: scene.tube.relaxed_circumference_m,
+        relaxed_length_m: scene.tube.relaxed_length_m,
+    };
+    let Tube {
+        mut knit, end_ring, ..
+    } = clock.time("knit tube", || build_tube(&spec, &axis, &leg.positions));
+
+    let offset = scene.contact.offset(&scene.yarns);
+    let rest_spacing = spec.relaxed_circumference_m / spec.wales as f64;
+    let query_radius = (10.0 * rest_spacing).max(0.005);
+    let mut contact = LegContact::new(&collider, offset, query_radius, axis.direction(), end_ring);
+    progress.begin("fit", scene.solver.max_steps as u64);
+    let stats = clock.time("fit", || {
+        relax_constrained(
+            &mut knit,
+            &plan.forces,
+            &scene.solver,
+            &mut contact,
+            &mut StepProgress(progress),
+        )
+    });
+    progress.end();
+    let stats = stats?;
+
+    let (max_penetration, axial_range) = clock.time("check penetration", || {
+        (max_penetration(&knit, &collider), axial_range(&knit, &axis))
+    });
+    let density = if plan.files.is_empty() {
+        (Vec::new(), Vec::new())
+    } else {
+        clock.time("stitch density", || {
+            let per_point = fields::stitch_density(&knit);
+            let bandwidth = 2.5 * mean_course_spacing(&knit);
+            let on_leg =
+                fields::transfer_to_leg(&knit.particles.x, &per_point, &leg.positions, bandwidth);
+            (per_point, on_leg)
+        })
+    };
+    let tension = fields::tension(&knit, &plan.forces);
+
+    let mut files = Vec::new();
+    for &(output, name) in &plan.files {
+        let bytes = clock.time(&format!("encode {name}"), || {
+            encode(output, name, scene, &leg, &knit, &density, &tension)
+        })?;
+        files.push((name.to_string(), bytes));
+    }
+
+    let covered: Vec<f64> = density.1.iter().copied().filter(|&d| d > 0.0).collect();
+    let metrics = Metrics {
+        points: knit.len(),
+        steps: stats.steps,
+        residual: stats.residual,
+        max_move: stats.max_move,
+        converged: stats.converged,
+        max_penetration_m: Some(max_penetration),
+        leg_triangles: Some(leg.triangles.len()),
+    };
+    let counters = contact.counters();
+    let details = json!({
+        "leg": {
+            "file": leg.path.display().to_string(),
+            "units": leg.units.name(),
+            "up_axis": leg.up_axis.name(),
+            "bounds_m": { "min": leg.bounds().0.coords.as_slice(), "max": leg.bounds().1.coords.as_slice() },
+        },
+        "axis": axis,
+        "tube": {
+            "wales": spec.wales,
+            "courses": spec.courses,
+            "rest_course_spacing_m": rest_spacing,
+            "rest_wale_spacing_m": spec.relaxed_length_m / (spec.courses - 1) as f64,
+            "axial_range_m": axial_range,
+        },
+        "solver": {
+            "time_step": scene.solver.time_step,
+            "time_step_limit": stats.time_step_limit,
+            "substeps_per_step": stats.substeps_per_step,
+        },
+        "contact": {
+            "method": scene.contact.method.name(),
+            "offset_m": offset,
+            "closest_queries": counters.closest_queries,
+            "slides": counters.slides,
+            "pushed_out": counters.pushed_out,
+        },
+        "stitch_density_per_cm2": {
+            "leg_vertices_covered": covered.len(),
+            "leg_vertices": leg.positions.len(),
+            "min": covered.iter().copied().fold(f64::INFINITY, f64::min),
+            "max": covered.iter().copied().fold(0.0, f64::max),
+        },
+    });
+    let mut report = Report {
+        command: plan.command.to_string(),
+        scene: paths.scene_name.clone(),
+        effects: plan.effects.iter().map(|e| e.name().to_string()).collect(),
+        stages: Vec::new(),
+        metrics,
+        details,
+        outputs: file_names.iter().map(|s| s.to_string()).collect(),
+        wall_seconds: 0.0,
+    };
+    let mut written = clock.time("write files", || {
+        export::atomic::write_all(&paths.out_dir, &files, &all_inputs)
+    })?;
+    report.stages = clock.stages().to_vec();
+    report.wall_seconds = clock.wall_seconds();
+    written.extend(export::atomic::write_all(
+        &paths.out_dir,
+        &[("report.json".to_string(), report.to_json())],
+        &all_inputs,
+    )?);
+    Ok(FitOutcome { report, written })
+}
+
+/// The axis from the scene (converted from file coordinates) or detected.
+fn choose_axis(scene: &Scene, inputs: &FitInputs, leg: &Leg) -> Result<Axis> {
+    match &scene.leg.axis {
+        Some(given) => {
+            let bottom = leg.world_from_file(&Point3::from(given.bottom));
+            let top = leg.world_from_file(&Point3::from(given.top));
+            Ok(Axis {
+                bottom: bottom.coords.into(),
+                top: top.coords.into(),
+                source: inputs.axis_source,
+            })
+        }
+        None => detect_axis(leg).ok_or_else(|| Error::Leg {
+            path: leg.path.clone(),
+            message: "cannot find the leg's axis: the mesh has no area".into(),
+        }),
+    }
+}
+
+/// Deepest yarn point inside the leg, metres (0 when none is), from exact closest-point queries.
+fn max_penetration(knit: &Knit, collider: &Collider) -> f64 {
+    use rayon::prelude::*;
+    knit.particles
+        .x
+        .par_iter()
+        .map(|p| (-collider.closest(&Point3::from(*p)).signed_distance).max(0.0))
+        .reduce(|| 0.0, f64::max)
+}
+
+/// Lowest and highest position of the yarn along the axis, metres from the bottom point.
+fn axial_range(knit: &Knit, axis: &Axis) -> [f64; 2] {
+    let a = axis.direction();
+    knit.particles
+        .x
+        .iter()
+        .fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], p| {
+            let s = (p - axis.bottom().coords).dot(&a);
+            [lo.min(s), hi.max(s)]
+        })
+}
+
+fn mean_course_spacing(knit: &Knit) -> f64 {
+    let x = &knit.particles.x;
+    let course: Vec<f64> = knit
+        .springs
+        .iter()
+        .filter(|s| s.direction == crate::knit::Direction::Course)
+        .map(|s| (x[s.b.index()] - x[s.a.index()]).norm())
+        .collect();
+    course.iter().sum::<f64>() / course.len().max(1) as f64
+}
+
+/// Encodes one output file.
+fn encode(
+    output: Output,
+    name: &str,
+    scene: &Scene,
+    leg: &Leg,
+    knit: &Knit,
+    density: &(Vec<f64>, Vec<f64>),
+    tension: &[f64],
+) -> Result<Vec<u8>> {
+    let mut yarns = YarnGeometry::from_knit("yarns", knit, [0.0; 3]);
+    yarns.point_attributes.insert(
+        "tension".into(),
+        tension.iter().map(|&t| t as f32).collect(),
+    );
+    let leg_mesh = leg_surface(leg, &density.1);
+    let comments = vec![format!("knitfit {} fit", env!("CARGO_PKG_VERSION"))];
+    match (output, name) {
+        (Output::Glb, _) => {
+            let stocking = stocking_surface(knit, &yarns);
+            export::gltf::write_nodes_glb(
+                &[
+                    GlbNode::Surface(&leg_mesh),
+                    GlbNode::Yarns(&yarns),
+                    GlbNode::Surface(&stocking),
+                ],
+                [scene.yarns.nylon.colour, scene.yarns.support.colour],
+            )
+        }
+        (Output::Ply, "leg.ply") => export::ply::write_mesh_ply(&leg_mesh, &comments),
+        (Output::Ply, _) => export::ply::write_ply(&[yarns], &comments),
+        (Output::Picture, _) => Err(Error::Encode {
+            what: name.into(),
+            message: "the fit has no picture output yet".into(),
+        }),
+    }
+}
+
+/// The leg with `stitch_density` and its heat map as vertex colours.
+fn leg_surface(leg: &Leg, density: &[f64]) -> SurfaceMesh {
+    let positions = leg.positions.iter().map(|p| p.coords.into()).collect();
+    let mut mesh = SurfaceMesh::new("leg", positions, leg.triangles.clone());
+    let covered = density.iter().copied().filter(|&d| d > 0.0);
+    let (lo, hi) = covered.fold((f64::INFINITY, 0.0f64), |(lo, hi), d| {
+        (lo.min(d), hi.max(d))
+    });
+    let uncovered = [0.2f32, 0.2, 0.2];
+    mesh.colours = Some(
+        density
+            .iter()
+            .map(|&d| {
+                if d > 0.0 {
+                    colormap::heat(if hi > lo { (d - lo) / (hi - lo) } else { 0.5 })
+                } else {
+                    uncovered
+                }
+            })
+            .collect(),
+    );
+    mesh.point_attributes.insert(
+        "stitch_density".into(),
+        density.iter().map(|&d| d as f32).collect(),
+    );
+    mesh
+}
+
+/// The fitted knit as a triangle surface: the grid triangulated with the seam column repeated
+/// so texture coordinates (wale, course) run 0–1 without a jump; yarn attributes per vertex.
+fn stocking_surface(knit: &Knit, yarns: &YarnGeometry) -> SurfaceMesh {
+    let (wales, courses) = (knit.wales, knit.courses);
+    let columns = wales + 1;
+    let source = |w: usize, c: usize| knit.point(w % wales, c).index();
+    let mut positions = Vec::with_capacity(columns * courses);
+    let mut texcoords = Vec::with_capacity(columns * courses);
+    let mut attributes: BTreeMap<String, Vec<f32>> = yarns
+        .point_attributes
+        .keys()
+        .map(|k| (k.clone(), Vec::new()))
+        .collect();
+    for c in 0..courses {
+        for w in 0..columns {
+            let i = source(w, c);
+            let p = knit.particles.x[i];
+            positions.push([p.x, p.y, p.z]);
+            texcoords.push([
+                w as f32 / wales as f32,
+                1.0 - c as f32 / (courses - 1).max(1) as f32,
+            ]);
+            for (name, values) in attributes.iter_mut() {
+                values.push(yarns.point_attributes[name][i]);
+            }
+        }
+    }
+    let id = |w: usize, c: usize| (c * columns + w) as u32;
+    let mut triangles = Vec::with_capacity(2 * wales * courses);
+    for c in 0..courses.saturating_sub(1) {
+        for w in 0..wales {
+            // Counter-clockwise seen from outside: around the axis, then up it.
+            triangles.push([id(w, c), id(w + 1, c), id(w + 1, c + 1)]);
+            triangles.push([id(w, c), id(w + 1, c + 1), id(w, c + 1)]);
+        }
+    }
+    let mut mesh = SurfaceMesh::new("stocking", positions, triangles);
+    // The repeated seam column must share the normal of the column it repeats.
+    for c in 0..courses {
+        let (first, last) = (id(0, c) as usize, id(wales, c) as usize);
+        let n = nalgebra::Vector3::from(mesh.normals[first])
+            + nalgebra::Vector3::from(mesh.normals[last]);
+        let n = if n.norm() > 0.0 {
+            n.normalize()
+        } else {
+            nalgebra::Vector3::y()
+        };
+        mesh.normals[first] = n.into();
+        mesh.normals[last] = n.into();
+    }
+    mesh.texcoords = Some(texcoords);
+    mesh.point_attributes = attributes;
+    mesh
+}
+
+/// The directory a scene's relative paths are resolved against.
+pub fn scene_dir(scene_path: Option<&Path>) -> PathBuf {
+    match scene_path {
+        Some(p) => p.parent().map(Path::to_path_buf).unwrap_or_default(),
+        None => Path::new(crate::scene::BUNDLED_SCENE_DIR).to_path_buf(),
+    }
+}

@@ -1,0 +1,251 @@
+//! Sliding contact as in Sakaguchi & Miyata §6.2 (Fig. 13): a point's move is kept up to where it
+//! meets the leg, and the part that would go inside is projected onto the surface it hit, so the
+//! point slides. We keep the yarn's centre line `offset` (the yarn radius) off the skin, repeat the
+//! projection when the slide meets another face (concave regions), and finish with a check
+//! against the closest point: a point never ends a step inside the leg.
+//!
+//! The tube's end rings are also held at their heights along the axis (they may still shrink
+//! radially), which keeps the stocking stretched between the two axis points.
+//!
+//! Exact queries are skipped where they cannot change the answer:
+//! * a point away from the leg keeps a lower bound on its distance to the surface (from its last
+//!   exact query, minus how far it has moved since) and is only queried when its move could use
+//!   up that clearance;
+//! * a point resting on the leg keeps the tangent plane of its last exact query and slides on that
+//!   plane until it has moved [`PLANE_REUSE_M`] from where the plane was taken. Within that
+//!   distance a surface whose radius of curvature is at least 1 cm departs from its tangent plane
+//!   by under 13 µm, less than half the default yarn offset (30 µm), so the point stays outside.
+//!   Sharper creases are covered by the exact check after the fit.
+
+use nalgebra::{Point3, Vector3};
+use rayon::prelude::*;
+
+use super::Constraints;
+use crate::knit::Vec3;
+use crate::leg::Collider;
+
+/// How many times one move may slide from face to face before it stops where it is.
+const MAX_SLIDES: usize = 4;
+/// Points per parallel chunk.
+const CHUNK: usize = 1024;
+/// How far a point may slide on a cached tangent plane before it is queried again, metres.
+pub const PLANE_REUSE_M: f64 = 0.0005;
+
+/// Per-point contact bookkeeping.
+#[derive(Clone, Copy, Debug, Default)]
+struct PointContact {
+    /// Lower bound on the distance to the surface, metres (0 = unknown: query).
+    clearance: f64,
+    /// Outward normal of the surface the point rests on, or zero when it is not touching.
+    normal: Vec3,
+    /// A point of the plane the point slides on while touching (surface + offset · normal).
+    plane_point: Vec3,
+    /// Where the point was at its last exact query.
+    queried_at: Vec3,
+}
+
+/// Counters for the report.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ContactCounters {
+    /// Exact closest-point queries made.
+    pub closest_queries: u64,
+    /// Moves that hit the leg and slid.
+    pub slides: u64,
+    /// Points pushed back out by the final check (a slide that ended inside).
+    pub pushed_out: u64,
+}
+
+/// Contact with the leg plus the tube's locked end rings.
+pub struct LegContact<'a> {
+    collider: &'a Collider,
+    offset: f64,
+    /// Beyond this distance a point is not queried exactly: a multiple of the rest spacing.
+    query_radius: f64,
+    axis: Vec3,
+    axially_locked: Vec<bool>,
+    state: Vec<PointContact>,
+    counters: ContactCounters,
+}
+
+impl<'a> LegContact<'a> {
+    /// Contact for `points` points against `collider`, keeping `offset` metres off the skin.
+    /// Points flagged in `axially_locked` cannot move along `axis` (a unit vector).
+    /// `query_radius` bounds the distance exact queries look (metres; larger is safe, slower).
+    pub fn new(
+        collider: &'a Collider,
+        offset: f64,
+        query_radius: f64,
+        axis: Vec3,
+        axially_locked: Vec<bool>,
+    ) -> LegContact<'a> {
+        let points = axially_locked.len();
+        LegContact {
+            collider,
+            offset,
+            query_radius,
+            axis,
+            axially_locked,
+            state: vec![PointContact::default(); points],
+            counters: ContactCounters::default(),
+        }
+    }
+
+    /// What contact has done so far.
+    pub fn counters(&self) -> ContactCounters {
+        self.counters
+    }
+
+    /// Moves a point from `from` by `delta`, sliding on the leg; returns where it ends with its
+    /// new clearance and contact normal. A slide that runs out of [`MAX_SLIDES`] stops there.
+    /// A `locked` point's moves keep no component along the axis.
+    fn slide(
+        &self,
+        from: &Vec3,
+        mut delta: Vec3,
+        locked: bool,
+        counters: &mut ContactCounters,
+    ) -> (Vec3, PointContact) {
+        let mut p = Point3::from(*from);
+        for _ in 0..MAX_SLIDES {
+            if locked {
+                delta -= self.axis * delta.dot(&self.axis);
+            }
+            let len = delta.norm();
+            if len.is_nan() || len <= 0.0 {
+                break;
+            }
+            let dir = delta / len;
+            match self.collider.first_hit(&p, &dir, len + self.offset) {
+                None => {
+                    p += delta;
+                    break;
+                }
+                Some((toi, n)) => {
+                    counters.slides += 1;
+                    // Stop where the centre line is `offset` off the face (at most back to the
+                    // start), then keep only the tangential part of what is left of the move.
+                    let cos = (-dir.dot(&n)).max(1e-3);
+                    let advance = (toi - self.offset / cos).max(0.0);
+                    p += dir * advance;
+                    let rest = delta - dir * advance;
+                    delta = rest - n * rest.dot(&n).min(0.0);
+                }
+            }
+        }
+        // Final check against the closest point: never end inside, never closer than offset.
+        counters.closest_queries += 1;
+        let state = match self.collider.closest_within(&p, self.query_radius) {
+            Some(c) => {
+                if c.signed_distance < self.offset * (1.0 - 1e-6) {
+                    if c.signed_distance < 0.0 {
+                        counters.pushed_out += 1;
+                    }
+                    p = c.point + c.outward * self.offset;
+                }
+                let gap = c.signed_distance.max(self.offset);
+                let touching = gap <= self.offset * 1.5 + 1e-9;
+                PointContact {
+                    clearance: gap,
+                    normal: if touching { c.outward } else { Vec3::zeros() },
+                    plane_point: c.point.coords + c.outward * self.offset,
+                    queried_at: p.coords,
+                }
+            }
+            None => PointContact {
+                clearance: self.query_radius,
+                queried_at: p.coords,
+                ..PointContact::default()
+            },
+        };
+        (p.coords, state)
+    }
+}
+
+impl Constraints for LegContact<'_> {
+    fn constrain(&mut self, from: &[Vec3], x: &mut [Vec3], inv_mass: &[f64]) {
+        let axis = self.axis;
+        let locked = &self.axially_locked;
+        let this = &*self;
+        let results: Vec<(Vec<PointContact>, ContactCounters)> = x
+            .par_chunks_mut(CHUNK)
+            .zip(from.par_chunks(CHUNK))
+            .enumerate()
+            .map(|(chunk, (x, from))| {
+                let mut counters = ContactCounters::default();
+                let mut states = Vec::with_capacity(x.len());
+                for k in 0..x.len() {
+                    let i = chunk * CHUNK + k;
+                    let mut state = this.state[i];
+                    if inv_mass[i] > 0.0 {
+                        let mut delta = x[k] - from[k];
+                        if locked[i] {
+                            delta -= axis * delta.dot(&axis);
+                        }
+                        let to = from[k] + delta;
+                        let touching = state.normal != Vec3::zeros();
+                        if touching && (to - state.queried_at).norm() < PLANE_REUSE_M {
+                            // Slide on the cached tangent plane: drop the part of the move that
+                            // would go below it.
+                            let below = (to - state.plane_point).dot(&state.normal).min(0.0);
+                            let mut slid = to - state.normal * below;
+                            if locked[i] {
+                                let d = slid - from[k];
+                                slid -= axis * d.dot(&axis);
+                            }
+                            x[k] = slid;
+                        } else if !touching && delta.norm() + this.offset < state.clearance {
+                            // Cannot reach the leg this step: move freely, spend clearance.
+                            x[k] = to;
+                            state.clearance -= delta.norm();
+                        } else {
+                            let (p, new_state) =
+                                this.slide(&from[k], delta, locked[i], &mut counters);
+                            x[k] = p;
+                            state = new_state;
+                        }
+                    }
+                    states.push(state);
+                }
+                (states, counters)
+            })
+            .collect();
+        let mut i = 0;
+        for (states, counters) in results {
+            for s in states {
+                self.state[i] = s;
+                i += 1;
+            }
+            self.counters.closest_queries += counters.closest_queries;
+            self.counters.slides += counters.slides;
+            self.counters.pushed_out += counters.pushed_out;
+        }
+    }
+
+    fn remove_held_force(&self, _x: &[Vec3], force: &mut [Vec3]) {
+        for (i, f) in force.iter_mut().enumerate() {
+            let n: Vector3<f64> = self.state[i].normal;
+            if self.axially_locked[i] {
+                let in_plane = *f - self.axis * f.dot(&self.axis);
+                if in_plane.dot(&n) < 0.0 {
+                    // Pressed onto the leg and held at its height: only sliding around the ring,
+                    // along axis × normal, is free.
+                    let along = self.axis.cross(&n);
+                    let len = along.norm();
+                    *f = if len > 1e-9 {
+                        let t = along / len;
+                        t * in_plane.dot(&t)
+                    } else {
+                        Vec3::zeros()
+                    };
+                } else {
+                    *f = in_plane;
+                }
+            } else {
+                let into_leg = f.dot(&n);
+                if into_leg < 0.0 {
+                    *f -= n * into_leg;
+                }
+            }
+        }
+    }
+}
