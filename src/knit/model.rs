@@ -67,6 +67,9 @@ pub struct Incident {
     pub spring: u32,
     /// The point at the other end.
     pub other: PointId,
+    /// True when the point this entry belongs to is the spring's end `a` (saves reading the
+    /// spring in the force loop).
+    pub at_a: bool,
 }
 
 /// A connection-force term acting on a point `i` (eq. 2): the tension of spring `j–k`, where `j`
@@ -77,6 +80,8 @@ pub struct Connection {
     pub via: PointId,
     /// Index into [`Knit::springs`] of spring `i–j` (its direction is the force's direction).
     pub from: u32,
+    /// True when `i` is end `a` of spring `i–j`.
+    pub from_at_a: bool,
     /// Index into [`Knit::springs`] of spring `j–k`.
     pub spring: u32,
 }
@@ -165,10 +170,12 @@ impl Knit {
             per_point[spring.a.index()].push(Incident {
                 spring: s as u32,
                 other: spring.b,
+                at_a: true,
             });
             per_point[spring.b.index()].push(Incident {
                 spring: s as u32,
                 other: spring.a,
+                at_a: false,
             });
         }
         // Connection terms: for i, each course neighbour j, and j's other course spring j–k.
@@ -185,6 +192,7 @@ impl Knit {
                         per_point_connections[i].push(Connection {
                             via: j,
                             from: inc.spring,
+                            from_at_a: inc.at_a,
                             spring: onward.spring,
                         });
                     }

@@ -67,6 +67,15 @@ pub struct LegContact<'a> {
     counters: ContactCounters,
 }
 
+/// What a single point's contact needs, shared by all points of a step.
+#[derive(Clone, Copy)]
+struct SlideParams<'a> {
+    collider: &'a Collider,
+    offset: f64,
+    query_radius: f64,
+    axis: Vec3,
+}
+
 impl<'a> LegContact<'a> {
     /// Contact for `points` points against `collider`, keeping `offset` metres off the skin.
     /// Points flagged in `axially_locked` cannot move along `axis` (a unit vector).
@@ -93,6 +102,43 @@ impl<'a> LegContact<'a> {
     /// What contact has done so far.
     pub fn counters(&self) -> ContactCounters {
         self.counters
+    }
+}
+
+impl SlideParams<'_> {
+    /// Where a free point moving from `from` towards `to` may go, updating its contact state.
+    fn constrain_point(
+        &self,
+        from: &Vec3,
+        to: &Vec3,
+        locked: bool,
+        state: &mut PointContact,
+        counters: &mut ContactCounters,
+    ) -> Vec3 {
+        let mut delta = to - from;
+        if locked {
+            delta -= self.axis * delta.dot(&self.axis);
+        }
+        let to = from + delta;
+        let touching = state.normal != Vec3::zeros();
+        if touching && (to - state.queried_at).norm() < PLANE_REUSE_M {
+            // Slide on the cached tangent plane: drop the part of the move below it.
+            let below = (to - state.plane_point).dot(&state.normal).min(0.0);
+            let mut slid = to - state.normal * below;
+            if locked {
+                let d = slid - from;
+                slid -= self.axis * d.dot(&self.axis);
+            }
+            slid
+        } else if !touching && delta.norm() + self.offset < state.clearance {
+            // Cannot reach the leg this step: move freely, spend clearance.
+            state.clearance -= delta.norm();
+            to
+        } else {
+            let (p, new_state) = self.slide(from, delta, locked, counters);
+            *state = new_state;
+            p
+        }
     }
 
     /// Moves a point from `from` by `delta`, sliding on the leg; returns where it ends with its
@@ -163,88 +209,66 @@ impl<'a> LegContact<'a> {
 
 impl Constraints for LegContact<'_> {
     fn constrain(&mut self, from: &[Vec3], x: &mut [Vec3], inv_mass: &[f64]) {
-        let axis = self.axis;
+        let params = SlideParams {
+            collider: self.collider,
+            offset: self.offset,
+            query_radius: self.query_radius,
+            axis: self.axis,
+        };
         let locked = &self.axially_locked;
-        let this = &*self;
-        let results: Vec<(Vec<PointContact>, ContactCounters)> = x
+        let counters: Vec<ContactCounters> = self
+            .state
             .par_chunks_mut(CHUNK)
+            .zip(x.par_chunks_mut(CHUNK))
             .zip(from.par_chunks(CHUNK))
             .enumerate()
-            .map(|(chunk, (x, from))| {
+            .map(|(chunk, ((states, x), from))| {
                 let mut counters = ContactCounters::default();
-                let mut states = Vec::with_capacity(x.len());
                 for k in 0..x.len() {
                     let i = chunk * CHUNK + k;
-                    let mut state = this.state[i];
                     if inv_mass[i] > 0.0 {
-                        let mut delta = x[k] - from[k];
-                        if locked[i] {
-                            delta -= axis * delta.dot(&axis);
-                        }
-                        let to = from[k] + delta;
-                        let touching = state.normal != Vec3::zeros();
-                        if touching && (to - state.queried_at).norm() < PLANE_REUSE_M {
-                            // Slide on the cached tangent plane: drop the part of the move that
-                            // would go below it.
-                            let below = (to - state.plane_point).dot(&state.normal).min(0.0);
-                            let mut slid = to - state.normal * below;
-                            if locked[i] {
-                                let d = slid - from[k];
-                                slid -= axis * d.dot(&axis);
-                            }
-                            x[k] = slid;
-                        } else if !touching && delta.norm() + this.offset < state.clearance {
-                            // Cannot reach the leg this step: move freely, spend clearance.
-                            x[k] = to;
-                            state.clearance -= delta.norm();
-                        } else {
-                            let (p, new_state) =
-                                this.slide(&from[k], delta, locked[i], &mut counters);
-                            x[k] = p;
-                            state = new_state;
-                        }
+                        x[k] = params.constrain_point(
+                            &from[k],
+                            &x[k],
+                            locked[i],
+                            &mut states[k],
+                            &mut counters,
+                        );
                     }
-                    states.push(state);
                 }
-                (states, counters)
+                counters
             })
             .collect();
-        let mut i = 0;
-        for (states, counters) in results {
-            for s in states {
-                self.state[i] = s;
-                i += 1;
-            }
-            self.counters.closest_queries += counters.closest_queries;
-            self.counters.slides += counters.slides;
-            self.counters.pushed_out += counters.pushed_out;
+        for c in counters {
+            self.counters.closest_queries += c.closest_queries;
+            self.counters.slides += c.slides;
+            self.counters.pushed_out += c.pushed_out;
         }
     }
 
-    fn remove_held_force(&self, _x: &[Vec3], force: &mut [Vec3]) {
-        for (i, f) in force.iter_mut().enumerate() {
-            let n: Vector3<f64> = self.state[i].normal;
-            if self.axially_locked[i] {
-                let in_plane = *f - self.axis * f.dot(&self.axis);
-                if in_plane.dot(&n) < 0.0 {
-                    // Pressed onto the leg and held at its height: only sliding around the ring,
-                    // along axis × normal, is free.
-                    let along = self.axis.cross(&n);
-                    let len = along.norm();
-                    *f = if len > 1e-9 {
-                        let t = along / len;
-                        t * in_plane.dot(&t)
-                    } else {
-                        Vec3::zeros()
-                    };
-                } else {
-                    *f = in_plane;
-                }
+    fn unheld_force(&self, i: usize, f: &Vec3) -> Vec3 {
+        let n: Vector3<f64> = self.state[i].normal;
+        if self.axially_locked[i] {
+            let in_plane = f - self.axis * f.dot(&self.axis);
+            if in_plane.dot(&n) >= 0.0 {
+                return in_plane;
+            }
+            // Pressed onto the leg and held at its height: only sliding around the ring, along
+            // axis × normal, is free.
+            let along = self.axis.cross(&n);
+            let len = along.norm();
+            if len > 1e-9 {
+                let t = along / len;
+                t * in_plane.dot(&t)
             } else {
-                let into_leg = f.dot(&n);
-                if into_leg < 0.0 {
-                    *f -= n * into_leg;
-                }
+                Vec3::zeros()
+            }
+        } else {
+            let into_leg = f.dot(&n);
+            if into_leg < 0.0 {
+                f - n * into_leg
+            } else {
+                *f
             }
         }
     }

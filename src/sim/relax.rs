@@ -63,14 +63,14 @@ pub struct RelaxStats {
 
 /// Limits on where points may go, applied after each sub-step's unconstrained update (the
 /// paper's "modified move", §6.2), and the forces those limits hold.
-pub trait Constraints {
+pub trait Constraints: Sync {
     /// Moves each free point from `from[i]` towards `x[i]` as far as the constraints allow,
     /// writing the allowed position into `x[i]`.
     fn constrain(&mut self, from: &[Vec3], x: &mut [Vec3], inv_mass: &[f64]);
-    /// Removes from each `force[i]` the part the constraints balance at positions `x` (a
-    /// contact's reaction, a locked direction), so the residual measures only what can still
+    /// The part of the force `f` on point `i` that the constraints do not hold (a contact's
+    /// reaction and a locked direction removed), so the residual measures only what can still
     /// move points.
-    fn remove_held_force(&self, x: &[Vec3], force: &mut [Vec3]);
+    fn unheld_force(&self, i: usize, f: &Vec3) -> Vec3;
 }
 
 /// No constraints: points go wherever the forces take them.
@@ -78,7 +78,9 @@ pub struct Unconstrained;
 
 impl Constraints for Unconstrained {
     fn constrain(&mut self, _from: &[Vec3], _x: &mut [Vec3], _inv_mass: &[f64]) {}
-    fn remove_held_force(&self, _x: &[Vec3], _force: &mut [Vec3]) {}
+    fn unheld_force(&self, _i: usize, f: &Vec3) -> Vec3 {
+        *f
+    }
 }
 
 /// Told about each step, e.g. to drive a progress bar. The library itself prints nothing.
@@ -202,13 +204,16 @@ pub fn relax_constrained(
     };
     let mut start_energy = None;
     let mut step = 0;
-    let mut held = Vec::new();
     let mut from = Vec::new();
     loop {
         let eval = evaluate(knit, terms, &mut ws);
-        held.clone_from(&ws.force);
-        constraints.remove_held_force(&knit.particles.x, &mut held);
-        let residual = relative_residual(knit, &held, eval.spring_force_sq, force_floor);
+        let residual = relative_residual(
+            knit,
+            &ws.force,
+            &*constraints,
+            eval.spring_force_sq,
+            force_floor,
+        );
         let (max_speed, kinetic_energy) = motion(knit);
         let max_move = max_speed * settings.time_step / shortest_rest;
         let energy = eval.potential_energy + kinetic_energy;
@@ -332,25 +337,25 @@ fn net_force(
     states: &[SpringState],
     p: crate::knit::PointId,
 ) -> Vec3 {
-    // Unit vector along spring `s`, pointing away from `p`.
-    let away = |s: u32| {
-        let state = &states[s as usize];
-        if knit.springs[s as usize].a == p {
-            state.unit_ab
+    // Unit vector along spring `s`, pointing away from `p` (which is end `a` when `at_a`).
+    let away = |s: u32, at_a: bool| {
+        let unit = states[s as usize].unit_ab;
+        if at_a {
+            unit
         } else {
-            -state.unit_ab
+            -unit
         }
     };
     let mut f = Vec3::zeros();
     for inc in knit.incident(p) {
         // Tension pulls p along the spring, compression pushes it back: eq. (1).
-        f += away(inc.spring) * states[inc.spring as usize].tension;
+        f += away(inc.spring, inc.at_a) * states[inc.spring as usize].tension;
     }
     if let Some(c2) = terms.connection_factor {
         for conn in knit.connections(p) {
             let tension = states[conn.spring as usize].tension.max(0.0);
             // Drawn towards the middle point j, along spring i–j (sign: see forces.rs).
-            f += away(conn.from) * (c2 * tension);
+            f += away(conn.from, conn.from_at_a) * (c2 * tension);
         }
     }
     f
@@ -359,19 +364,31 @@ fn net_force(
 /// RMS net force on free points over RMS spring force. Spring forces below that of a strain of
 /// [`REST_STRAIN`] on the softest spring count as that floor: such a knit is at rest, and both
 /// sums are rounding noise whose ratio means nothing.
-fn relative_residual(knit: &Knit, force: &[Vec3], spring_force_sq: f64, force_floor: f64) -> f64 {
+fn relative_residual(
+    knit: &Knit,
+    force: &[Vec3],
+    constraints: &dyn Constraints,
+    spring_force_sq: f64,
+    force_floor: f64,
+) -> f64 {
     let inv_mass = &knit.particles.inv_mass;
-    let (sum_sq, free) = force
-        .chunks(CHUNK)
-        .zip(inv_mass.chunks(CHUNK))
-        .map(|(f, m)| {
-            f.iter()
-                .zip(m)
-                .filter(|(_, &m)| m > 0.0)
-                .fold((0.0, 0usize), |(s, n), (f, _)| {
-                    (s + f.norm_squared(), n + 1)
-                })
+    let partial: Vec<(f64, usize)> = force
+        .par_chunks(CHUNK)
+        .enumerate()
+        .map(|(chunk, f)| {
+            let mut sum = (0.0, 0usize);
+            for (k, f) in f.iter().enumerate() {
+                let i = chunk * CHUNK + k;
+                if inv_mass[i] > 0.0 {
+                    sum.0 += constraints.unheld_force(i, f).norm_squared();
+                    sum.1 += 1;
+                }
+            }
+            sum
         })
+        .collect();
+    let (sum_sq, free) = partial
+        .iter()
         .fold((0.0, 0), |(a, n), (b, k)| (a + b, n + k));
     if free == 0 {
         return 0.0;
