@@ -2,5 +2,6 @@
 //! One test binary (see ripgrep); modules by topic.
 
 mod cli;
+mod fit;
 mod physics;
 mod util;

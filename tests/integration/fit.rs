@@ -1,0 +1,397 @@
+//! The fit on every sample leg (paper §6.1–6.2): invariants checked on the written files against
+//! the exact leg, and clean refusals of bad leg files.
+
+use std::path::{Path, PathBuf};
+
+use knitfit::leg::{load_leg, Collider};
+use knitfit::scene::{ContactMethod, Units, UpAxis};
+use nalgebra::Point3;
+use ply_rs_bw::ply::{DefaultElement, Property};
+
+use crate::util::{files_in, knitfit, report, stderr};
+
+/// Every bundled sample leg.
+fn sample_legs() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples");
+    let mut legs: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "glb"))
+        .collect();
+    legs.sort();
+    assert!(!legs.is_empty());
+    legs
+}
+
+fn read_ply(path: &Path) -> ply_rs_bw::ply::Ply<DefaultElement> {
+    let mut file = std::fs::File::open(path).unwrap();
+    ply_rs_bw::parser::Parser::<DefaultElement>::new()
+        .read_ply(&mut file)
+        .unwrap()
+}
+
+fn float(e: &DefaultElement, name: &str) -> f64 {
+    match &e[name] {
+        Property::Float(v) => *v as f64,
+        other => panic!("{name}: {other:?}"),
+    }
+}
+
+fn point(e: &DefaultElement) -> Point3<f64> {
+    Point3::new(float(e, "x"), float(e, "y"), float(e, "z"))
+}
+
+/// Fits `leg` at `resolution` into a fresh directory and returns (dir, report).
+fn fit(leg: &Path, resolution: &str, extra: &[&str]) -> (tempfile::TempDir, serde_json::Value) {
+    let dir = tempfile::tempdir().unwrap();
+    let mut args = vec![
+        "fit",
+        "--leg",
+        leg.to_str().unwrap(),
+        "--resolution",
+        resolution,
+        "-q",
+    ];
+    args.extend_from_slice(extra);
+    let out = knitfit(dir.path(), &args);
+    assert!(out.status.success(), "{}: {}", leg.display(), stderr(&out));
+    let r = report(&dir.path().join("out"));
+    (dir, r)
+}
+
+#[test]
+fn every_sample_leg_fits_without_penetration_between_the_axis_points() {
+    for leg_path in sample_legs() {
+        let (dir, r) = fit(&leg_path, "60x60", &[]);
+        let out = dir.path().join("out");
+        let name = leg_path.display();
+        assert_eq!(r["metrics"]["converged"], true, "{name}");
+        assert!(r["metrics"]["residual"].as_f64().unwrap() < 1e-3, "{name}");
+        assert_eq!(r["metrics"]["points"], 3600);
+        assert!(
+            r["metrics"]["max_penetration_m"].as_f64().unwrap() <= 1e-5,
+            "{name}"
+        );
+        assert_eq!(
+            r["effects"],
+            serde_json::json!(["yarn_connection", "alternating_yarns", "contact"])
+        );
+
+        // Independently of the report: every yarn point from the PLY, against the exact leg.
+        let leg = load_leg(&leg_path, Units::Metres, UpAxis::PosY).unwrap();
+        let collider = Collider::new(&leg, ContactMethod::Bvh).unwrap();
+        let yarns = read_ply(&out.join("stocking.ply"));
+        let points: Vec<Point3<f64>> = yarns.payload["vertex"].iter().map(point).collect();
+        assert_eq!(points.len(), 3600);
+        let deepest = points
+            .iter()
+            .map(|p| collider.closest(p).signed_distance)
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            deepest >= -1e-5,
+            "{name}: a yarn point is {deepest} m inside the leg"
+        );
+
+        // The tube stays between the two axis points.
+        let axis = &r["details"]["axis"];
+        let v = |k: &str| {
+            Point3::from(std::array::from_fn::<f64, 3, _>(|i| {
+                axis[k][i].as_f64().unwrap()
+            }))
+        };
+        let (bottom, top) = (v("bottom"), v("top"));
+        let dir_axis = (top - bottom).normalize();
+        let length = (top - bottom).norm();
+        for p in &points {
+            let s = (p - bottom).dot(&dir_axis);
+            assert!(
+                (-1e-6..=length + 1e-6).contains(&s),
+                "{name}: {s} outside 0..{length}"
+            );
+        }
+    }
+}
+
+#[test]
+fn stitch_density_is_positive_on_covered_skin_and_higher_at_the_ankle_than_the_thigh() {
+    for leg_path in sample_legs() {
+        let (dir, r) = fit(&leg_path, "60x60", &[]);
+        let name = leg_path.display();
+        let legply = read_ply(&dir.path().join("out").join("leg.ply"));
+        let vertices = &legply.payload["vertex"];
+        let density: Vec<f64> = vertices
+            .iter()
+            .map(|v| float(v, "stitch_density"))
+            .collect();
+        assert!(density.iter().all(|d| d.is_finite() && *d >= 0.0), "{name}");
+        let axis = &r["details"]["axis"];
+        let y = |k: &str| axis[k][1].as_f64().unwrap();
+        let (bottom, top) = (y("bottom"), y("top"));
+        let band = |lo: f64, hi: f64| {
+            let values: Vec<f64> = vertices
+                .iter()
+                .zip(&density)
+                .filter(|(v, _)| {
+                    let t = (float(v, "y") - bottom) / (top - bottom);
+                    (lo..hi).contains(&t)
+                })
+                .map(|(_, d)| *d)
+                .collect();
+            assert!(!values.is_empty(), "{name}: no vertex in band {lo}..{hi}");
+            values
+        };
+        let ankle = band(0.05, 0.15);
+        let thigh = band(0.85, 0.95);
+        assert!(
+            ankle.iter().all(|&d| d > 0.0),
+            "{name}: uncovered skin at the ankle"
+        );
+        assert!(
+            thigh.iter().all(|&d| d > 0.0),
+            "{name}: uncovered skin at the thigh"
+        );
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+        assert!(
+            mean(&ankle) > 1.5 * mean(&thigh),
+            "{name}: ankle {} vs thigh {} stitches/cm²",
+            mean(&ankle),
+            mean(&thigh)
+        );
+    }
+}
+
+#[test]
+fn ply_and_gltf_outputs_agree_and_read_back_with_their_counts() {
+    let leg_path = &sample_legs()[0];
+    let (dir, r) = fit(leg_path, "30x20", &[]);
+    let out = dir.path().join("out");
+    let yarns = read_ply(&out.join("stocking.ply"));
+    assert_eq!(yarns.payload["vertex"].len(), 600);
+    assert_eq!(
+        yarns.payload["edge"].len(),
+        30 * 20 + 30 * 19,
+        "closed courses + wales"
+    );
+    let legply = read_ply(&out.join("leg.ply"));
+    assert_eq!(
+        legply.payload["face"].len() as u64,
+        r["metrics"]["leg_triangles"].as_u64().unwrap()
+    );
+
+    let (doc, buffers, _) = gltf::import(out.join("stocking.glb")).unwrap();
+    let names: Vec<_> = doc.nodes().map(|n| n.name().unwrap().to_string()).collect();
+    assert_eq!(names, ["leg", "yarns", "stocking"]);
+    let yarn_node = doc.nodes().nth(1).unwrap();
+    let prim = yarn_node.mesh().unwrap().primitives().next().unwrap();
+    let positions: Vec<[f32; 3]> = prim
+        .reader(|b| Some(&buffers[b.index()]))
+        .read_positions()
+        .unwrap()
+        .collect();
+    for (gl, ply) in positions.iter().zip(&yarns.payload["vertex"]) {
+        assert_eq!(
+            *gl,
+            [
+                float(ply, "x") as f32,
+                float(ply, "y") as f32,
+                float(ply, "z") as f32
+            ]
+        );
+    }
+    let semantics: Vec<String> = prim.attributes().map(|(s, _)| s.to_string()).collect();
+    for name in ["_COURSE", "_WALE", "_YARN_KIND", "_TENSION"] {
+        assert!(
+            semantics.iter().any(|s| s == name),
+            "{name} missing from {semantics:?}"
+        );
+    }
+    let leg_node = doc.nodes().next().unwrap();
+    let leg_prim = leg_node.mesh().unwrap().primitives().next().unwrap();
+    let semantics: Vec<String> = leg_prim.attributes().map(|(s, _)| s.to_string()).collect();
+    for name in ["_STITCH_DENSITY", "COLOR_0", "NORMAL"] {
+        assert!(
+            semantics.iter().any(|s| s == name),
+            "{name} missing from {semantics:?}"
+        );
+    }
+    let stocking = doc.nodes().nth(2).unwrap().mesh().unwrap();
+    let semantics: Vec<String> = stocking
+        .primitives()
+        .next()
+        .unwrap()
+        .attributes()
+        .map(|(s, _)| s.to_string())
+        .collect();
+    assert!(semantics.iter().any(|s| s == "TEXCOORD_0"), "{semantics:?}");
+}
+
+#[test]
+fn brute_force_contact_gives_the_same_fit_as_the_bvh() {
+    // A coarse leg keeps the brute-force reference affordable.
+    let dir = tempfile::tempdir().unwrap();
+    let leg = coarse_leg(dir.path());
+    let (bvh_dir, bvh) = fit(&leg, "16x12", &[]);
+    let (brute_dir, brute) = fit(&leg, "16x12", &["--contact", "brute"]);
+    assert_eq!(bvh["metrics"]["steps"], brute["metrics"]["steps"]);
+    let a = read_ply(&bvh_dir.path().join("out/stocking.ply"));
+    let b = read_ply(&brute_dir.path().join("out/stocking.ply"));
+    for (p, q) in a.payload["vertex"].iter().zip(&b.payload["vertex"]) {
+        assert!((point(p) - point(q)).norm() < 1e-6);
+    }
+}
+
+/// A leg-sized elliptic tube of 32 × 24 quads, capped, written as a GLB into `dir`.
+fn coarse_leg(dir: &Path) -> PathBuf {
+    use knitfit::export::gltf::{write_nodes_glb, GlbNode};
+    use knitfit::export::SurfaceMesh;
+    let (around, along) = (32usize, 24usize);
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for j in 0..=along {
+        let y = 0.08 + 0.75 * j as f64 / along as f64;
+        let r = 0.035 + 0.045 * (y - 0.08) / 0.75;
+        for i in 0..around {
+            let t = std::f64::consts::TAU * i as f64 / around as f64;
+            positions.push([r * 1.1 * t.cos(), y, -r * 0.9 * t.sin()]);
+        }
+    }
+    for j in 0..along {
+        for i in 0..around {
+            let a = (j * around + i) as u32;
+            let b = (j * around + (i + 1) % around) as u32;
+            let (c, d) = (b + around as u32, a + around as u32);
+            triangles.push([a, b, c]);
+            triangles.push([a, c, d]);
+        }
+    }
+    let mesh = SurfaceMesh::new("leg", positions, triangles);
+    let path = dir.join("coarse_leg.glb");
+    std::fs::write(
+        &path,
+        write_nodes_glb(&[GlbNode::Surface(&mesh)], [[0.5; 3]; 2]).unwrap(),
+    )
+    .unwrap();
+    path
+}
+
+/// Runs `fit --leg FILE` on a leg file holding `bytes`, expecting a one-line error with exit
+/// code 2 that names the file and contains `expect`, and nothing written.
+fn bad_leg(name: &str, bytes: &[u8], expect: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join(name), bytes).unwrap();
+    let out = knitfit(dir.path(), &["fit", "--leg", name, "--resolution", "8x8"]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{name}: {err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains(name), "names the file: {err}");
+    assert!(err.contains(expect), "expected {expect:?}: {err}");
+    assert!(files_in(&dir.path().join("out")).is_empty());
+}
+
+/// A minimal glTF document with one primitive of `mode` over three embedded vertices.
+fn gltf_text(positions: [[&str; 3]; 3], mode: u32, extensions: &str) -> String {
+    let floats: Vec<f32> = positions
+        .iter()
+        .flatten()
+        .map(|s| match *s {
+            "nan" => f32::NAN,
+            s => s.parse().unwrap(),
+        })
+        .collect();
+    let bytes: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
+    let data = base64(&bytes);
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},{extensions}"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"mode":{mode}}}]}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}}],
+"bufferViews":[{{"buffer":0,"byteLength":36}}],
+"buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,{data}"}}]}}"#
+    )
+}
+
+fn base64(bytes: &[u8]) -> String {
+    const ALPHABET: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            *chunk.get(1).unwrap_or(&0),
+            *chunk.get(2).unwrap_or(&0),
+        ];
+        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
+        for k in 0..4 {
+            if k <= chunk.len() {
+                out.push(ALPHABET[(n >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+const TRIANGLE: [[&str; 3]; 3] = [["0", "0", "0"], ["1", "0", "0"], ["0", "1", "0"]];
+
+#[test]
+fn a_file_that_is_not_gltf_is_refused() {
+    bad_leg(
+        "leg.glb",
+        b"solid leg\nendsolid\n",
+        "not a readable glTF file",
+    );
+}
+
+#[test]
+fn a_leg_of_lines_only_is_refused() {
+    bad_leg(
+        "lines.gltf",
+        gltf_text(TRIANGLE, 1, "").as_bytes(),
+        "only line or point primitives",
+    );
+}
+
+#[test]
+fn compressed_geometry_is_refused_by_name() {
+    let ext = r#""extensionsUsed":["KHR_draco_mesh_compression"],"extensionsRequired":["KHR_draco_mesh_compression"],"#;
+    bad_leg(
+        "draco.gltf",
+        gltf_text(TRIANGLE, 4, ext).as_bytes(),
+        "KHR_draco_mesh_compression",
+    );
+}
+
+#[test]
+fn non_finite_coordinates_are_refused() {
+    let nan = [["0", "0", "0"], ["nan", "0", "0"], ["0", "1", "0"]];
+    bad_leg("nan.gltf", gltf_text(nan, 4, "").as_bytes(), "non-finite");
+}
+
+#[test]
+fn a_leg_in_millimetres_read_as_metres_is_refused_with_the_units_that_fit() {
+    let leg = std::fs::read(&sample_legs()[0]).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    // The sample leg, scaled ×1000 by a node transform.
+    let mut gltf = gltf::Gltf::from_slice(&leg).unwrap();
+    let mut root = gltf.document.clone().into_json();
+    for node in &mut root.nodes {
+        node.scale = Some([1000.0; 3]);
+    }
+    let json = gltf_json::serialize::to_vec(&root).unwrap();
+    let blob = gltf.blob.take().unwrap();
+    let glb = gltf::binary::Glb {
+        header: gltf::binary::Header {
+            magic: *b"glTF",
+            version: 2,
+            length: 0,
+        },
+        json: std::borrow::Cow::Owned(json),
+        bin: Some(std::borrow::Cow::Owned(blob)),
+    };
+    let path = dir.path().join("leg_mm.glb");
+    std::fs::write(&path, glb.to_vec().unwrap()).unwrap();
+    bad_leg(
+        "leg_mm.glb",
+        &std::fs::read(&path).unwrap(),
+        "set leg.units to \"mm\"",
+    );
+}
