@@ -273,3 +273,103 @@ impl Constraints for LegContact<'_> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::leg::Leg;
+    use crate::scene::{ContactMethod, Units, UpAxis};
+
+    /// A capped rod of radius `r` along Y, counter-clockwise outside.
+    fn rod(r: f64) -> Leg {
+        let (around, along) = (24usize, 10usize);
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        for j in 0..=along {
+            for i in 0..around {
+                let t = std::f64::consts::TAU * i as f64 / around as f64;
+                positions.push(Point3::new(
+                    r * t.cos(),
+                    0.1 * j as f64 / along as f64,
+                    -r * t.sin(),
+                ));
+            }
+        }
+        for j in 0..along {
+            for i in 0..around {
+                let a = (j * around + i) as u32;
+                let b = (j * around + (i + 1) % around) as u32;
+                triangles.push([a, b, b + around as u32]);
+                triangles.push([a, b + around as u32, a + around as u32]);
+            }
+        }
+        let (bottom, top) = (positions.len() as u32, positions.len() as u32 + 1);
+        positions.push(Point3::new(0.0, 0.0, 0.0));
+        positions.push(Point3::new(0.0, 0.1, 0.0));
+        for i in 0..around as u32 {
+            let n = (i + 1) % around as u32;
+            triangles.push([bottom, n, i]);
+            let top_ring = (along * around) as u32;
+            triangles.push([top, top_ring + i, top_ring + n]);
+        }
+        Leg {
+            path: "rod".into(),
+            positions,
+            triangles,
+            units: Units::Metres,
+            up_axis: UpAxis::PosY,
+        }
+    }
+
+    /// A seeded generator of numbers in [-1, 1) (no entropy: tests are reproducible).
+    struct Lcg(u64);
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (self.0 >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+        }
+    }
+
+    #[test]
+    fn no_move_ends_inside_a_thin_rod_however_it_is_aimed() {
+        let radius = 0.003;
+        let offset = 0.00003;
+        let leg = rod(radius);
+        for method in [ContactMethod::Bvh, ContactMethod::Brute] {
+            let collider = Collider::new(&leg, method).unwrap();
+            let n = 200;
+            let mut rng = Lcg(7);
+            // Points start just outside the rod (0.1 mm off the skin) at random places.
+            let mut x: Vec<Vec3> = (0..n)
+                .map(|_| {
+                    let t = std::f64::consts::PI * rng.next();
+                    let y = 0.05 + 0.03 * rng.next();
+                    Vec3::new((radius + 1e-4) * t.cos(), y, (radius + 1e-4) * t.sin())
+                })
+                .collect();
+            let mut contact = LegContact::new(&collider, offset, 0.01, Vec3::y(), vec![false; n]);
+            let inv_mass = vec![1.0; n];
+            for step in 0..40 {
+                let from = x.clone();
+                // Moves up to 8 mm long in any direction (many go straight through the rod),
+                // then short ones that slide on cached tangent planes.
+                let length = if step < 20 { 0.008 } else { 0.0003 };
+                for p in x.iter_mut() {
+                    *p += Vec3::new(rng.next(), 0.3 * rng.next(), rng.next()) * length;
+                }
+                contact.constrain(&from, &mut x, &inv_mass);
+                for p in &x {
+                    let d = collider.closest(&Point3::from(*p)).signed_distance;
+                    assert!(
+                        d >= offset * 0.999,
+                        "{method:?}: a point ended {d} m from the skin"
+                    );
+                }
+            }
+            assert!(contact.counters().slides > 0, "the moves did hit the rod");
+        }
+    }
+}
