@@ -112,10 +112,16 @@ pub fn run_fit(
     };
     let tension = fields::tension(&knit, &plan.forces);
 
+    let mut yarns = YarnGeometry::from_knit("yarns", &knit, [0.0; 3]);
+    yarns.point_attributes.insert(
+        "tension".into(),
+        tension.iter().map(|&t| t as f32).collect(),
+    );
+    let leg_mesh = leg_surface(&leg, &density.1);
     let mut files = Vec::new();
     for &(output, name) in &plan.files {
         let bytes = clock.time(&format!("encode {name}"), || {
-            encode(output, name, scene, &leg, &knit, &density, &tension)
+            encode(output, name, scene, &knit, &yarns, &leg_mesh)
         })?;
         files.push((name.to_string(), bytes));
     }
@@ -245,32 +251,25 @@ fn encode(
     output: Output,
     name: &str,
     scene: &Scene,
-    leg: &Leg,
     knit: &Knit,
-    density: &(Vec<f64>, Vec<f64>),
-    tension: &[f64],
+    yarns: &YarnGeometry,
+    leg_mesh: &SurfaceMesh,
 ) -> Result<Vec<u8>> {
-    let mut yarns = YarnGeometry::from_knit("yarns", knit, [0.0; 3]);
-    yarns.point_attributes.insert(
-        "tension".into(),
-        tension.iter().map(|&t| t as f32).collect(),
-    );
-    let leg_mesh = leg_surface(leg, &density.1);
     let comments = vec![format!("knitfit {} fit", env!("CARGO_PKG_VERSION"))];
     match (output, name) {
         (Output::Glb, _) => {
-            let stocking = stocking_surface(knit, &yarns);
+            let stocking = stocking_surface(knit, yarns);
             export::gltf::write_nodes_glb(
                 &[
-                    GlbNode::Surface(&leg_mesh),
-                    GlbNode::Yarns(&yarns),
+                    GlbNode::Surface(leg_mesh),
+                    GlbNode::Yarns(yarns),
                     GlbNode::Surface(&stocking),
                 ],
                 [scene.yarns.nylon.colour, scene.yarns.support.colour],
             )
         }
-        (Output::Ply, "leg.ply") => export::ply::write_mesh_ply(&leg_mesh, &comments),
-        (Output::Ply, _) => export::ply::write_ply(&[yarns], &comments),
+        (Output::Ply, "leg.ply") => export::ply::write_mesh_ply(leg_mesh, &comments),
+        (Output::Ply, _) => export::ply::write_ply(std::slice::from_ref(yarns), &comments),
         (Output::Picture, _) => Err(Error::Encode {
             what: name.into(),
             message: "the fit has no picture output yet".into(),
