@@ -1,8 +1,14 @@
-//! The stitch picture of relaxed patches (Sakaguchi & Miyata Fig. 8/9): each patch drawn flat,
-//! yarn by yarn, panels side by side at one common scale so stitch sizes compare across panels.
+//! The stitch picture of relaxed patches, after Sakaguchi & Miyata Fig. 8/9: each patch drawn
+//! flat as a stitch diagram, its yarn grid drawn as yarn, panels side by side at one common scale
+//! so stitch sizes compare across panels.
 //!
-//! Each yarn segment is an anti-aliased capsule shaded like a cylinder seen from above; course
-//! yarn is drawn over wale yarn; held points are marked. Pure and deterministic.
+//! Every yarn segment is an anti-aliased capsule shaded like a cylinder seen from above (light on
+//! the crest, dark at the flanks). Segments are drawn in passes: the grip under held edges, then
+//! wale yarn, then course yarn over it, then a mark on every held point. Within a pass the
+//! capsules are merged as one signed-distance field (nearest capsule wins), so joints between the
+//! segments of one yarn are seamless rather than darkened twice by overlapping edges.
+//!
+//! Pure and deterministic: no randomness, no threads, the same bytes for the same input.
 
 use image::{ImageEncoder, RgbImage};
 
@@ -12,21 +18,28 @@ use crate::export::YarnGeometry;
 use crate::knit::Direction;
 
 /// One patch to draw.
+#[derive(Clone, Copy, Debug)]
 pub struct Panel<'a> {
-    /// The patch's yarn geometry (positions in the XY plane; `offset_m` is ignored).
+    /// The patch's yarn geometry: positions in metres in the XY plane (x along the course, y
+    /// along the wale; z is ignored). `offset_m` is ignored: each panel is centred on the
+    /// bounding box of its own points.
     pub geometry: &'a YarnGeometry,
-    /// Per point: true where the point is held (pinned).
+    /// Per point: true where the point is held (pinned). Shorter than `positions` means the
+    /// missing points are free; extra entries are ignored.
     pub held: &'a [bool],
 }
 
 /// How the picture looks.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PictureStyle {
-    /// Side of each square panel, pixels (default: 480).
+    /// Side of each square panel, pixels (default: 480; at least 16 is used).
     pub panel_px: u32,
-    /// Yarn radius per yarn kind (`YarnKind::index()`), metres (default: 0.03 / 0.04 mm).
+    /// Yarn radius per yarn kind ([`crate::knit::YarnKind::index`]), metres (default: 0.03 mm
+    /// nylon, 0.04 mm support, as the scene defaults). Drawn at least 1.2 px, and at most 30 % of
+    /// the panel's median segment length so stitches stay open.
     pub yarn_radius_m: [f64; 2],
-    /// Linear-RGB yarn colour per yarn kind, 0–1.
+    /// Linear-RGB yarn colour per yarn kind, each channel 0–1 (default: the scene defaults, a
+    /// dark brown nylon and a dark blue-black support yarn).
     pub yarn_colour: [[f64; 3]; 2],
 }
 
@@ -34,198 +47,357 @@ impl Default for PictureStyle {
     fn default() -> Self {
         PictureStyle {
             panel_px: 480,
-            yarn_radius_m: [0.00003, 0.00004],
+            yarn_radius_m: [0.000_03, 0.000_04],
             yarn_colour: [[0.16, 0.11, 0.09], [0.08, 0.07, 0.10]],
         }
     }
 }
 
-/// Linear-RGB background.
+/// Linear-RGB background: a light warm grey, like paper.
 const BACKGROUND: [f32; 3] = [0.80, 0.78, 0.74];
-/// Linear-RGB colour of held-point marks.
-const HELD_MARK: [f32; 3] = [0.55, 0.05, 0.03];
+/// Linear-RGB colour of the grip drawn under held edges: a pale rust tint.
+const GRIP: [f32; 3] = [0.86, 0.52, 0.40];
+/// Linear-RGB colour of the square on each held point: a deep red, dark but not yarn-coloured.
+const HELD_MARK: [f32; 3] = [0.50, 0.03, 0.02];
+/// Smallest panel side, pixels.
+const MIN_PANEL_PX: u32 = 16;
 /// Empty border of each panel, as a fraction of its side.
 const MARGIN: f64 = 0.06;
-/// Thinnest yarn drawn, pixels (thinner would vanish or alias).
+/// Thinnest yarn drawn from the style's radius, pixels (thinner would vanish or alias).
 const MIN_RADIUS_PX: f64 = 1.2;
-/// Thickest yarn drawn, as a fraction of the mean segment length, so stitches stay open.
+/// Thickest yarn drawn, as a fraction of the panel's median segment length, so stitches stay open.
+/// Wins over [`MIN_RADIUS_PX`] on very dense panels, which then read as a tone.
 const MAX_RADIUS_FRACTION: f64 = 0.3;
+/// Thinnest yarn drawn at all, pixels: a one-pixel line.
+const FLOOR_RADIUS_PX: f64 = 0.5;
+/// Largest half-side of a held point's square, as a fraction of the median segment length.
+const MARK_FRACTION: f64 = 0.4;
+/// Grip half-width under held edges, as a fraction of the median segment length.
+const GRIP_FRACTION: f64 = 0.22;
 
-/// Draws `panels` side by side.
+/// Draws `panels` side by side, left to right, each `style.panel_px` square; the image is
+/// `panel_px × panels.len()` wide (one blank panel when `panels` is empty) and `panel_px` high.
+///
+/// One scale (metres per pixel) serves every panel: the largest panel's larger bounding-box side
+/// fills the panel less its margin. Each panel is centred on its own bounding-box centre; the
+/// patch's +y (along the wale) points up. Points with a non-finite coordinate, and segments that
+/// touch them or name a point that does not exist, are skipped.
 pub fn draw_patches(panels: &[Panel], style: &PictureStyle) -> RgbImage {
-    let side = style.panel_px.max(16);
-    let width = side * panels.len().max(1) as u32;
-    let mut canvas = Canvas {
-        width: width as usize,
-        height: side as usize,
-        pixels: vec![BACKGROUND; width as usize * side as usize],
-    };
-    let extent = panels
+    let side = style.panel_px.max(MIN_PANEL_PX);
+    let width = side.saturating_mul(panels.len().max(1) as u32);
+    let mut canvas = Canvas::new(width as usize, side as usize);
+    let bounds: Vec<Option<Bounds>> = panels.iter().map(|p| bounds(p.geometry)).collect();
+    let extent_m = bounds
         .iter()
-        .filter_map(|p| bounds(p.geometry))
-        .map(|(lo, hi)| (hi[0] - lo[0]).max(hi[1] - lo[1]))
+        .flatten()
+        .map(|b| (b.hi[0] - b.lo[0]).max(b.hi[1] - b.lo[1]))
         .fold(0.0, f64::max);
-    let px_per_m = if extent > 0.0 {
-        side as f64 * (1.0 - 2.0 * MARGIN) / extent
+    let px_per_m = if extent_m > 0.0 && extent_m.is_finite() {
+        f64::from(side) * (1.0 - 2.0 * MARGIN) / extent_m
     } else {
         1.0
     };
-    for (i, panel) in panels.iter().enumerate() {
-        let Some((lo, hi)) = bounds(panel.geometry) else {
+    for (i, (panel, bounds)) in panels.iter().zip(&bounds).enumerate() {
+        let Some(bounds) = bounds else {
             continue;
         };
-        let centre = [(lo[0] + hi[0]) / 2.0, (lo[1] + hi[1]) / 2.0];
-        let origin = [(i as f64 + 0.5) * side as f64, side as f64 / 2.0];
-        // Image y grows downwards; the patch's y (along the wale) grows upwards.
-        let to_px = |p: &[f64; 3]| {
-            [
-                origin[0] + (p[0] - centre[0]) * px_per_m,
-                origin[1] - (p[1] - centre[1]) * px_per_m,
-            ]
+        let rect = Rect {
+            x0: i * side as usize,
+            x1: (i + 1) * side as usize,
+            y0: 0,
+            y1: side as usize,
         };
-        draw_panel(&mut canvas, panel, style, px_per_m, &to_px);
+        let centre_m = [
+            (bounds.lo[0] + bounds.hi[0]) / 2.0,
+            (bounds.lo[1] + bounds.hi[1]) / 2.0,
+        ];
+        let origin_px = [
+            (rect.x0 + rect.x1) as f64 / 2.0,
+            (rect.y0 + rect.y1) as f64 / 2.0,
+        ];
+        // Image y grows downwards; the patch's y grows upwards.
+        let points_px: Vec<Option<[f64; 2]>> = panel
+            .geometry
+            .positions
+            .iter()
+            .map(|p| {
+                p.iter().all(|c| c.is_finite()).then(|| {
+                    [
+                        origin_px[0] + (p[0] - centre_m[0]) * px_per_m,
+                        origin_px[1] - (p[1] - centre_m[1]) * px_per_m,
+                    ]
+                })
+            })
+            .collect();
+        draw_panel(&mut canvas, rect, panel, &points_px, style, px_per_m);
     }
     canvas.to_srgb()
 }
 
+/// Draws one panel inside `rect`, from its points already in pixels (`None`: not drawable).
 fn draw_panel(
     canvas: &mut Canvas,
+    rect: Rect,
     panel: &Panel,
+    points_px: &[Option<[f64; 2]>],
     style: &PictureStyle,
     px_per_m: f64,
-    to_px: &dyn Fn(&[f64; 3]) -> [f64; 2],
 ) {
-    let g = panel.geometry;
-    let lengths: Vec<f64> = g
+    let point = |i: u32| points_px.get(i as usize).copied().flatten();
+    let held = |i: u32| panel.held.get(i as usize).copied().unwrap_or(false);
+    // Drawable segments with their ends in pixels.
+    let segments: Vec<_> = panel
+        .geometry
         .segments
         .iter()
-        .map(|s| {
-            let (a, b) = (
-                to_px(&g.positions[s.a as usize]),
-                to_px(&g.positions[s.b as usize]),
-            );
-            (a[0] - b[0]).hypot(a[1] - b[1])
-        })
-        .filter(|l| l.is_finite())
+        .filter_map(|s| Some((s, point(s.a)?, point(s.b)?)))
         .collect();
-    let mean_length = lengths.iter().sum::<f64>() / lengths.len().max(1) as f64;
-    // Wale yarn first, course yarn over it.
+    let typical_px = median(
+        segments
+            .iter()
+            .map(|(_, a, b)| (a[0] - b[0]).hypot(a[1] - b[1]))
+            .filter(|l| *l > 0.0 && l.is_finite())
+            .collect(),
+    );
+    let radius_px = style.yarn_radius_m.map(|r| {
+        (r * px_per_m)
+            .max(MIN_RADIUS_PX)
+            .min(MAX_RADIUS_FRACTION * typical_px.unwrap_or(f64::INFINITY))
+            .max(FLOOR_RADIUS_PX)
+    });
+    let colour = style.yarn_colour.map(|c| c.map(|v| v as f32));
+    let thickest = radius_px[0].max(radius_px[1]);
+
+    let grip_radius = typical_px.map_or(thickest * 2.0, |t| GRIP_FRACTION * t);
+    let grip = segments
+        .iter()
+        .filter(|(s, _, _)| held(s.a) && held(s.b))
+        .map(|&(_, a, b)| Capsule {
+            a,
+            b,
+            radius: grip_radius,
+            colour: GRIP,
+            shaded: false,
+        });
+    canvas.draw_pass(rect, grip);
     for direction in [Direction::Wale, Direction::Course] {
-        for s in g.segments.iter().filter(|s| s.direction == direction) {
-            let kind = s.yarn.index() as usize;
-            let radius = (style.yarn_radius_m[kind] * px_per_m)
-                .max(MIN_RADIUS_PX)
-                .min((MAX_RADIUS_FRACTION * mean_length).max(MIN_RADIUS_PX));
-            let colour = style.yarn_colour[kind].map(|c| c as f32);
-            let (a, b) = (
-                to_px(&g.positions[s.a as usize]),
-                to_px(&g.positions[s.b as usize]),
-            );
-            canvas.capsule(a, b, radius, colour);
+        let yarn = segments
+            .iter()
+            .filter(|(s, _, _)| s.direction == direction)
+            .map(|&(s, a, b)| {
+                let kind = s.yarn.index() as usize;
+                Capsule {
+                    a,
+                    b,
+                    radius: radius_px[kind],
+                    colour: colour[kind],
+                    shaded: true,
+                }
+            });
+        canvas.draw_pass(rect, yarn);
+    }
+
+    // Big enough to see next to the yarn, small enough not to fill a dense panel's stitches.
+    let mark_half = (thickest + 1.0)
+        .max(2.5)
+        .min(MARK_FRACTION * typical_px.unwrap_or(f64::INFINITY))
+        .max(1.0);
+    for (i, p) in points_px.iter().enumerate() {
+        if let (Some(p), true) = (p, held(i as u32)) {
+            canvas.square(rect, *p, mark_half, HELD_MARK);
         }
     }
-    for (p, _) in g.positions.iter().zip(panel.held).filter(|(_, &held)| held) {
-        canvas.square(to_px(p), 2.5, HELD_MARK);
-    }
+}
+
+/// The median of `values`, or `None` when empty.
+fn median(mut values: Vec<f64>) -> Option<f64> {
+    values.sort_by(f64::total_cmp);
+    values.get(values.len() / 2).copied()
+}
+
+/// An axis-aligned box in metres.
+#[derive(Clone, Copy, Debug)]
+struct Bounds {
+    lo: [f64; 2],
+    hi: [f64; 2],
 }
 
 /// XY bounds of the finite positions, or `None` when there are none.
-fn bounds(g: &YarnGeometry) -> Option<([f64; 2], [f64; 2])> {
-    let finite = g
-        .positions
+fn bounds(g: &YarnGeometry) -> Option<Bounds> {
+    g.positions
         .iter()
-        .filter(|p| p.iter().all(|c| c.is_finite()));
-    finite.fold(None, |acc, p| {
-        let (lo, hi) = acc.unwrap_or(([p[0], p[1]], [p[0], p[1]]));
-        Some((
-            [lo[0].min(p[0]), lo[1].min(p[1])],
-            [hi[0].max(p[0]), hi[1].max(p[1])],
-        ))
-    })
+        .filter(|p| p.iter().all(|c| c.is_finite()))
+        .fold(None, |acc: Option<Bounds>, p| {
+            let b = acc.unwrap_or(Bounds {
+                lo: [p[0], p[1]],
+                hi: [p[0], p[1]],
+            });
+            Some(Bounds {
+                lo: [b.lo[0].min(p[0]), b.lo[1].min(p[1])],
+                hi: [b.hi[0].max(p[0]), b.hi[1].max(p[1])],
+            })
+        })
 }
 
-/// A linear-RGB float image.
+/// A pixel rectangle, `x0..x1` × `y0..y1`.
+#[derive(Clone, Copy, Debug)]
+struct Rect {
+    x0: usize,
+    x1: usize,
+    y0: usize,
+    y1: usize,
+}
+
+/// A stroke of yarn (or grip) from `a` to `b`, pixels.
+#[derive(Clone, Copy, Debug)]
+struct Capsule {
+    a: [f64; 2],
+    b: [f64; 2],
+    radius: f64,
+    /// Linear RGB.
+    colour: [f32; 3],
+    /// Cylinder shading (yarn) or flat (grip).
+    shaded: bool,
+}
+
+impl Capsule {
+    /// Pixel centres whose distance to the capsule's axis might be within `radius + 0.5`, clipped
+    /// to `rect`; `None` when none.
+    fn pixel_box(&self, rect: Rect) -> Option<Rect> {
+        let pad = self.radius + 1.0;
+        let lo = [
+            self.a[0].min(self.b[0]) - pad,
+            self.a[1].min(self.b[1]) - pad,
+        ];
+        let hi = [
+            self.a[0].max(self.b[0]) + pad,
+            self.a[1].max(self.b[1]) + pad,
+        ];
+        if !lo.iter().chain(&hi).all(|c| c.is_finite()) {
+            return None;
+        }
+        let clip = |v: f64, lo: usize, hi: usize| v.clamp(lo as f64, hi as f64) as usize;
+        let r = Rect {
+            x0: clip(lo[0].floor(), rect.x0, rect.x1),
+            x1: clip(hi[0].ceil(), rect.x0, rect.x1),
+            y0: clip(lo[1].floor(), rect.y0, rect.y1),
+            y1: clip(hi[1].ceil(), rect.y0, rect.y1),
+        };
+        (r.x0 < r.x1 && r.y0 < r.y1).then_some(r)
+    }
+
+    /// Distance from `p` to the axis segment `a`–`b`, pixels.
+    fn axis_distance(&self, p: [f64; 2]) -> f64 {
+        let ab = [self.b[0] - self.a[0], self.b[1] - self.a[1]];
+        let ap = [p[0] - self.a[0], p[1] - self.a[1]];
+        let len_sq = ab[0] * ab[0] + ab[1] * ab[1];
+        let t = if len_sq > 0.0 {
+            ((ap[0] * ab[0] + ap[1] * ab[1]) / len_sq).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (ap[0] - t * ab[0]).hypot(ap[1] - t * ab[1])
+    }
+
+    /// The colour at distance `dist` from the axis: for yarn, a cylinder seen from above, lit
+    /// head-on (bright crest, dark flanks) with a narrow sheen along the crest.
+    fn colour_at(&self, dist: f64) -> [f32; 3] {
+        if !self.shaded {
+            return self.colour;
+        }
+        let across = (dist / self.radius).min(1.0) as f32;
+        let height = (1.0 - across * across).sqrt();
+        let shade = 0.4 + 0.8 * height;
+        // Absolute, so dark yarn still shows its round; small, so it stays dark.
+        let sheen = 0.06 * height.powi(4);
+        self.colour.map(|c| c * shade + sheen)
+    }
+}
+
+/// A linear-RGB float image, with a scratch layer for one pass of capsules.
 struct Canvas {
     width: usize,
     height: usize,
     pixels: Vec<[f32; 3]>,
+    /// Per pixel, for the pass being drawn: signed distance to the nearest capsule's edge
+    /// (pixels, negative inside) and that capsule's colour there.
+    layer: Vec<(f32, [f32; 3])>,
 }
 
+/// Layer value of a pixel no capsule reached.
+const EMPTY: (f32, [f32; 3]) = (f32::INFINITY, [0.0; 3]);
+
 impl Canvas {
-    fn blend(&mut self, x: usize, y: usize, colour: [f32; 3], alpha: f32) {
-        let p = &mut self.pixels[y * self.width + x];
-        for k in 0..3 {
-            p[k] += (colour[k] - p[k]) * alpha;
+    fn new(width: usize, height: usize) -> Canvas {
+        Canvas {
+            width,
+            height,
+            pixels: vec![BACKGROUND; width * height],
+            layer: vec![EMPTY; width * height],
         }
     }
 
-    /// Pixel ranges covering `[lo, hi]`, clipped to the image; `None` if off-image or not finite.
-    fn span(
-        &self,
-        lo: [f64; 2],
-        hi: [f64; 2],
-    ) -> Option<(std::ops::Range<usize>, std::ops::Range<usize>)> {
-        if !(lo.iter().chain(&hi).all(|c| c.is_finite())) {
-            return None;
-        }
-        let clip = |v: f64, n: usize| v.clamp(0.0, n as f64) as usize;
-        let xs = clip(lo[0].floor(), self.width)..clip(hi[0].ceil() + 1.0, self.width);
-        let ys = clip(lo[1].floor(), self.height)..clip(hi[1].ceil() + 1.0, self.height);
-        (!xs.is_empty() && !ys.is_empty()).then_some((xs, ys))
-    }
-
-    /// An anti-aliased capsule from `a` to `b`, shaded as a cylinder lit from above-left.
-    fn capsule(&mut self, a: [f64; 2], b: [f64; 2], radius: f64, colour: [f32; 3]) {
-        let pad = radius + 1.0;
-        let lo = [a[0].min(b[0]) - pad, a[1].min(b[1]) - pad];
-        let hi = [a[0].max(b[0]) + pad, a[1].max(b[1]) + pad];
-        let Some((xs, ys)) = self.span(lo, hi) else {
-            return;
-        };
-        let ab = [b[0] - a[0], b[1] - a[1]];
-        let len_sq = ab[0] * ab[0] + ab[1] * ab[1];
-        for y in ys {
-            for x in xs.clone() {
-                let p = [x as f64 + 0.5 - a[0], y as f64 + 0.5 - a[1]];
-                let t = if len_sq > 0.0 {
-                    ((p[0] * ab[0] + p[1] * ab[1]) / len_sq).clamp(0.0, 1.0)
-                } else {
-                    0.0
-                };
-                let d = [p[0] - t * ab[0], p[1] - t * ab[1]];
-                let dist = d[0].hypot(d[1]);
-                let coverage = (radius + 0.5 - dist).clamp(0.0, 1.0) as f32;
-                if coverage <= 0.0 {
-                    continue;
+    /// Draws `capsules` as one shape (the union of the capsules, each pixel coloured by the
+    /// nearest), anti-aliased with a one-pixel edge, over what is already inside `rect`.
+    fn draw_pass(&mut self, rect: Rect, capsules: impl Iterator<Item = Capsule>) {
+        let mut touched: Option<Rect> = None;
+        for capsule in capsules {
+            let Some(r) = capsule.pixel_box(rect) else {
+                continue;
+            };
+            touched = Some(touched.map_or(r, |t| Rect {
+                x0: t.x0.min(r.x0),
+                x1: t.x1.max(r.x1),
+                y0: t.y0.min(r.y0),
+                y1: t.y1.max(r.y1),
+            }));
+            for y in r.y0..r.y1 {
+                for x in r.x0..r.x1 {
+                    let dist = capsule.axis_distance([x as f64 + 0.5, y as f64 + 0.5]);
+                    let edge = (dist - capsule.radius) as f32;
+                    let cell = &mut self.layer[y * self.width + x];
+                    if edge < cell.0 && edge < 0.5 {
+                        *cell = (edge, capsule.colour_at(dist));
+                    }
                 }
-                // Height of a unit cylinder across its width: bright on the crest, dark at the
-                // flanks, plus a narrow sheen on the crest.
-                let across = (dist / radius).min(1.0);
-                let crest = (1.0 - across * across).sqrt() as f32;
-                let shade = 0.45 + 0.75 * crest;
-                let sheen = 0.35 * crest.powi(8);
-                let shaded = colour.map(|c| c * shade + sheen);
-                self.blend(x, y, shaded, coverage);
+            }
+        }
+        let Some(t) = touched else {
+            return;
+        };
+        for y in t.y0..t.y1 {
+            for x in t.x0..t.x1 {
+                let i = y * self.width + x;
+                let (edge, colour) = std::mem::replace(&mut self.layer[i], EMPTY);
+                let coverage = (0.5 - edge).clamp(0.0, 1.0);
+                if coverage > 0.0 {
+                    let p = &mut self.pixels[i];
+                    for k in 0..3 {
+                        p[k] += (colour[k] - p[k]) * coverage;
+                    }
+                }
             }
         }
     }
 
-    /// A filled square of half-size `half` centred on `c`.
-    fn square(&mut self, c: [f64; 2], half: f64, colour: [f32; 3]) {
-        let Some((xs, ys)) = self.span(
-            [c[0] - half, c[1] - half],
-            [c[0] + half - 1.0, c[1] + half - 1.0],
-        ) else {
-            return;
-        };
-        for y in ys {
-            for x in xs.clone() {
-                self.blend(x, y, colour, 1.0);
-            }
+    /// A filled square of half-side `half` pixels centred on `c`, clipped to `rect`.
+    fn square(&mut self, rect: Rect, c: [f64; 2], half: f64, colour: [f32; 3]) {
+        let clip = |v: f64, lo: usize, hi: usize| v.round().clamp(lo as f64, hi as f64) as usize;
+        let (x0, x1) = (
+            clip(c[0] - half, rect.x0, rect.x1),
+            clip(c[0] + half, rect.x0, rect.x1),
+        );
+        let (y0, y1) = (
+            clip(c[1] - half, rect.y0, rect.y1),
+            clip(c[1] + half, rect.y0, rect.y1),
+        );
+        for y in y0..y1 {
+            self.pixels[y * self.width + x0..y * self.width + x1].fill(colour);
         }
     }
 
     fn to_srgb(&self) -> RgbImage {
+        debug_assert_eq!(self.pixels.len(), self.width * self.height);
         RgbImage::from_fn(self.width as u32, self.height as u32, |x, y| {
             image::Rgb(self.pixels[y as usize * self.width + x as usize].map(linear_to_srgb8))
         })
@@ -233,6 +405,8 @@ impl Canvas {
 }
 
 /// Encodes an image as PNG bytes.
+///
+/// Errors: [`Error::Encode`] naming `patch.png` if the encoder fails.
 pub fn encode_png(image: &RgbImage) -> Result<Vec<u8>> {
     let mut bytes = Vec::new();
     image::codecs::png::PngEncoder::new(&mut bytes)
@@ -243,7 +417,7 @@ pub fn encode_png(image: &RgbImage) -> Result<Vec<u8>> {
             image::ExtendedColorType::Rgb8,
         )
         .map_err(|e| Error::Encode {
-            what: "PNG".into(),
+            what: "patch.png".into(),
             message: e.to_string(),
         })?;
     Ok(bytes)
@@ -256,80 +430,185 @@ mod tests {
     use crate::knit::YarnKind;
     use std::collections::BTreeMap;
 
-    fn line(positions: Vec<[f64; 3]>) -> YarnGeometry {
+    fn geometry(positions: Vec<[f64; 3]>, segments: Vec<Segment>) -> YarnGeometry {
         YarnGeometry {
             name: "t".into(),
             offset_m: [0.0; 3],
-            segments: (1..positions.len() as u32)
-                .map(|b| Segment {
-                    a: b - 1,
-                    b,
-                    yarn: YarnKind::Nylon,
-                    direction: Direction::Course,
-                })
-                .collect(),
             positions,
             point_attributes: BTreeMap::new(),
+            segments,
         }
+    }
+
+    fn segment(a: u32, b: u32, yarn: YarnKind, direction: Direction) -> Segment {
+        Segment {
+            a,
+            b,
+            yarn,
+            direction,
+        }
+    }
+
+    /// A polyline of nylon course segments through `positions`.
+    fn line(positions: Vec<[f64; 3]>) -> YarnGeometry {
+        let segments = (1..positions.len() as u32)
+            .map(|b| segment(b - 1, b, YarnKind::Nylon, Direction::Course))
+            .collect();
+        geometry(positions, segments)
+    }
+
+    fn style(panel_px: u32) -> PictureStyle {
+        PictureStyle {
+            panel_px,
+            yarn_radius_m: [0.000_1, 0.000_1],
+            yarn_colour: [[0.9, 0.05, 0.05], [0.05, 0.05, 0.9]],
+        }
+    }
+
+    fn draw_one(g: &YarnGeometry, held: &[bool], style: &PictureStyle) -> RgbImage {
+        draw_patches(&[Panel { geometry: g, held }], style)
+    }
+
+    fn background_srgb() -> image::Rgb<u8> {
+        image::Rgb(BACKGROUND.map(linear_to_srgb8))
     }
 
     #[test]
     fn yarn_covers_pixels_under_it_and_leaves_the_background_elsewhere() {
         let g = line(vec![[-0.001, 0.0, 0.0], [0.001, 0.0, 0.0]]);
-        let held = [false, false];
-        let style = PictureStyle {
-            panel_px: 100,
-            ..PictureStyle::default()
-        };
-        let img = draw_patches(
-            &[Panel {
-                geometry: &g,
-                held: &held,
-            }],
-            &style,
-        );
-        let background = img.get_pixel(50, 5);
+        let img = draw_one(&g, &[false, false], &style(100));
         let yarn = img.get_pixel(50, 50);
-        assert!(yarn[0] < background[0] - 40, "{yarn:?} vs {background:?}");
+        assert!(
+            yarn[0] > 150 && yarn[1] < 100 && yarn[2] < 100,
+            "pixel on the yarn is not the (red) yarn colour: {yarn:?}"
+        );
+        assert_eq!(*img.get_pixel(50, 5), background_srgb());
+        assert_eq!(*img.get_pixel(50, 95), background_srgb());
     }
 
     #[test]
-    fn panels_sit_side_by_side() {
-        let g = line(vec![[0.0; 3], [0.001, 0.0, 0.0]]);
-        let held = [true, false];
-        let panel = || Panel {
-            geometry: &g,
-            held: &held,
-        };
-        let style = PictureStyle {
-            panel_px: 64,
-            ..PictureStyle::default()
-        };
-        let img = draw_patches(&[panel(), panel()], &style);
-        assert_eq!(img.dimensions(), (128, 64));
-        assert_eq!(
-            encode_png(&img).unwrap(),
-            encode_png(&draw_patches(&[panel(), panel()], &style)).unwrap()
+    fn course_yarn_is_drawn_over_wale_yarn() {
+        let g = geometry(
+            vec![
+                [-0.001, 0.0, 0.0],
+                [0.001, 0.0, 0.0],
+                [0.0, -0.001, 0.0],
+                [0.0, 0.001, 0.0],
+            ],
+            // Course listed first, so only the pass order can put it on top.
+            vec![
+                segment(0, 1, YarnKind::Nylon, Direction::Course),
+                segment(2, 3, YarnKind::Support, Direction::Wale),
+            ],
         );
+        let img = draw_one(&g, &[], &style(100));
+        let crossing = img.get_pixel(50, 50);
+        assert!(crossing[0] > crossing[2], "{crossing:?}");
+        let wale = img.get_pixel(50, 20);
+        assert!(wale[2] > wale[0], "{wale:?}");
+    }
+
+    #[test]
+    fn panels_sit_side_by_side_and_share_one_scale() {
+        let long = line(vec![[0.0; 3], [0.002, 0.0, 0.0]]);
+        let short = line(vec![[0.0; 3], [0.001, 0.0, 0.0]]);
+        let img = draw_patches(
+            &[
+                Panel {
+                    geometry: &long,
+                    held: &[],
+                },
+                Panel {
+                    geometry: &short,
+                    held: &[],
+                },
+            ],
+            &style(100),
+        );
+        assert_eq!(img.dimensions(), (200, 100));
+        let yarn_px = |x0: u32| {
+            (x0..x0 + 100)
+                .filter(|&x| *img.get_pixel(x, 50) != background_srgb())
+                .count() as f64
+        };
+        let ratio = yarn_px(100) / yarn_px(0);
+        assert!((ratio - 0.5).abs() < 0.1, "short/long drawn length {ratio}");
+    }
+
+    #[test]
+    fn held_points_are_marked() {
+        let g = line(vec![[-0.001, 0.0, 0.0], [0.0, 0.0, 0.0], [0.001, 0.0, 0.0]]);
+        let img = draw_one(&g, &[true, false, false], &style(100));
+        let mark = image::Rgb(HELD_MARK.map(linear_to_srgb8));
+        // The left end sits at the margin: 6 % of 100 px.
+        assert_eq!(*img.get_pixel(6, 50), mark);
+        assert_ne!(*img.get_pixel(50, 50), mark);
+    }
+
+    #[test]
+    fn dense_patches_keep_their_stitches_open() {
+        // 40 × 40 grid in a 100 px panel: 2.2 px per stitch, much less than the 0.1 mm yarn.
+        let n = 40u32;
+        let positions = (0..n * n)
+            .map(|i| [f64::from(i % n) * 1e-3, f64::from(i / n) * 1e-3, 0.0])
+            .collect();
+        let segments = (0..n * n)
+            .filter(|i| i % n + 1 < n)
+            .map(|i| segment(i, i + 1, YarnKind::Nylon, Direction::Course))
+            .collect();
+        let img = draw_one(&geometry(positions, segments), &[], &style(100));
+        let column: Vec<_> = (30..70).map(|y| img.get_pixel(50, y)[0]).collect();
+        let (lo, hi) = (column.iter().min().unwrap(), column.iter().max().unwrap());
+        assert!(hi - lo > 40, "courses merged into a block: {column:?}");
+    }
+
+    #[test]
+    fn output_bytes_are_deterministic() {
+        let g = line(vec![[0.0; 3], [0.001, 0.0005, 0.0], [0.002, 0.0, 0.0]]);
+        let held = [true, false, true];
+        let draw = || {
+            let panel = Panel {
+                geometry: &g,
+                held: &held,
+            };
+            encode_png(&draw_patches(&[panel, panel], &PictureStyle::default())).unwrap()
+        };
+        let bytes = draw();
+        assert_eq!(&bytes[1..4], b"PNG");
+        assert_eq!(bytes, draw());
     }
 
     #[test]
     fn degenerate_geometry_does_not_panic() {
-        for positions in [
-            vec![],
-            vec![[0.0; 3]],
-            vec![[0.0; 3], [0.0; 3]],
-            vec![[f64::NAN, 0.0, 0.0], [1.0, 0.0, 0.0]],
-        ] {
-            let g = line(positions);
-            let held = vec![true; g.positions.len()];
-            draw_patches(
-                &[Panel {
-                    geometry: &g,
-                    held: &held,
-                }],
-                &PictureStyle::default(),
-            );
+        let nan = f64::NAN;
+        let cases = [
+            line(vec![]),
+            line(vec![[0.0; 3]]),
+            line(vec![[0.0; 3], [0.0; 3]]),
+            line(vec![[0.0; 3], [0.0; 3], [0.001, 0.0, 0.0]]),
+            line(vec![[nan, 0.0, 0.0], [0.001, 0.0, 0.0], [0.0, 0.001, 0.0]]),
+            line(vec![[f64::INFINITY, 0.0, 0.0], [0.0, nan, 0.0]]),
+            line(vec![[1e300, 0.0, 0.0], [-1e300, 0.0, 0.0]]),
+            geometry(
+                vec![[0.0; 3]],
+                vec![segment(0, 7, YarnKind::Support, Direction::Wale)],
+            ),
+        ];
+        let bad_style = PictureStyle {
+            panel_px: 0,
+            yarn_radius_m: [nan, f64::INFINITY],
+            ..PictureStyle::default()
+        };
+        for g in &cases {
+            for held in [vec![], vec![true; 5]] {
+                for style in [&PictureStyle::default(), &bad_style] {
+                    let img = draw_one(g, &held, style);
+                    assert!(img.width() > 0 && img.height() > 0);
+                }
+            }
         }
+        let img = draw_patches(&[], &PictureStyle::default());
+        assert_eq!(img.dimensions(), (480, 480));
+        assert!(img.pixels().all(|p| *p == background_srgb()));
     }
 }
