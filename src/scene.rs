@@ -178,9 +178,15 @@ pub struct TubeSettings {
     /// Circumference of the stocking lying relaxed, metres (default: 0.20, a typical sheer
     /// stocking's leg measured flat and doubled).
     pub relaxed_circumference_m: f64,
-    /// Length of the stocking lying relaxed between the two axis points, metres (default: 0.50).
-    pub relaxed_length_m: f64,
+    /// Length of the relaxed stocking between the two axis points, metres; must be shorter than
+    /// the axis, since a stocking is worn stretched along the leg. Absent means
+    /// [`RELAXED_LENGTH_FRACTION`] of the axis length (default: absent).
+    pub relaxed_length_m: Option<f64>,
 }
+
+/// A stocking's relaxed length as a fraction of the leg length it covers, when the scene does
+/// not give one: sheer stockings are worn stretched by about 1.4× along the leg.
+pub const RELAXED_LENGTH_FRACTION: f64 = 0.7;
 
 impl Default for TubeSettings {
     fn default() -> Self {
@@ -188,7 +194,7 @@ impl Default for TubeSettings {
             wales: 150,
             courses: 150,
             relaxed_circumference_m: 0.20,
-            relaxed_length_m: 0.50,
+            relaxed_length_m: None,
         }
     }
 }
@@ -602,14 +608,15 @@ impl Scene {
             ));
         }
         check_tube_points(w, c).map_err(|m| bad("tube", m))?;
-        for (field, value) in [
+        let lengths = [
             (
                 "tube.relaxed_circumference_m",
-                self.tube.relaxed_circumference_m,
+                Some(self.tube.relaxed_circumference_m),
             ),
             ("tube.relaxed_length_m", self.tube.relaxed_length_m),
-        ] {
-            if !(value.is_finite() && value > 0.0) {
+        ];
+        for (field, value) in lengths {
+            if let Some(value) = value.filter(|v| !(v.is_finite() && *v > 0.0)) {
                 return Err(bad(
                     field,
                     format!("must be a positive number, got {value}"),

@@ -20,7 +20,7 @@ use crate::plan::Plan;
 use crate::post::fields;
 use crate::render::colormap;
 use crate::report::{Metrics, Report, StageClock};
-use crate::scene::{Output, Scene};
+use crate::scene::{Output, Scene, RELAXED_LENGTH_FRACTION};
 use crate::sim::contact::LegContact;
 use crate::sim::relax_constrained;
 
@@ -68,12 +68,13 @@ pub fn run_fit(
     let collider = clock.time("build collider", || {
         Collider::new(&leg, scene.contact.method)
     })?;
+    let relaxed_length = relaxed_length(scene, &axis, &paths.scene_name)?;
     let spec = TubeSpec {
         wales: scene.tube.wales,
         courses: scene.tube.courses,
         pattern: scene.knit.pattern,
         relaxed_circumference_m: scene.tube.relaxed_circumference_m,
-        relaxed_length_m: scene.tube.relaxed_length_m,
+        relaxed_length_m: relaxed_length,
     };
     let Tube {
         mut knit, end_ring, ..
@@ -150,6 +151,8 @@ pub fn run_fit(
             "courses": spec.courses,
             "rest_course_spacing_m": rest_spacing,
             "rest_wale_spacing_m": spec.relaxed_length_m / (spec.courses - 1) as f64,
+            "relaxed_length_m": spec.relaxed_length_m,
+            "relaxed_circumference_m": spec.relaxed_circumference_m,
             "axial_range_m": axial_range,
         },
         "solver": {
@@ -209,6 +212,24 @@ fn choose_axis(scene: &Scene, inputs: &FitInputs, leg: &Leg) -> Result<Axis> {
         None => detect_axis(leg).ok_or_else(|| Error::Leg {
             path: leg.path.clone(),
             message: "cannot find the leg's axis: the mesh has no area".into(),
+        }),
+    }
+}
+
+/// The stocking's relaxed length: given (and shorter than the axis), or a fraction of the axis.
+fn relaxed_length(scene: &Scene, axis: &Axis, scene_name: &str) -> Result<f64> {
+    let length = axis.length();
+    match scene.tube.relaxed_length_m {
+        None => Ok(RELAXED_LENGTH_FRACTION * length),
+        Some(l) if l < length => Ok(l),
+        Some(l) => Err(Error::InvalidScene {
+            path: scene_name.to_string(),
+            field: "tube.relaxed_length_m".into(),
+            message: format!(
+                "{l} m is not shorter than the leg axis ({length:.3} m): the stocking would bunch \
+                 up instead of being stretched onto the leg; give a shorter length, leave it out \
+                 ({RELAXED_LENGTH_FRACTION} × the axis), or place the axis points further apart"
+            ),
         }),
     }
 }

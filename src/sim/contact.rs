@@ -106,6 +106,23 @@ impl<'a> LegContact<'a> {
 }
 
 impl SlideParams<'_> {
+    /// Where a point too close to (or inside) the leg goes: `offset` out along the normal, or,
+    /// for a point held at its height, out within its ring's plane, as long as the normal is not
+    /// nearly along the axis (then along the normal, the lesser evil).
+    fn push_out(&self, p: &Point3<f64>, c: &crate::leg::Closest, locked: bool) -> Point3<f64> {
+        let needed = self.offset - c.signed_distance;
+        if locked {
+            let in_plane = c.outward - self.axis * c.outward.dot(&self.axis);
+            let len = in_plane.norm();
+            if len > 0.3 {
+                let u = in_plane / len;
+                // Moving along u gains u·outward of distance per unit (plane approximation).
+                return p + u * (needed / u.dot(&c.outward));
+            }
+        }
+        c.point + c.outward * self.offset
+    }
+
     /// Where a free point moving from `from` towards `to` may go, updating its contact state.
     fn constrain_point(
         &self,
@@ -186,7 +203,7 @@ impl SlideParams<'_> {
                     if c.signed_distance < 0.0 {
                         counters.pushed_out += 1;
                     }
-                    p = c.point + c.outward * self.offset;
+                    p = self.push_out(&p, &c, locked);
                 }
                 let gap = c.signed_distance.max(self.offset);
                 let touching = gap <= self.offset * 1.5 + 1e-9;

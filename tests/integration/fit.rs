@@ -395,3 +395,140 @@ fn a_leg_in_millimetres_read_as_metres_is_refused_with_the_units_that_fit() {
         "set leg.units to \"mm\"",
     );
 }
+
+/// Rewrites the first sample leg's JSON with `edit`, writing `name` (`.glb`) into `dir`.
+fn edited_sample(dir: &Path, name: &str, edit: impl FnOnce(&mut gltf_json::Root)) -> PathBuf {
+    let bytes = std::fs::read(&sample_legs()[0]).unwrap();
+    let mut gltf = gltf::Gltf::from_slice(&bytes).unwrap();
+    let mut root = gltf.document.clone().into_json();
+    edit(&mut root);
+    let glb = gltf::binary::Glb {
+        header: gltf::binary::Header {
+            magic: *b"glTF",
+            version: 2,
+            length: 0,
+        },
+        json: std::borrow::Cow::Owned(gltf_json::serialize::to_vec(&root).unwrap()),
+        bin: Some(std::borrow::Cow::Owned(gltf.blob.take().unwrap())),
+    };
+    let path = dir.join(name);
+    std::fs::write(&path, glb.to_vec().unwrap()).unwrap();
+    path
+}
+
+/// Mean stitch density of the covered leg vertices in a fit's leg.ply.
+fn mean_density(out: &Path) -> f64 {
+    let leg = read_ply(&out.join("leg.ply"));
+    let d: Vec<f64> = leg.payload["vertex"]
+        .iter()
+        .map(|v| float(v, "stitch_density"))
+        .filter(|&d| d > 0.0)
+        .collect();
+    d.iter().sum::<f64>() / d.len() as f64
+}
+
+#[test]
+fn a_z_up_leg_fits_like_the_y_up_one_when_the_scene_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    // Rotate +90° about X: the file's up becomes +Z.
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    let z_up = edited_sample(dir.path(), "z_up.glb", |root| {
+        for node in &mut root.nodes {
+            node.rotation = Some(gltf_json::scene::UnitQuaternion([s, 0.0, 0.0, s]));
+        }
+    });
+    let scene = dir.path().join("z.json");
+    std::fs::write(&scene, r#"{"leg": {"file": "z_up.glb", "up_axis": "+z"}}"#).unwrap();
+    let out = knitfit(
+        dir.path(),
+        &["fit", "z.json", "--resolution", "40x40", "--out", "z", "-q"],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (y_dir, _) = fit(&sample_legs()[0], "40x40", &[]);
+    let (z, y) = (
+        mean_density(&dir.path().join("z")),
+        mean_density(&y_dir.path().join("out")),
+    );
+    assert!(
+        (z - y).abs() < 0.01 * y,
+        "+z leg {z} vs +y leg {y} stitches/cm²"
+    );
+    assert_eq!(
+        report(&dir.path().join("z"))["details"]["leg"]["up_axis"],
+        "+z"
+    );
+    // Read as +Y, the same file lies on its side: the tube then follows the detected axis, but
+    // the report must say what was assumed.
+    let _ = z_up;
+}
+
+#[test]
+fn a_gltf_with_an_external_buffer_loads() {
+    let dir = tempfile::tempdir().unwrap();
+    let bytes = std::fs::read(&sample_legs()[0]).unwrap();
+    let mut gltf = gltf::Gltf::from_slice(&bytes).unwrap();
+    let mut root = gltf.document.clone().into_json();
+    root.buffers[0].uri = Some("leg.bin".into());
+    std::fs::write(dir.path().join("leg.bin"), gltf.blob.take().unwrap()).unwrap();
+    std::fs::write(
+        dir.path().join("leg.gltf"),
+        gltf_json::serialize::to_vec(&root).unwrap(),
+    )
+    .unwrap();
+    let out = knitfit(
+        dir.path(),
+        &["fit", "--leg", "leg.gltf", "--resolution", "12x12", "-q"],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(
+        report(&dir.path().join("out"))["metrics"]["leg_triangles"],
+        41216
+    );
+}
+
+#[test]
+fn axis_from_the_command_line_sets_where_the_stocking_ends() {
+    let leg = &sample_legs()[0];
+    let (dir, r) = fit(leg, "40x40", &["--axis", "0,0.30,0,0,0.60,0"]);
+    assert_eq!(r["details"]["axis"]["source"], "command_line");
+    assert_eq!(r["metrics"]["converged"], true);
+    let yarns = read_ply(&dir.path().join("out/stocking.ply"));
+    for v in &yarns.payload["vertex"] {
+        let y = float(v, "y");
+        assert!((0.3 - 1e-6..=0.6 + 1e-6).contains(&y), "yarn at y = {y}");
+    }
+}
+
+#[test]
+fn a_bad_axis_flag_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    for (axis, expect) in [
+        ("1,2,3", "expected six numbers"),
+        ("0,0.3,0,0,0.3,0", "different points"),
+        ("0,nan,0,0,1,0", "finite"),
+    ] {
+        let out = knitfit(dir.path(), &["fit", "--axis", axis]);
+        assert_eq!(out.status.code(), Some(2), "{axis}");
+        assert!(stderr(&out).contains(expect), "{axis}: {}", stderr(&out));
+    }
+    assert!(files_in(&dir.path().join("out")).is_empty());
+}
+
+#[test]
+fn a_stocking_longer_than_the_axis_is_refused_before_fitting() {
+    let dir = tempfile::tempdir().unwrap();
+    let leg = sample_legs()[0].display().to_string();
+    std::fs::write(
+        dir.path().join("s.json"),
+        r#"{"tube": {"relaxed_length_m": 0.9}}"#,
+    )
+    .unwrap();
+    let out = knitfit(dir.path(), &["fit", "s.json", "--leg", &leg]);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("tube.relaxed_length_m: 0.9 m is not shorter than the leg axis"),
+        "{}",
+        stderr(&out)
+    );
+    assert!(files_in(&dir.path().join("out")).is_empty());
+}
