@@ -6,9 +6,14 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
 
-/// Creates `dir` if needed, proves it is writable, and checks that none of the `files` it will
-/// receive is one of the `inputs`: all before any work is done, so that a run whose outputs
-/// cannot be written fails at once and writes nothing.
+/// Creates `dir` if needed, proves it is writable (creates and removes a probe file), and checks
+/// that none of the `files` (names in `dir`) it will receive is one of the `inputs`: all before
+/// any work is done, so that a run whose outputs cannot be written fails at once and writes
+/// nothing.
+///
+/// Errors: [`Error::WouldOverwriteInput`] for an output that is an input (same file once
+/// canonicalized, so links count), [`Error::OutputDir`] when the directory cannot be created or
+/// written to.
 pub fn prepare_dir(dir: &Path, files: &[&str], inputs: &[PathBuf]) -> Result<()> {
     let fail = |source| Error::OutputDir {
         path: dir.to_path_buf(),
@@ -22,9 +27,15 @@ pub fn prepare_dir(dir: &Path, files: &[&str], inputs: &[PathBuf]) -> Result<()>
     Ok(())
 }
 
-/// Writes every `(file name, bytes)` into `dir`: all to temporary names first, then all renamed
-/// into place. Refuses to replace any of `inputs`. On failure, removes what it wrote. Returns the
-/// final paths.
+/// Writes every `(file name, bytes)` into `dir` (which must exist, see [`prepare_dir`]) and
+/// returns the final paths, in order.
+///
+/// Every file is first written to a temporary name in `dir` (`.NAME.tmp-PID`); only once all are
+/// written are they renamed into place, so no file is ever half-written. Refuses, before writing
+/// anything, to replace any of `inputs` ([`Error::WouldOverwriteInput`]). On failure returns
+/// [`Error::Write`] naming the file and removes every temporary file it made; if a rename fails,
+/// the files renamed before it stay in place, each complete. A name must be a plain file name
+/// (no directory part).
 pub fn write_all(
     dir: &Path,
     files: &[(String, Vec<u8>)],
@@ -32,6 +43,17 @@ pub fn write_all(
 ) -> Result<Vec<PathBuf>> {
     refuse_inputs(dir, files.iter().map(|(name, _)| name.as_str()), inputs)?;
     let targets: Vec<PathBuf> = files.iter().map(|(name, _)| dir.join(name)).collect();
+    for ((name, _), target) in files.iter().zip(&targets) {
+        if Path::new(name).file_name() != Some(name.as_ref()) {
+            return Err(Error::Write {
+                path: target.clone(),
+                source: std::io::Error::new(
+                    std::io::ErrorKind::InvalidInput,
+                    "not a plain file name",
+                ),
+            });
+        }
+    }
     let mut temps: Vec<PathBuf> = Vec::new();
     let cleanup = |temps: &[PathBuf]| {
         for t in temps {
@@ -77,7 +99,7 @@ fn refuse_inputs<'a>(
     Ok(())
 }
 
-/// True when both paths name the same existing file.
+/// True when both paths name the same existing file (after resolving links and `..`).
 fn same_file(a: &Path, b: &Path) -> bool {
     match (a.canonicalize(), b.canonicalize()) {
         (Ok(a), Ok(b)) => a == b,
@@ -131,5 +153,76 @@ mod tests {
         assert!(matches!(err, Error::WouldOverwriteInput { .. }), "{err}");
         assert_eq!(std::fs::read(&input).unwrap(), b"input");
         assert_eq!(names(dir.path()), ["patch.ply"]);
+    }
+
+    #[test]
+    fn failed_write_removes_its_temporaries() {
+        let dir = tempfile::tempdir().unwrap();
+        // A directory where the second temporary file should go makes its creation fail.
+        let blocker = format!(".b.txt.tmp-{}", std::process::id());
+        std::fs::create_dir(dir.path().join(&blocker)).unwrap();
+        let files = vec![
+            ("a.txt".to_string(), b"A".to_vec()),
+            ("b.txt".to_string(), b"B".to_vec()),
+        ];
+        let err = write_all(dir.path(), &files, &[]).unwrap_err();
+        assert!(
+            matches!(&err, Error::Write { path, .. } if path.ends_with("b.txt")),
+            "{err}"
+        );
+        assert_eq!(
+            names(dir.path()),
+            [blocker],
+            "nothing written, nothing left"
+        );
+    }
+
+    #[test]
+    fn failed_rename_removes_its_temporaries() {
+        let dir = tempfile::tempdir().unwrap();
+        // A non-empty directory at the target makes the rename fail.
+        std::fs::create_dir_all(dir.path().join("b.txt/keep")).unwrap();
+        let files = vec![
+            ("a.txt".to_string(), b"A".to_vec()),
+            ("b.txt".to_string(), b"B".to_vec()),
+        ];
+        let err = write_all(dir.path(), &files, &[]).unwrap_err();
+        assert!(matches!(err, Error::Write { .. }), "{err}");
+        assert_eq!(names(dir.path()), ["a.txt", "b.txt"]);
+        assert_eq!(std::fs::read(dir.path().join("a.txt")).unwrap(), b"A");
+    }
+
+    #[test]
+    fn name_with_a_directory_part_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let files = vec![("../escape.txt".to_string(), b"x".to_vec())];
+        let err = write_all(dir.path(), &files, &[]).unwrap_err();
+        assert!(matches!(err, Error::Write { .. }), "{err}");
+        assert!(names(dir.path()).is_empty());
+    }
+
+    #[test]
+    fn prepare_dir_refuses_an_input_before_creating_anything() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("leg.glb");
+        std::fs::write(&input, "leg").unwrap();
+        let err = prepare_dir(dir.path(), &["leg.glb"], std::slice::from_ref(&input)).unwrap_err();
+        assert!(matches!(err, Error::WouldOverwriteInput { .. }), "{err}");
+        assert_eq!(names(dir.path()), ["leg.glb"]);
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_link_to_an_input_counts_as_the_input() {
+        let dir = tempfile::tempdir().unwrap();
+        let input = dir.path().join("leg.glb");
+        std::fs::write(&input, "leg").unwrap();
+        let out = dir.path().join("out");
+        std::fs::create_dir(&out).unwrap();
+        std::os::unix::fs::symlink(&input, out.join("stocking.glb")).unwrap();
+        let files = vec![("stocking.glb".to_string(), b"x".to_vec())];
+        let err = write_all(&out, &files, std::slice::from_ref(&input)).unwrap_err();
+        assert!(matches!(err, Error::WouldOverwriteInput { .. }), "{err}");
+        assert_eq!(std::fs::read(&input).unwrap(), b"leg");
     }
 }

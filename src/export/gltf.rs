@@ -13,6 +13,7 @@ use gltf_json as json;
 use json::validation::{Checked::Valid, USize64};
 use json::Index;
 
+use super::ply::{check_surface_mesh, check_yarn_geometry};
 use super::{SurfaceMesh, YarnGeometry};
 use crate::error::{Error, Result};
 use crate::knit::YarnKind;
@@ -25,15 +26,40 @@ pub enum GlbNode<'a> {
     Yarns(&'a YarnGeometry),
 }
 
-/// Encodes `parts` as one GLB of yarns only (the patch experiment): a root node per part, named
-/// after it and translated by its `offset_m`. `yarn_colours` are linear RGB per yarn kind.
+/// Encodes `parts` as one GLB of yarns only (the patch experiment).
+///
+/// One scene; a root node per part, named after it and translated by its `offset_m` (metres;
+/// no translation when zero). Its mesh has a `LINES` primitive per yarn kind that has segments
+/// (`u32` indices, material `nylon` / `support` with base colour `yarn_colours[kind.index()]`,
+/// linear RGB, alpha 1, metallic 0, roughness 0.6). The primitives share `POSITION` (f32
+/// metres, in the node's frame, with min/max) and one `_UPPERCASE` float scalar per point
+/// attribute. A part without segments is a node without a mesh. The bytes depend only on the
+/// arguments.
+///
+/// Fails with [`Error::Encode`] if a part is inconsistent (see
+/// [`check_yarn_geometry`](super::ply::check_yarn_geometry)).
 pub fn write_glb(parts: &[YarnGeometry], yarn_colours: [[f64; 3]; 2]) -> Result<Vec<u8>> {
     let nodes: Vec<GlbNode> = parts.iter().map(GlbNode::Yarns).collect();
     write_nodes_glb(&nodes, yarn_colours)
 }
 
-/// Encodes surfaces and yarns as one GLB, a root node each, in the given order.
+/// Encodes surfaces and yarns as one GLB, a root node each, in the given order. Yarns are
+/// written as by [`write_glb`]; a surface is one `TRIANGLES` primitive with `POSITION`,
+/// `NORMAL`, `TEXCOORD_0` and `COLOR_0` where present, and its point attributes, no material
+/// and no translation (a surface without triangles is a node without a mesh).
+///
+/// Fails with [`Error::Encode`] if a node's geometry is inconsistent.
 pub fn write_nodes_glb(nodes: &[GlbNode], yarn_colours: [[f64; 3]; 2]) -> Result<Vec<u8>> {
+    for node in nodes {
+        match node {
+            GlbNode::Yarns(part) => check_yarn_geometry(part),
+            GlbNode::Surface(mesh) => check_surface_mesh(mesh),
+        }
+        .map_err(|message| Error::Encode {
+            what: "glTF".into(),
+            message,
+        })?;
+    }
     let mut doc = GlbBuilder::default();
     // A material per yarn kind that some segment uses (an unused one is a validator notice).
     let materials = YarnKind::ALL.map(|kind| {
@@ -152,31 +178,39 @@ impl GlbBuilder {
         part: &YarnGeometry,
         materials: &[Option<Index<json::Material>>; 2],
     ) -> Index<json::Node> {
-        let mut attributes = custom_attributes(self, &part.point_attributes);
-        attributes.insert(
-            Valid(json::mesh::Semantic::Positions),
-            self.positions(&part.positions),
-        );
+        let by_kind: Vec<(YarnKind, Vec<u32>)> = YarnKind::ALL
+            .into_iter()
+            .map(|kind| {
+                let indices = part
+                    .segments
+                    .iter()
+                    .filter(|s| s.yarn == kind)
+                    .flat_map(|s| [s.a, s.b])
+                    .collect();
+                (kind, indices)
+            })
+            .filter(|(_, indices): &(_, Vec<u32>)| !indices.is_empty())
+            .collect();
+        // Accessors only when some primitive uses them: an unused one is a validator notice,
+        // and an empty one an error.
         let mut primitives = Vec::new();
-        for kind in YarnKind::ALL {
-            let indices: Vec<u32> = part
-                .segments
-                .iter()
-                .filter(|s| s.yarn == kind)
-                .flat_map(|s| [s.a, s.b])
-                .collect();
-            if indices.is_empty() {
-                continue;
+        if !by_kind.is_empty() {
+            let mut attributes = custom_attributes(self, &part.point_attributes);
+            attributes.insert(
+                Valid(json::mesh::Semantic::Positions),
+                self.positions(&part.positions),
+            );
+            for (kind, indices) in by_kind {
+                primitives.push(json::mesh::Primitive {
+                    attributes: attributes.clone(),
+                    extensions: None,
+                    extras: Default::default(),
+                    indices: Some(self.indices(&indices)),
+                    material: materials[kind.index() as usize],
+                    mode: Valid(json::mesh::Mode::Lines),
+                    targets: None,
+                });
             }
-            primitives.push(json::mesh::Primitive {
-                attributes: attributes.clone(),
-                extensions: None,
-                extras: Default::default(),
-                indices: Some(self.indices(&indices)),
-                material: materials[kind.index() as usize],
-                mode: Valid(json::mesh::Mode::Lines),
-                targets: None,
-            });
         }
         let [x, y, z] = part.offset_m.map(|c| c as f32);
         let translation = (part.offset_m != [0.0; 3]).then_some([x, y, z]);
@@ -187,6 +221,9 @@ impl GlbBuilder {
     /// colours, and the custom attributes.
     fn surface_node(&mut self, mesh: &SurfaceMesh) -> Index<json::Node> {
         use json::mesh::Semantic;
+        if mesh.triangles.is_empty() {
+            return self.node(&mesh.name, Vec::new(), None);
+        }
         let mut attributes = custom_attributes(self, &mesh.point_attributes);
         attributes.insert(Valid(Semantic::Positions), self.positions(&mesh.positions));
         attributes.insert(Valid(Semantic::Normals), self.vectors(&mesh.normals));
@@ -348,58 +385,137 @@ mod tests {
 
     use crate::export::sample_geometry as part;
 
+    const COLOURS: [[f64; 3]; 2] = [[0.5, 0.25, 0.125], [0.2, 0.4, 0.6]];
+
+    /// The values of a float accessor (custom attributes, which the reader has no method for).
+    fn floats<T: gltf::accessor::Item>(
+        accessor: gltf::Accessor,
+        buffers: &[gltf::buffer::Data],
+    ) -> Vec<T> {
+        gltf::accessor::Iter::<T>::new(accessor, |b| Some(&buffers[b.index()]))
+            .unwrap()
+            .collect()
+    }
+
+    fn attribute<'a>(prim: &gltf::Primitive<'a>, name: &str) -> gltf::Accessor<'a> {
+        prim.attributes()
+            .find(|(s, _)| *s == gltf::Semantic::Extras(name.into()))
+            .unwrap_or_else(|| panic!("_{name} is written"))
+            .1
+    }
+
     #[test]
     fn round_trips_through_the_gltf_reader() {
-        let bytes = write_glb(&[part("a", 0.0), part("b", 0.5)], [[0.1; 3], [0.2; 3]]).unwrap();
+        let bytes = write_glb(&[part("a", 0.0), part("b", 0.5)], COLOURS).unwrap();
         let (doc, buffers, _) = gltf::import_slice(&bytes).unwrap();
-        let nodes: Vec<_> = doc.nodes().collect();
-        assert_eq!(nodes[1].name(), Some("b"));
-        assert_eq!(nodes[1].transform().decomposed().0, [0.5, 0.0, 0.0]);
-        let prims: Vec<_> = nodes[1].mesh().unwrap().primitives().collect();
-        assert_eq!(prims.len(), 2, "one primitive per yarn kind");
-        assert_eq!(prims[1].material().name(), Some("support"));
-        let reader = prims[1].reader(|b| Some(&buffers[b.index()]));
-        assert_eq!(prims[1].mode(), gltf::mesh::Mode::Lines);
         assert_eq!(
-            reader
-                .read_indices()
-                .unwrap()
-                .into_u32()
-                .collect::<Vec<_>>(),
-            [0, 2]
+            doc.as_json().asset.generator.as_deref(),
+            Some(concat!("knitfit ", env!("CARGO_PKG_VERSION")))
         );
+        assert_eq!(doc.scenes().count(), 1);
+        let roots: Vec<_> = doc.default_scene().unwrap().nodes().collect();
+        let names: Vec<_> = roots.iter().map(|n| n.name().unwrap()).collect();
+        assert_eq!(names, ["a", "b"]);
+        assert_eq!(roots[0].transform().decomposed().0, [0.0, 0.0, 0.0]);
+        assert_eq!(roots[1].transform().decomposed().0, [0.5, 0.0, 0.0]);
+
+        let prims: Vec<_> = roots[1].mesh().unwrap().primitives().collect();
+        assert_eq!(prims.len(), 2, "one primitive per yarn kind");
+        let expected = [("nylon", [0, 1]), ("support", [0, 2])];
+        for (prim, (material, indices)) in prims.iter().zip(expected) {
+            assert_eq!(prim.mode(), gltf::mesh::Mode::Lines);
+            assert_eq!(prim.material().name(), Some(material));
+            let reader = prim.reader(|b| Some(&buffers[b.index()]));
+            let read: Vec<u32> = reader.read_indices().unwrap().into_u32().collect();
+            assert_eq!(read, indices);
+        }
+        let reader = prims[1].reader(|b| Some(&buffers[b.index()]));
         let positions: Vec<_> = reader.read_positions().unwrap().collect();
-        assert_eq!(positions[2], [0.0, 0.002, 0.0]);
-        let course = prims[1]
-            .attributes()
-            .find(|(s, _)| *s == gltf::Semantic::Extras("COURSE".into()))
-            .expect("_COURSE is written")
-            .1;
-        assert_eq!(course.count(), 3);
-        let view = course.view().unwrap();
-        let data = &buffers[0][view.offset()..view.offset() + view.length()];
-        assert_eq!(f32::from_le_bytes(data[8..12].try_into().unwrap()), 1.0);
+        assert_eq!(
+            positions,
+            [[0.0, 0.0, 0.0], [0.001, 0.0, 0.0], [0.0, 0.002, 0.0]],
+            "positions are in the node's frame, without the offset"
+        );
+        let position = prims[1].get(&gltf::Semantic::Positions).unwrap();
+        assert_eq!(position.min(), Some(serde_json::json!([0.0, 0.0, 0.0])));
+        // Bounds are the f32 values stored, widened exactly to f64.
+        let max = [0.001f32, 0.002, 0.0].map(f64::from);
+        assert_eq!(position.max(), Some(serde_json::json!(max)));
+        assert_eq!(
+            floats::<f32>(attribute(&prims[1], "COURSE"), &buffers),
+            [0.0, 0.0, 1.0]
+        );
+        assert_eq!(
+            floats::<f32>(attribute(&prims[1], "WALE"), &buffers),
+            [0.0, 1.0, 0.0]
+        );
+        assert_eq!(
+            floats::<f32>(attribute(&prims[0], "YARN_KIND"), &buffers),
+            [0.0, 0.0, 1.0]
+        );
+        assert_eq!(
+            attribute(&prims[0], "COURSE").index(),
+            attribute(&prims[1], "COURSE").index(),
+            "primitives share their vertex accessors"
+        );
+    }
+
+    #[test]
+    fn materials_carry_the_yarn_colours() {
+        let bytes = write_glb(&[part("a", 0.0)], COLOURS).unwrap();
+        let (doc, _, _) = gltf::import_slice(&bytes).unwrap();
+        let support = doc.materials().nth(1).unwrap();
+        assert_eq!(support.name(), Some("support"));
+        let pbr = support.pbr_metallic_roughness();
+        assert_eq!(pbr.base_color_factor(), [0.2, 0.4, 0.6, 1.0]);
+        assert_eq!((pbr.metallic_factor(), pbr.roughness_factor()), (0.0, 0.6));
     }
 
     #[test]
     fn only_used_yarn_kinds_get_a_material() {
         let mut nylon_only = part("a", 0.0);
         nylon_only.segments.retain(|s| s.yarn == YarnKind::Nylon);
-        let bytes = write_glb(&[nylon_only], [[0.1; 3]; 2]).unwrap();
+        let bytes = write_glb(&[nylon_only], COLOURS).unwrap();
         let (doc, _, _) = gltf::import_slice(&bytes).unwrap();
-        let names: Vec<_> = doc
-            .materials()
-            .map(|m| m.name().unwrap().to_string())
-            .collect();
+        let names: Vec<_> = doc.materials().map(|m| m.name().unwrap()).collect();
         assert_eq!(names, ["nylon"]);
     }
 
     #[test]
+    fn part_without_segments_is_a_node_without_accessors() {
+        let mut bare = part("bare", 0.1);
+        bare.segments.clear();
+        let bytes = write_glb(&[bare], COLOURS).unwrap();
+        let (doc, _, _) = gltf::import_slice(&bytes).unwrap();
+        let node = doc.nodes().next().unwrap();
+        assert_eq!(node.name(), Some("bare"));
+        assert!(node.mesh().is_none());
+        assert_eq!(doc.accessors().count(), 0);
+        assert_eq!(doc.buffers().count(), 0);
+    }
+
+    #[test]
+    fn non_finite_position_is_an_error() {
+        let mut a = part("a", 0.0);
+        a.positions[1][0] = f64::NAN;
+        let err = write_glb(&[a], COLOURS).unwrap_err();
+        assert!(matches!(err, Error::Encode { .. }), "{err}");
+    }
+
+    #[test]
+    fn segment_past_the_last_point_is_an_error() {
+        let mut a = part("a", 0.0);
+        a.segments[0].b = 3;
+        let err = write_glb(&[a], COLOURS).unwrap_err();
+        assert!(matches!(err, Error::Encode { .. }), "{err}");
+    }
+
+    #[test]
     fn is_deterministic() {
-        let parts = [part("a", 0.0)];
+        let parts = [part("a", 0.0), part("b", 0.5)];
         assert_eq!(
-            write_glb(&parts, [[0.1; 3]; 2]).unwrap(),
-            write_glb(&parts, [[0.1; 3]; 2]).unwrap()
+            write_glb(&parts, COLOURS).unwrap(),
+            write_glb(&parts, COLOURS).unwrap()
         );
     }
 }

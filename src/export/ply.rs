@@ -11,16 +11,42 @@ use super::{SurfaceMesh, YarnGeometry};
 use crate::error::{Error, Result};
 use crate::knit::Direction;
 
-/// Encodes `parts` as one PLY file. Each part's `offset_m` is added to its positions (PLY has no
-/// transforms); a `part` property says which part a vertex came from. `comments` go into the
-/// header, followed by the unit/axis convention and the offsets used.
+/// Vertex properties [`write_ply`] writes itself, so no point attribute may take their names.
+const YARN_VERTEX_PROPERTIES: [&str; 4] = ["x", "y", "z", "part"];
+
+/// Vertex properties [`write_mesh_ply`] writes itself.
+const MESH_VERTEX_PROPERTIES: [&str; 9] = ["x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"];
+
+/// Encodes `parts` as one binary little-endian PLY file.
 ///
-/// All parts must carry the same attribute names.
+/// `vertex`: `x`, `y`, `z` (float, metres, each part's `offset_m` added, as PLY has no
+/// transforms), every point attribute (float, in the map's order), `part` (uchar, index into
+/// `parts`). `edge`: `vertex1`, `vertex2` (int, indices into all parts' vertices in order),
+/// `yarn_kind` (uchar, [`YarnKind::index`](crate::knit::YarnKind::index)), `direction` (uchar,
+/// 0 course, 1 wale). The header holds `comments`, then the unit/axis convention, then one line
+/// per part giving its name and the offset added. The bytes depend only on the arguments.
+///
+/// Fails with [`Error::Encode`] if the parts carry different attribute names, if a part is
+/// inconsistent (see [`check_yarn_geometry`]), if there are more than 256 parts or 2^31
+/// vertices, or if a comment holds a line break.
 pub fn write_ply(parts: &[YarnGeometry], comments: &[String]) -> Result<Vec<u8>> {
     let encode_error = |message: String| Error::Encode {
         what: "PLY".into(),
         message,
     };
+    for part in parts {
+        check_yarn_geometry(part).map_err(encode_error)?;
+        if let Some(name) = part
+            .point_attributes
+            .keys()
+            .find(|name| YARN_VERTEX_PROPERTIES.contains(&name.as_str()))
+        {
+            return Err(encode_error(format!(
+                "part {:?}: point attribute {name:?} would clash with a vertex property",
+                part.name
+            )));
+        }
+    }
     let attribute_names: Vec<&String> = parts
         .first()
         .map(|p| p.point_attributes.keys().collect())
@@ -33,6 +59,12 @@ pub fn write_ply(parts: &[YarnGeometry], comments: &[String]) -> Result<Vec<u8>>
             "parts carry different point attributes".into(),
         ));
     }
+    if parts.len() > usize::from(u8::MAX) + 1 {
+        return Err(encode_error(format!(
+            "{} parts; the uchar `part` property holds at most 256",
+            parts.len()
+        )));
+    }
 
     let mut ply = Ply::<DefaultElement>::new();
     ply.header.encoding = Encoding::BinaryLittleEndian;
@@ -43,7 +75,7 @@ pub fn write_ply(parts: &[YarnGeometry], comments: &[String]) -> Result<Vec<u8>>
     for (i, part) in parts.iter().enumerate() {
         let [x, y, z] = part.offset_m;
         ply.header.comments.push(format!(
-            "part {i} \"{}\": offset ({x}, {y}, {z}) m added to positions for viewing",
+            "part {i} {:?}: offset ({x}, {y}, {z}) m added to positions for viewing",
             part.name
         ));
     }
@@ -81,6 +113,7 @@ pub fn write_ply(parts: &[YarnGeometry], comments: &[String]) -> Result<Vec<u8>>
             for (name, values) in &part.point_attributes {
                 v.insert(name.clone(), Property::Float(values[i]));
             }
+            // At most 256 parts, checked above.
             v.insert("part".into(), Property::UChar(part_index as u8));
             vertices.push(v);
         }
@@ -112,13 +145,28 @@ pub fn write_ply(parts: &[YarnGeometry], comments: &[String]) -> Result<Vec<u8>>
     Ok(bytes)
 }
 
-/// Encodes a triangle surface as a PLY file: `vertex` (x, y, z, nx, ny, nz, every point
-/// attribute, and red/green/blue when the mesh has colours) and `face` (vertex_indices).
+/// Encodes a triangle surface as a binary little-endian PLY file: `vertex` (x, y, z in metres,
+/// nx, ny, nz, every point attribute, and red/green/blue as sRGB uchar when the mesh has
+/// colours) and `face` (vertex_indices).
+///
+/// Fails with [`Error::Encode`] if the mesh is inconsistent (see [`check_surface_mesh`]), an
+/// attribute takes the name of a vertex property, or a comment holds a line break.
 pub fn write_mesh_ply(mesh: &SurfaceMesh, comments: &[String]) -> Result<Vec<u8>> {
     let encode_error = |message: String| Error::Encode {
         what: "PLY".into(),
         message,
     };
+    check_surface_mesh(mesh).map_err(encode_error)?;
+    if let Some(name) = mesh
+        .point_attributes
+        .keys()
+        .find(|name| MESH_VERTEX_PROPERTIES.contains(&name.as_str()))
+    {
+        return Err(encode_error(format!(
+            "mesh {:?}: point attribute {name:?} would clash with a vertex property",
+            mesh.name
+        )));
+    }
     let mut ply = Ply::<DefaultElement>::new();
     ply.header.encoding = Encoding::BinaryLittleEndian;
     ply.header.comments.extend(comments.iter().cloned());
@@ -190,27 +238,159 @@ pub fn write_mesh_ply(mesh: &SurfaceMesh, comments: &[String]) -> Result<Vec<u8>
     Ok(bytes)
 }
 
+/// Checks what every writer relies on in a yarn geometry: attribute names of the form
+/// `[a-z][a-z0-9_]*` (valid PLY identifiers, distinct once upper-cased for glTF), one value per
+/// point in every attribute, segments between existing points, and finite positions, offset and
+/// attribute values. The message names the part and what is wrong.
+pub(super) fn check_yarn_geometry(part: &YarnGeometry) -> std::result::Result<(), String> {
+    let n = part.positions.len();
+    let fail = |what: String| Err(format!("part {:?}: {what}", part.name));
+    if let Err(what) = check_attributes(&part.point_attributes, n) {
+        return fail(what);
+    }
+    if let Some(s) = part
+        .segments
+        .iter()
+        .find(|s| s.a as usize >= n || s.b as usize >= n)
+    {
+        return fail(format!(
+            "segment {}–{} past the last of {n} points",
+            s.a, s.b
+        ));
+    }
+    if let Some(i) = part.positions.iter().position(|p| !all_finite(p)) {
+        return fail(format!("point {i} is not finite: {:?}", part.positions[i]));
+    }
+    if !all_finite(&part.offset_m) {
+        return fail(format!("offset {:?} m is not finite", part.offset_m));
+    }
+    Ok(())
+}
+
+/// Checks what every writer relies on in a surface: one normal (and texture coordinate and
+/// colour, where present) per vertex, triangles between existing vertices, finite positions, and
+/// attributes as in [`check_yarn_geometry`].
+pub(super) fn check_surface_mesh(mesh: &SurfaceMesh) -> std::result::Result<(), String> {
+    let n = mesh.positions.len();
+    let fail = |what: String| Err(format!("mesh {:?}: {what}", mesh.name));
+    let lengths = [
+        ("normals", Some(mesh.normals.len())),
+        ("texture coordinates", mesh.texcoords.as_ref().map(Vec::len)),
+        ("colours", mesh.colours.as_ref().map(Vec::len)),
+    ];
+    for (what, len) in lengths {
+        if let Some(len) = len.filter(|&len| len != n) {
+            return fail(format!("{len} {what} for {n} vertices"));
+        }
+    }
+    if let Err(what) = check_attributes(&mesh.point_attributes, n) {
+        return fail(what);
+    }
+    if let Some(t) = mesh
+        .triangles
+        .iter()
+        .find(|t| t.iter().any(|&i| i as usize >= n))
+    {
+        return fail(format!("triangle {t:?} past the last of {n} vertices"));
+    }
+    if let Some(i) = mesh.positions.iter().position(|p| !all_finite(p)) {
+        return fail(format!("vertex {i} is not finite: {:?}", mesh.positions[i]));
+    }
+    let finite = |v: &[f32]| v.iter().all(|c| c.is_finite());
+    let vectors_finite = [
+        ("normal", mesh.normals.iter().all(|v| finite(v))),
+        (
+            "texture coordinate",
+            mesh.texcoords.iter().flatten().all(|v| finite(v)),
+        ),
+        ("colour", mesh.colours.iter().flatten().all(|v| finite(v))),
+    ];
+    if let Some((what, _)) = vectors_finite.iter().find(|(_, ok)| !ok) {
+        return fail(format!("a {what} is not finite"));
+    }
+    Ok(())
+}
+
+/// Attribute names `[a-z][a-z0-9_]*`, `points` finite values each.
+fn check_attributes(
+    attributes: &std::collections::BTreeMap<String, Vec<f32>>,
+    points: usize,
+) -> std::result::Result<(), String> {
+    for (name, values) in attributes {
+        let mut chars = name.chars();
+        let well_formed = chars.next().is_some_and(|c| c.is_ascii_lowercase())
+            && chars.all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_');
+        if !well_formed {
+            return Err(format!(
+                "point attribute name {name:?} is not of the form [a-z][a-z0-9_]*"
+            ));
+        }
+        if values.len() != points {
+            return Err(format!(
+                "point attribute {name:?} has {} values for {points} points",
+                values.len()
+            ));
+        }
+        if let Some(i) = values.iter().position(|v| !v.is_finite()) {
+            return Err(format!(
+                "point attribute {name:?} is not finite at point {i}: {}",
+                values[i]
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn all_finite(p: &[f64; 3]) -> bool {
+    p.iter().all(|c| c.is_finite())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     use crate::export::sample_geometry as part;
 
+    fn parse(bytes: &[u8]) -> Ply<DefaultElement> {
+        ply_rs_bw::parser::Parser::<DefaultElement>::new()
+            .read_ply(&mut &bytes[..])
+            .unwrap()
+    }
+
+    fn property_names(ply: &Ply<DefaultElement>, element: &str) -> Vec<String> {
+        ply.header.elements[element]
+            .properties
+            .keys()
+            .cloned()
+            .collect()
+    }
+
     #[test]
     fn round_trips_through_the_ply_parser() {
         let bytes = write_ply(&[part("a", 0.0), part("b", 0.5)], &["test".into()]).unwrap();
-        let ply = ply_rs_bw::parser::Parser::<DefaultElement>::new()
-            .read_ply(&mut bytes.as_slice())
-            .unwrap();
-        assert!(ply.header.comments.iter().any(|c| c.contains("metres")));
+        let ply = parse(&bytes);
+        assert_eq!(ply.header.encoding, Encoding::BinaryLittleEndian);
+        assert_eq!(
+            property_names(&ply, "vertex"),
+            ["x", "y", "z", "course", "wale", "yarn_kind", "part"]
+        );
+        assert_eq!(
+            property_names(&ply, "edge"),
+            ["vertex1", "vertex2", "yarn_kind", "direction"]
+        );
         let vertices = &ply.payload["vertex"];
         let edges = &ply.payload["edge"];
         assert_eq!((vertices.len(), edges.len()), (6, 4));
-        assert_eq!(vertices[4]["x"], Property::Float(0.501));
+        assert_eq!(vertices[1]["x"], Property::Float(0.001));
+        assert_eq!(vertices[4]["x"], Property::Float(0.501), "offset added");
         assert_eq!(vertices[5]["y"], Property::Float(0.002));
         assert_eq!(vertices[2]["course"], Property::Float(1.0));
         assert_eq!(vertices[4]["wale"], Property::Float(1.0));
+        assert_eq!(vertices[5]["yarn_kind"], Property::Float(1.0));
+        assert_eq!(vertices[2]["part"], Property::UChar(0));
         assert_eq!(vertices[3]["part"], Property::UChar(1));
+        assert_eq!(edges[0]["yarn_kind"], Property::UChar(0));
+        assert_eq!(edges[0]["direction"], Property::UChar(0));
         assert_eq!(edges[3]["vertex1"], Property::Int(3));
         assert_eq!(edges[3]["vertex2"], Property::Int(5));
         assert_eq!(edges[3]["yarn_kind"], Property::UChar(1));
@@ -218,8 +398,24 @@ mod tests {
     }
 
     #[test]
+    fn header_states_units_and_each_offset() {
+        let bytes = write_ply(&[part("a", 0.0), part("b", 0.5)], &["test".into()]).unwrap();
+        let comments = parse(&bytes).header.comments;
+        assert_eq!(comments.len(), 4, "{comments:?}");
+        assert_eq!(comments[0], "test");
+        assert_eq!(
+            comments[1],
+            "units: metres; PLY has no axis convention: +Y is up as in glTF"
+        );
+        assert_eq!(
+            comments[3],
+            "part 1 \"b\": offset (0.5, 0, 0) m added to positions for viewing"
+        );
+    }
+
+    #[test]
     fn is_deterministic() {
-        let parts = [part("a", 0.0)];
+        let parts = [part("a", 0.0), part("b", 0.5)];
         assert_eq!(
             write_ply(&parts, &[]).unwrap(),
             write_ply(&parts, &[]).unwrap()
@@ -230,6 +426,65 @@ mod tests {
     fn mismatched_attributes_are_an_error() {
         let mut b = part("b", 0.0);
         b.point_attributes.remove("wale");
-        assert!(write_ply(&[part("a", 0.0), b], &[]).is_err());
+        let err = write_ply(&[part("a", 0.0), b], &[]).unwrap_err();
+        assert!(matches!(err, Error::Encode { .. }), "{err}");
+    }
+
+    #[test]
+    fn attribute_of_the_wrong_length_is_an_error_not_a_panic() {
+        let mut a = part("a", 0.0);
+        a.point_attributes.get_mut("wale").unwrap().pop();
+        let err = write_ply(&[a], &[]).unwrap_err();
+        assert!(err.to_string().contains("2 values for 3 points"), "{err}");
+    }
+
+    #[test]
+    fn segment_past_the_last_point_is_an_error() {
+        let mut a = part("a", 0.0);
+        a.segments[1].b = 3;
+        let err = write_ply(&[a], &[]).unwrap_err();
+        assert!(matches!(err, Error::Encode { .. }), "{err}");
+    }
+
+    #[test]
+    fn attribute_named_like_a_vertex_property_is_refused() {
+        let mut a = part("a", 0.0);
+        a.point_attributes.insert("part".into(), vec![0.0; 3]);
+        let err = write_ply(&[a], &[]).unwrap_err();
+        assert!(err.to_string().contains("clash"), "{err}");
+    }
+
+    #[test]
+    fn comment_with_a_line_break_is_an_error() {
+        let err = write_ply(&[part("a", 0.0)], &["two\nlines".into()]).unwrap_err();
+        assert!(matches!(err, Error::Encode { .. }), "{err}");
+    }
+
+    #[test]
+    fn surface_round_trips_with_normals_and_faces() {
+        let mut mesh = SurfaceMesh::new(
+            "leg",
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]],
+            vec![[0, 1, 2]],
+        );
+        mesh.point_attributes
+            .insert("stitch_density".into(), vec![1.0, 2.0, 3.0]);
+        let ply = parse(&write_mesh_ply(&mesh, &[]).unwrap());
+        let vertices = &ply.payload["vertex"];
+        assert_eq!(vertices[1]["x"], Property::Float(1.0));
+        assert_eq!(vertices[0]["ny"], Property::Float(1.0));
+        assert_eq!(vertices[2]["stitch_density"], Property::Float(3.0));
+        assert_eq!(
+            ply.payload["face"][0]["vertex_indices"],
+            Property::ListInt(vec![0, 1, 2])
+        );
+    }
+
+    #[test]
+    fn surface_with_a_missing_normal_is_an_error_not_a_panic() {
+        let mut mesh = SurfaceMesh::new("leg", vec![[0.0; 3]; 3], vec![[0, 1, 2]]);
+        mesh.normals.pop();
+        let err = write_mesh_ply(&mesh, &[]).unwrap_err();
+        assert!(matches!(err, Error::Encode { .. }), "{err}");
     }
 }
