@@ -5,6 +5,14 @@
 //! the triangles' centroids with the largest eigenvalue), oriented upwards; bottom and top are the
 //! extreme projections of the vertices onto it, moved inwards by [`END_INSET`] of the length so
 //! that the tube's end rings lie on skin rather than on an open cut.
+//!
+//! A leg cut from a body is open at its ends, and the cut need not be square to the axis (a
+//! thigh leans inwards). A ring's plane crossing the cut would put yarn points beside the hole,
+//! where inside and outside are not defined. So where the mesh has open edges near an end
+//! (within [`END_ZONE`] of the length), that end is moved further in, until the ring's plane
+//! clears every open edge there by [`CUT_CLEARANCE`] of the length.
+
+use std::collections::HashMap;
 
 use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 use serde::Serialize;
@@ -13,6 +21,10 @@ use super::Leg;
 
 /// Fraction of the leg's length kept free at each end by a detected axis.
 pub const END_INSET: f64 = 0.03;
+/// Fraction of the leg's length at each end where open edges count as the cut.
+pub const END_ZONE: f64 = 0.25;
+/// Fraction of the leg's length kept between an end ring's plane and the cut.
+pub const CUT_CLEARANCE: f64 = 0.01;
 
 /// Where an axis came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -59,7 +71,8 @@ impl Axis {
     }
 }
 
-/// Detects the leg's axis (see module docs). `None` for a mesh with no area.
+/// Detects the leg's axis (see module docs). `None` for a mesh with no area, or one whose open
+/// edges leave no room between the ends.
 pub fn detect_axis(leg: &Leg) -> Option<Axis> {
     let mut area_sum = 0.0;
     let mut centroid = Vector3::zeros();
@@ -107,11 +120,111 @@ pub fn detect_axis(leg: &Leg) -> Option<Axis> {
             let s = (p.coords - centroid).dot(&dir);
             (lo.min(s), hi.max(s))
         });
-    let inset = END_INSET * (hi - lo);
+    let length = hi - lo;
+    let (mut bottom, mut top) = (lo + END_INSET * length, hi - END_INSET * length);
+    for v in open_edge_vertices(leg) {
+        let s = (leg.positions[v as usize].coords - centroid).dot(&dir);
+        if s < lo + END_ZONE * length {
+            bottom = bottom.max(s + CUT_CLEARANCE * length);
+        } else if s > hi - END_ZONE * length {
+            top = top.min(s - CUT_CLEARANCE * length);
+        }
+    }
+    if bottom >= top {
+        return None;
+    }
     let at = |s: f64| (centroid + dir * s).into();
     Some(Axis {
-        bottom: at(lo + inset),
-        top: at(hi - inset),
+        bottom: at(bottom),
+        top: at(top),
         source: AxisSource::Detected,
     })
+}
+
+/// Vertices on an open edge (an edge used by exactly one triangle), sorted, without repeats.
+fn open_edge_vertices(leg: &Leg) -> Vec<u32> {
+    let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in &leg.triangles {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            *uses.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    let mut vertices: Vec<u32> = uses
+        .into_iter()
+        .filter(|&(_, n)| n == 1)
+        .flat_map(|((a, b), _)| [a, b])
+        .collect();
+    vertices.sort_unstable();
+    vertices.dedup();
+    vertices
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Units, UpAxis};
+
+    /// An open tube of radius 5 cm from y = 0 to y = 0.5, cut square to Y at both ends but
+    /// leaning by `lean` in x per metre of height, like a thigh.
+    fn leaning_open_tube(lean: f64) -> Leg {
+        let (around, along) = (32u32, 20u32);
+        let mut positions = Vec::new();
+        for j in 0..=along {
+            let y = 0.5 * j as f64 / along as f64;
+            for i in 0..around {
+                let t = std::f64::consts::TAU * i as f64 / around as f64;
+                positions.push(Point3::new(0.05 * t.cos() + lean * y, y, -0.05 * t.sin()));
+            }
+        }
+        let mut triangles = Vec::new();
+        for j in 0..along {
+            for i in 0..around {
+                let (a, b) = (j * around + i, j * around + (i + 1) % around);
+                triangles.push([a, b, b + around]);
+                triangles.push([a, b + around, a + around]);
+            }
+        }
+        Leg {
+            path: "tube".into(),
+            positions,
+            triangles,
+            units: Units::Metres,
+            up_axis: UpAxis::PosY,
+        }
+    }
+
+    #[test]
+    fn end_rings_clear_a_slanted_cut() {
+        let leg = leaning_open_tube(0.3);
+        let axis = detect_axis(&leg).unwrap();
+        let dir = axis.direction();
+        assert!(dir.x > 0.2, "the axis follows the lean: {dir:?}");
+        let (bottom, top) = (axis.bottom(), axis.top());
+        let open = open_edge_vertices(&leg);
+        assert_eq!(open.len(), 64, "both cuts are open");
+        let length = axis.length();
+        for v in open {
+            let s = (leg.positions[v as usize] - bottom).dot(&dir);
+            // Every open vertex lies beyond an end ring's plane, with room to spare.
+            assert!(
+                s < -0.005 * length || s > length * 1.005,
+                "open vertex {v} at {s} m along a {length} m axis"
+            );
+        }
+        // The ends still sit on the tube's centre line.
+        for p in [bottom, top] {
+            let centre_x = 0.3 * p.y;
+            assert!((p.x - centre_x).abs() < 0.01, "{p:?}");
+        }
+        assert!((top - bottom).norm() > 0.3);
+    }
+
+    #[test]
+    fn a_square_cut_keeps_the_plain_inset() {
+        let leg = leaning_open_tube(0.0);
+        let axis = detect_axis(&leg).unwrap();
+        let inset = END_INSET * 0.5;
+        assert!((axis.bottom[1] - inset.max(CUT_CLEARANCE * 0.5)).abs() < 1e-9);
+        assert!((axis.top[1] - (0.5 - inset)).abs() < 1e-9);
+    }
 }

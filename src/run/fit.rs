@@ -96,6 +96,9 @@ pub fn run_fit(
     });
     progress.end();
     let stats = stats?;
+    clock.time("exact contact pass", || {
+        contact.finish(&mut knit.particles.x, &knit.particles.inv_mass)
+    });
 
     let (max_penetration, axial_range) = clock.time("check penetration", || {
         (max_penetration(&knit, &collider), axial_range(&knit, &axis))
@@ -166,6 +169,7 @@ pub fn run_fit(
             "closest_queries": counters.closest_queries,
             "slides": counters.slides,
             "pushed_out": counters.pushed_out,
+            "finished_out": counters.finished_out,
         },
         "stitch_density_per_cm2": {
             "leg_vertices_covered": covered.len(),
@@ -211,7 +215,9 @@ fn choose_axis(scene: &Scene, inputs: &FitInputs, leg: &Leg) -> Result<Axis> {
         }
         None => detect_axis(leg).ok_or_else(|| Error::Leg {
             path: leg.path.clone(),
-            message: "cannot find the leg's axis: the mesh has no area".into(),
+            message: "cannot find the leg's axis: the mesh has no area, or open edges all along \
+                      it; give leg.axis in the scene or --axis"
+                .into(),
         }),
     }
 }

@@ -15,14 +15,15 @@
 //!   plane until it has moved [`PLANE_REUSE_M`] from where the plane was taken. Within that
 //!   distance a surface whose radius of curvature is at least 1 cm departs from its tangent plane
 //!   by under 13 µm, less than half the default yarn offset (30 µm), so the point stays outside.
-//!   Sharper creases are covered by the exact check after the fit.
+//!   Sharper creases and coarse facets can let it dip a few micrometres: the exact pass after the
+//!   fit ([`LegContact::finish`]) moves such points out.
 
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 
 use super::Constraints;
 use crate::knit::Vec3;
-use crate::leg::Collider;
+use crate::leg::{Closest, Collider};
 
 /// How many times one move may slide from face to face before it stops where it is.
 const MAX_SLIDES: usize = 4;
@@ -53,6 +54,8 @@ pub struct ContactCounters {
     pub slides: u64,
     /// Points pushed back out by the final check (a slide that ended inside).
     pub pushed_out: u64,
+    /// Points the exact pass after the fit ([`LegContact::finish`]) moved out to the offset.
+    pub finished_out: u64,
 }
 
 /// Contact with the leg plus the tube's locked end rings.
@@ -103,24 +106,82 @@ impl<'a> LegContact<'a> {
     pub fn counters(&self) -> ContactCounters {
         self.counters
     }
+
+    /// The exact pass after the fit: every point is checked against the exact triangles and
+    /// any closer than the offset is moved out to it, as the final check of a slide would. During
+    /// the fit a point resting on the leg slides on a cached tangent plane, which a sharp crease
+    /// or a coarse mesh can dip below by a few micrometres; this pass is what makes "no yarn
+    /// point inside the leg" exact. Points with `inv_mass` 0 are left alone.
+    pub fn finish(&mut self, x: &mut [Vec3], inv_mass: &[f64]) {
+        let params = SlideParams {
+            collider: self.collider,
+            offset: self.offset,
+            query_radius: self.query_radius,
+            axis: self.axis,
+        };
+        let locked = &self.axially_locked;
+        let counters: Vec<ContactCounters> = x
+            .par_chunks_mut(CHUNK)
+            .enumerate()
+            .map(|(chunk, x)| {
+                let mut counters = ContactCounters::default();
+                for (k, p) in x.iter_mut().enumerate() {
+                    let i = chunk * CHUNK + k;
+                    if inv_mass[i] == 0.0 {
+                        continue;
+                    }
+                    let at = Point3::from(*p);
+                    counters.closest_queries += 1;
+                    if let Some(c) = params.collider.closest_within(&at, params.query_radius) {
+                        if c.signed_distance < params.offset * (1.0 - 1e-6) {
+                            *p = params.push_out(&at, &c, locked[i], &mut counters).0.coords;
+                            counters.finished_out += 1;
+                        }
+                    }
+                }
+                counters
+            })
+            .collect();
+        for c in counters {
+            self.counters.closest_queries += c.closest_queries;
+            self.counters.finished_out += c.finished_out;
+        }
+    }
 }
 
 impl SlideParams<'_> {
     /// Where a point too close to (or inside) the leg goes: `offset` out along the normal, or,
     /// for a point held at its height, out within its ring's plane, as long as the normal is not
     /// nearly along the axis (then along the normal, the lesser evil).
-    fn push_out(&self, p: &Point3<f64>, c: &crate::leg::Closest, locked: bool) -> Point3<f64> {
-        let needed = self.offset - c.signed_distance;
+    /// Returns the new position and the closest point that goes with it.
+    fn push_out(
+        &self,
+        p: &Point3<f64>,
+        c: &Closest,
+        locked: bool,
+        counters: &mut ContactCounters,
+    ) -> (Point3<f64>, Closest) {
+        let along_normal = |c: &Closest| c.point + c.outward * self.offset;
         if locked {
             let in_plane = c.outward - self.axis * c.outward.dot(&self.axis);
             let len = in_plane.norm();
             if len > 0.3 {
-                let u = in_plane / len;
-                // Moving along u gains u·outward of distance per unit (plane approximation).
-                return p + u * (needed / u.dot(&c.outward));
+                // Moving along in_plane / len gains len of distance per unit, if the surface is
+                // flat: check, and where it fell short (curved, or beside an open cut) go out
+                // along the normal after all.
+                let needed = self.offset - c.signed_distance;
+                let q = p + in_plane / len * (needed / len);
+                counters.closest_queries += 1;
+                return match self.collider.closest_within(&q, self.query_radius) {
+                    Some(again) if again.signed_distance < self.offset * (1.0 - 1e-3) => {
+                        (along_normal(&again), again)
+                    }
+                    Some(again) => (q, again),
+                    None => (q, *c),
+                };
             }
         }
-        c.point + c.outward * self.offset
+        (along_normal(c), *c)
     }
 
     /// Where a free point moving from `from` towards `to` may go, updating its contact state.
@@ -138,14 +199,11 @@ impl SlideParams<'_> {
         }
         let to = from + delta;
         let touching = state.normal != Vec3::zeros();
-        if touching && (to - state.queried_at).norm() < PLANE_REUSE_M {
-            // Slide on the cached tangent plane: drop the part of the move below it.
-            let below = (to - state.plane_point).dot(&state.normal).min(0.0);
-            let mut slid = to - state.normal * below;
-            if locked {
-                let d = slid - from;
-                slid -= self.axis * d.dot(&self.axis);
-            }
+        let on_plane = touching && (to - state.queried_at).norm() < PLANE_REUSE_M;
+        if let Some(slid) = on_plane
+            .then(|| self.onto_cached_plane(&to, locked, state))
+            .flatten()
+        {
             slid
         } else if !touching && delta.norm() + self.offset < state.clearance {
             // Cannot reach the leg this step: move freely, spend clearance.
@@ -156,6 +214,26 @@ impl SlideParams<'_> {
             *state = new_state;
             p
         }
+    }
+
+    /// Slides a point that moved to `to` on its cached tangent plane: the part of the move below
+    /// the plane is dropped, along the normal, or for a point held at its height, within its
+    /// ring's plane (dropping it along the normal and then removing the axial part would put it
+    /// back below a tilted plane). `None` when the plane is too steep to slide on within the ring
+    /// (its normal nearly along the axis): the caller queries exactly.
+    fn onto_cached_plane(&self, to: &Vec3, locked: bool, state: &PointContact) -> Option<Vec3> {
+        let n = state.normal;
+        let below = (to - state.plane_point).dot(&n);
+        if below >= 0.0 {
+            return Some(*to);
+        }
+        if !locked {
+            return Some(to - n * below);
+        }
+        let in_plane = n - self.axis * n.dot(&self.axis);
+        let len = in_plane.norm();
+        // Moving along in_plane / len gains len of height above the plane per unit.
+        (len > 0.3).then(|| to - in_plane / len * (below / len))
     }
 
     /// Moves a point from `from` by `delta`, sliding on the leg; returns where it ends with its
@@ -198,12 +276,12 @@ impl SlideParams<'_> {
         // Final check against the closest point: never end inside, never closer than offset.
         counters.closest_queries += 1;
         let state = match self.collider.closest_within(&p, self.query_radius) {
-            Some(c) => {
+            Some(mut c) => {
                 if c.signed_distance < self.offset * (1.0 - 1e-6) {
                     if c.signed_distance < 0.0 {
                         counters.pushed_out += 1;
                     }
-                    p = self.push_out(&p, &c, locked);
+                    (p, c) = self.push_out(&p, &c, locked, counters);
                 }
                 let gap = c.signed_distance.max(self.offset);
                 let touching = gap <= self.offset * 1.5 + 1e-9;
@@ -388,5 +466,43 @@ mod tests {
             }
             assert!(contact.counters().slides > 0, "the moves did hit the rod");
         }
+    }
+
+    #[test]
+    fn the_exact_pass_moves_every_point_out_to_the_offset_and_leaves_held_ones() {
+        let (radius, offset) = (0.003, 0.00003);
+        let leg = rod(radius);
+        let collider = Collider::new(&leg, ContactMethod::Bvh).unwrap();
+        let mut rng = Lcg(11);
+        // Points from 1 mm inside to 1 mm outside the rod; the last few belong to a locked ring
+        // (held at y = 0.05, may only move within that plane), and one is held outright.
+        let n = 100;
+        let mut x: Vec<Vec3> = (0..n)
+            .map(|i| {
+                let t = std::f64::consts::PI * rng.next();
+                let r = radius + 0.001 * rng.next();
+                let y = if i >= 90 {
+                    0.05
+                } else {
+                    0.05 + 0.03 * rng.next()
+                };
+                Vec3::new(r * t.cos(), y, r * t.sin())
+            })
+            .collect();
+        let mut inv_mass = vec![1.0; n];
+        inv_mass[0] = 0.0;
+        let held = x[0];
+        let locked: Vec<bool> = (0..n).map(|i| i >= 90).collect();
+        let mut contact = LegContact::new(&collider, offset, 0.01, Vec3::y(), locked);
+        contact.finish(&mut x, &inv_mass);
+        assert_eq!(x[0], held);
+        for (i, p) in x.iter().enumerate().skip(1) {
+            let d = collider.closest(&Point3::from(*p)).signed_distance;
+            assert!(d >= offset * 0.999, "point {i} ended {d} m from the skin");
+            if i >= 90 {
+                assert_eq!(p.y, 0.05, "a locked point stays in its ring's plane");
+            }
+        }
+        assert!(contact.counters().finished_out > 10);
     }
 }
