@@ -23,6 +23,12 @@ fn sample_legs() -> Vec<PathBuf> {
     legs
 }
 
+/// The procedural sample leg: closed, Y-up, at the origin; the tests that edit a leg file or
+/// know its triangle count use it.
+fn procedural_leg() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/procedural_leg.glb")
+}
+
 fn read_ply(path: &Path) -> ply_rs_bw::ply::Ply<DefaultElement> {
     let mut file = std::fs::File::open(path).unwrap();
     ply_rs_bw::parser::Parser::<DefaultElement>::new()
@@ -68,10 +74,7 @@ fn every_sample_leg_fits_without_penetration_between_the_axis_points() {
         assert_eq!(r["metrics"]["converged"], true, "{name}");
         assert!(r["metrics"]["residual"].as_f64().unwrap() < 1e-3, "{name}");
         assert_eq!(r["metrics"]["points"], 3600);
-        assert!(
-            r["metrics"]["max_penetration_m"].as_f64().unwrap() <= 1e-5,
-            "{name}"
-        );
+        assert_eq!(r["metrics"]["max_penetration_m"], 0.0, "{name}");
         assert_eq!(
             r["effects"],
             serde_json::json!(["yarn_connection", "alternating_yarns", "contact"])
@@ -87,8 +90,9 @@ fn every_sample_leg_fits_without_penetration_between_the_axis_points() {
             .iter()
             .map(|p| collider.closest(p).signed_distance)
             .fold(f64::INFINITY, f64::min);
+        // The PLY holds f32 positions: allow their rounding (0.1 µm at 0.6 m), no more.
         assert!(
-            deepest >= -1e-5,
+            deepest >= -1e-7,
             "{name}: a yarn point is {deepest} m inside the leg"
         );
 
@@ -162,7 +166,7 @@ fn stitch_density_is_positive_on_covered_skin_and_higher_at_the_ankle_than_the_t
 
 #[test]
 fn ply_and_gltf_outputs_agree_and_read_back_with_their_counts() {
-    let leg_path = &sample_legs()[0];
+    let leg_path = &procedural_leg();
     let (dir, r) = fit(leg_path, "30x20", &[]);
     let out = dir.path().join("out");
     let yarns = read_ply(&out.join("stocking.ply"));
@@ -368,7 +372,7 @@ fn non_finite_coordinates_are_refused() {
 
 #[test]
 fn a_leg_in_millimetres_read_as_metres_is_refused_with_the_units_that_fit() {
-    let leg = std::fs::read(&sample_legs()[0]).unwrap();
+    let leg = std::fs::read(procedural_leg()).unwrap();
     let dir = tempfile::tempdir().unwrap();
     // The sample leg, scaled ×1000 by a node transform.
     let mut gltf = gltf::Gltf::from_slice(&leg).unwrap();
@@ -398,7 +402,7 @@ fn a_leg_in_millimetres_read_as_metres_is_refused_with_the_units_that_fit() {
 
 /// Rewrites the first sample leg's JSON with `edit`, writing `name` (`.glb`) into `dir`.
 fn edited_sample(dir: &Path, name: &str, edit: impl FnOnce(&mut gltf_json::Root)) -> PathBuf {
-    let bytes = std::fs::read(&sample_legs()[0]).unwrap();
+    let bytes = std::fs::read(procedural_leg()).unwrap();
     let mut gltf = gltf::Gltf::from_slice(&bytes).unwrap();
     let mut root = gltf.document.clone().into_json();
     edit(&mut root);
@@ -444,7 +448,7 @@ fn a_z_up_leg_fits_like_the_y_up_one_when_the_scene_says_so() {
         &["fit", "z.json", "--resolution", "40x40", "--out", "z", "-q"],
     );
     assert!(out.status.success(), "{}", stderr(&out));
-    let (y_dir, _) = fit(&sample_legs()[0], "40x40", &[]);
+    let (y_dir, _) = fit(&procedural_leg(), "40x40", &[]);
     let (z, y) = (
         mean_density(&dir.path().join("z")),
         mean_density(&y_dir.path().join("out")),
@@ -465,7 +469,7 @@ fn a_z_up_leg_fits_like_the_y_up_one_when_the_scene_says_so() {
 #[test]
 fn a_gltf_with_an_external_buffer_loads() {
     let dir = tempfile::tempdir().unwrap();
-    let bytes = std::fs::read(&sample_legs()[0]).unwrap();
+    let bytes = std::fs::read(procedural_leg()).unwrap();
     let mut gltf = gltf::Gltf::from_slice(&bytes).unwrap();
     let mut root = gltf.document.clone().into_json();
     root.buffers[0].uri = Some("leg.bin".into());
@@ -488,7 +492,7 @@ fn a_gltf_with_an_external_buffer_loads() {
 
 #[test]
 fn axis_from_the_command_line_sets_where_the_stocking_ends() {
-    let leg = &sample_legs()[0];
+    let leg = &procedural_leg();
     let (dir, r) = fit(leg, "40x40", &["--axis", "0,0.30,0,0,0.60,0"]);
     assert_eq!(r["details"]["axis"]["source"], "command_line");
     assert_eq!(r["metrics"]["converged"], true);
@@ -517,7 +521,7 @@ fn a_bad_axis_flag_is_refused() {
 #[test]
 fn a_stocking_longer_than_the_axis_is_refused_before_fitting() {
     let dir = tempfile::tempdir().unwrap();
-    let leg = sample_legs()[0].display().to_string();
+    let leg = procedural_leg().display().to_string();
     std::fs::write(
         dir.path().join("s.json"),
         r#"{"tube": {"relaxed_length_m": 0.9}}"#,
