@@ -25,6 +25,8 @@ use super::Constraints;
 use crate::knit::Vec3;
 use crate::leg::{Closest, Collider};
 
+/// How many in-plane pushes a held end-ring point gets before it is pushed along the normal.
+const PUSH_TRIES: usize = 4;
 /// How many times one move may slide from face to face before it stops where it is.
 const MAX_SLIDES: usize = 4;
 /// Points per parallel chunk.
@@ -162,26 +164,30 @@ impl SlideParams<'_> {
         counters: &mut ContactCounters,
     ) -> (Point3<f64>, Closest) {
         let along_normal = |c: &Closest| c.point + c.outward * self.offset;
-        if locked {
+        if !locked {
+            return (along_normal(c), *c);
+        }
+        // Moving along in_plane / len gains len of distance per unit if the surface is flat:
+        // check, and push again from the new closest point where it fell short (a curved or
+        // faceted surface). Where that does not settle (beside an open cut, or a surface nearly
+        // square to the axis), go out along the normal after all.
+        let (mut q, mut c) = (*p, *c);
+        for _ in 0..PUSH_TRIES {
             let in_plane = c.outward - self.axis * c.outward.dot(&self.axis);
             let len = in_plane.norm();
-            if len > 0.3 {
-                // Moving along in_plane / len gains len of distance per unit, if the surface is
-                // flat: check, and where it fell short (curved, or beside an open cut) go out
-                // along the normal after all.
-                let needed = self.offset - c.signed_distance;
-                let q = p + in_plane / len * (needed / len);
-                counters.closest_queries += 1;
-                return match self.collider.closest_within(&q, self.query_radius) {
-                    Some(again) if again.signed_distance < self.offset * (1.0 - 1e-3) => {
-                        (along_normal(&again), again)
-                    }
-                    Some(again) => (q, again),
-                    None => (q, *c),
-                };
+            if len <= 0.3 {
+                break;
+            }
+            let needed = self.offset - c.signed_distance;
+            q += in_plane / len * (needed / len);
+            counters.closest_queries += 1;
+            match self.collider.closest_within(&q, self.query_radius) {
+                Some(again) if again.signed_distance < self.offset * (1.0 - 1e-3) => c = again,
+                Some(again) => return (q, again),
+                None => return (q, c),
             }
         }
-        (along_normal(c), *c)
+        (along_normal(&c), c)
     }
 
     /// Where a free point moving from `from` towards `to` may go, updating its contact state.
