@@ -10,10 +10,9 @@
 //!
 //! Pure and deterministic: no randomness, no threads, the same bytes for the same input.
 
-use image::{ImageEncoder, RgbImage};
+use image::RgbImage;
 
 use super::colormap::linear_to_srgb8;
-use crate::error::{Error, Result};
 use crate::export::YarnGeometry;
 use crate::knit::Direction;
 
@@ -404,25 +403,6 @@ impl Canvas {
     }
 }
 
-/// Encodes an image as PNG bytes.
-///
-/// Errors: [`Error::Encode`] naming `patch.png` if the encoder fails.
-pub fn encode_png(image: &RgbImage) -> Result<Vec<u8>> {
-    let mut bytes = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut bytes)
-        .write_image(
-            image.as_raw(),
-            image.width(),
-            image.height(),
-            image::ExtendedColorType::Rgb8,
-        )
-        .map_err(|e| Error::Encode {
-            what: "patch.png".into(),
-            message: e.to_string(),
-        })?;
-    Ok(bytes)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -571,7 +551,11 @@ mod tests {
                 geometry: &g,
                 held: &held,
             };
-            encode_png(&draw_patches(&[panel, panel], &PictureStyle::default())).unwrap()
+            crate::render::encode_png(
+                &draw_patches(&[panel, panel], &PictureStyle::default()),
+                "patch.png",
+            )
+            .unwrap()
         };
         let bytes = draw();
         assert_eq!(&bytes[1..4], b"PNG");

@@ -119,7 +119,7 @@ pub fn run_patch(
                     yarn_colour: [scene.yarns.nylon.colour, scene.yarns.support.colour],
                     ..PictureStyle::default()
                 };
-                patch_picture::encode_png(&patch_picture::draw_patches(&panels, &style))
+                crate::render::encode_png(&patch_picture::draw_patches(&panels, &style), name)
             }
         })?;
         files.push((name.to_string(), bytes));

@@ -1,0 +1,1083 @@
+//! The stitch-density picture (`density.png`): the leg seen from the front and from the side, side
+//! by side, coloured by the stitch density of the fitted stocking at each leg vertex, with a
+//! colour bar in stitches/cm².
+//!
+//! Choices, and why:
+//!
+//! - **Orthographic views at one scale.** Lengths compare across the two views and along the leg
+//!   (a perspective camera would enlarge whatever is nearer to it). Both views are framed on the
+//!   bounding box of the drawn triangles with a margin. glTF's character faces +Z with +Y up, so
+//!   the *front* view looks from +Z towards −Z (+X to the right) and the *side* view from +X
+//!   towards −X (−Z to the right: the character's front is on the left, and for a left leg this
+//!   is its outer side).
+//! - **Colour.** Density maps linearly over [min, max] of the covered vertices (density > 0) onto
+//!   [`heat`], the same map as the vertex colours of `stocking.glb` and `leg.ply`. A range of a
+//!   single value is widened by ±5 % so it still draws mid-map. Vertices without yarn (density 0,
+//!   negative or not finite) are skin, drawn neutral grey rather than the coldest colour, so "no
+//!   stocking here" never reads as "very sparse stocking"; a grey swatch under the bar says so.
+//! - **Shading.** Per-vertex coverage and normalised density are interpolated across each
+//!   triangle (Gouraud) and mapped to colour per sample, so the leg shows the bar's colours (not
+//!   blends of them); a Lambert term from a light fixed relative to the camera (up, left and in
+//!   front) over a 30 % ambient floor darkens them just enough that the leg's form reads. Faces
+//!   seen from behind (through an open cut) are drawn darker and flat.
+//! - **Anti-aliasing.** Each view is z-buffered at `supersample`² samples per pixel and
+//!   box-filtered in linear light.
+//! - **Colour bar.** Vertical, at the right, maximum at the top and minimum at the bottom, with
+//!   4–6 ticks at round numbers and the unit above it. With no covered vertex at all the bar is
+//!   grey and labelled "no yarn".
+//!
+//! Text uses the `embedded-graphics` ISO 8859-1 bitmap fonts (so "cm²" is spelt with its
+//! superscript), drawn onto the image through a small [`DrawTarget`] wrapper.
+//!
+//! Pure and deterministic: no randomness, no threads, the same bytes for the same input; bad input
+//! (out-of-range indices, non-finite positions, degenerate triangles) is skipped, never a panic.
+
+use std::convert::Infallible;
+
+use embedded_graphics::mono_font::{iso_8859_1, MonoFont, MonoTextStyle};
+use embedded_graphics::pixelcolor::Rgb888;
+use embedded_graphics::prelude::{
+    DrawTarget, Drawable, OriginDimensions, Pixel, Point, RgbColor, Size,
+};
+use embedded_graphics::text::{Alignment, Baseline, Text, TextStyle, TextStyleBuilder};
+use image::{Rgb, RgbImage};
+
+use super::colormap::{heat, linear_to_srgb8};
+
+/// How the density picture looks.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DensityPictureStyle {
+    /// Height of each view, pixels (default: 640; 64 to 4096 is used). Widths follow the leg's
+    /// proportions; the font size follows this height.
+    pub view_px: u32,
+    /// Samples per pixel along each axis, for anti-aliasing (default: 2, i.e. 2×2; 1 to 4 is
+    /// used).
+    pub supersample: u32,
+}
+
+impl Default for DensityPictureStyle {
+    fn default() -> Self {
+        DensityPictureStyle {
+            view_px: 640,
+            supersample: 2,
+        }
+    }
+}
+
+/// The caption of the colour bar.
+pub const UNIT_LABEL: &str = "stitches/cm²";
+/// The label for skin without yarn (the grey swatch, or the whole bar when nothing is covered).
+pub const NO_YARN_LABEL: &str = "no yarn";
+
+/// Linear-RGB background: the light warm grey of the patch picture.
+const BACKGROUND: [f32; 3] = [0.80, 0.78, 0.74];
+/// Linear-RGB colour of skin without yarn, before shading: a neutral mid grey.
+const UNCOVERED: [f32; 3] = [0.30, 0.30, 0.30];
+/// sRGB colour of text, ticks and the bar's outline: a near-black grey.
+const INK: [u8; 3] = [40, 40, 40];
+/// Shading floor: the fraction of a colour kept where the light does not reach.
+const AMBIENT: f32 = 0.3;
+/// Shading gain of the Lambert term on top of [`AMBIENT`].
+const DIFFUSE: f32 = 0.7;
+/// Extra darkening of faces seen from behind (the inside of the leg, seen through a cut).
+const BACK_FACE_DIM: f32 = 0.6;
+/// Light direction in camera terms (right, up, towards the viewer), normalised where used.
+const LIGHT_CAMERA: [f64; 3] = [-0.5, 0.4, 0.75];
+/// Empty border around the leg in each view, as a fraction of `view_px`.
+const MARGIN: f64 = 0.05;
+/// Widest view, as a multiple of `view_px` (a mesh wider than tall is scaled down to fit).
+const MAX_VIEW_ASPECT: f64 = 1.5;
+/// Half-width of the colour range used when every covered vertex has the same density, as a
+/// fraction of that density.
+const FLAT_RANGE_FRACTION: f64 = 0.05;
+/// Entries in the colour look-up table.
+const LUT_SIZE: usize = 1024;
+/// Smallest and largest `view_px` used.
+const VIEW_PX_RANGE: (u32, u32) = (64, 2048);
+/// Largest `supersample` used.
+const MAX_SUPERSAMPLE: u32 = 4;
+/// Most samples along a view's height (`view_px × supersample`), which bounds the buffers'
+/// memory; `supersample` is lowered to stay within it.
+const MAX_SAMPLES_HIGH: u32 = 4096;
+
+/// One orthographic camera: world directions of the image's right and of the viewer; up is +Y.
+#[derive(Clone, Copy, Debug)]
+struct ViewFrame {
+    label: &'static str,
+    right: [f64; 3],
+    toward_viewer: [f64; 3],
+}
+
+const UP: [f64; 3] = [0.0, 1.0, 0.0];
+
+/// The two views, left to right.
+const VIEWS: [ViewFrame; 2] = [
+    ViewFrame {
+        label: "front",
+        right: [1.0, 0.0, 0.0],
+        toward_viewer: [0.0, 0.0, 1.0],
+    },
+    ViewFrame {
+        label: "side",
+        right: [0.0, 0.0, -1.0],
+        toward_viewer: [1.0, 0.0, 0.0],
+    },
+];
+
+/// Draws the density picture: the front view, the side view, then the colour bar, left to right.
+///
+/// `positions`: leg vertices, metres, world space, +Y up, glTF's orientation (the character faces
+/// +Z). `triangles`: vertex indices, counter-clockwise seen from outside; a triangle naming a
+/// vertex that does not exist or has a non-finite coordinate is skipped. `density`: per vertex,
+/// stitches per cm²; 0, negative or non-finite means no yarn there (drawn grey); a vertex beyond
+/// the end of `density` has none.
+///
+/// The image is `view_px` high plus a label band; its width follows the leg's proportions. An
+/// empty mesh gives empty views and the bar.
+pub fn draw_density(
+    positions: &[[f64; 3]],
+    triangles: &[[u32; 3]],
+    density: &[f64],
+    style: &DensityPictureStyle,
+) -> RgbImage {
+    let mesh = PreparedMesh::new(positions, triangles);
+    let scale = ColourScale::new(density);
+    let layout = Layout::new(&mesh, &scale, style);
+    let shading = VertexColouring::new(positions.len(), density, &scale);
+    let mut image = RgbImage::from_pixel(
+        layout.width as u32,
+        layout.height as u32,
+        Rgb(BACKGROUND.map(linear_to_srgb8)),
+    );
+    let lut = HeatLut::new();
+    for (frame, rect) in VIEWS.iter().zip(&layout.views) {
+        draw_view(&mut image, &mesh, &shading, &lut, frame, rect, &layout);
+    }
+    draw_bar(&mut image, &scale, &lut, &layout);
+    draw_text(&mut image, &scale, &layout);
+    image
+}
+
+/// The triangles that can be drawn, with per-vertex normals and the bounding box.
+struct PreparedMesh<'a> {
+    positions: &'a [[f64; 3]],
+    /// Triangles whose indices exist and whose corners are finite.
+    triangles: Vec<[usize; 3]>,
+    /// Per vertex: unit area-weighted normal, or zero where no drawable triangle gives one.
+    normals: Vec<[f64; 3]>,
+    /// Corners of the bounding box of the drawable triangles, if any.
+    bounds: Option<([f64; 3], [f64; 3])>,
+}
+
+impl<'a> PreparedMesh<'a> {
+    fn new(positions: &'a [[f64; 3]], triangles: &[[u32; 3]]) -> Self {
+        let finite: Vec<bool> = positions
+            .iter()
+            .map(|p| p.iter().all(|c| c.is_finite()))
+            .collect();
+        let drawable: Vec<[usize; 3]> = triangles
+            .iter()
+            .map(|t| t.map(|i| i as usize))
+            .filter(|t| t.iter().all(|&i| finite.get(i).copied().unwrap_or(false)))
+            .collect();
+        let mut normals = vec![[0.0; 3]; positions.len()];
+        let mut bounds: Option<([f64; 3], [f64; 3])> = None;
+        for t in &drawable {
+            // The cross product's length is twice the area: larger faces weigh more.
+            let n = face_normal(positions, *t);
+            for &i in t {
+                normals[i] = add(normals[i], n);
+                let p = positions[i];
+                bounds = Some(match bounds {
+                    None => (p, p),
+                    Some((lo, hi)) => (
+                        std::array::from_fn(|c| lo[c].min(p[c])),
+                        std::array::from_fn(|c| hi[c].max(p[c])),
+                    ),
+                });
+            }
+        }
+        for n in &mut normals {
+            *n = normalised(*n).unwrap_or([0.0; 3]);
+        }
+        PreparedMesh {
+            positions,
+            triangles: drawable,
+            normals,
+            bounds,
+        }
+    }
+}
+
+/// The density range the colours span, and the bar's ticks.
+#[derive(Clone, Debug, PartialEq)]
+struct ColourScale {
+    /// Density at the bottom and top of the bar, or `None` when no vertex is covered.
+    range: Option<(f64, f64)>,
+    /// Tick values and their labels, ascending.
+    ticks: Vec<(f64, String)>,
+}
+
+impl ColourScale {
+    fn new(density: &[f64]) -> Self {
+        let covered = density.iter().copied().filter(|&d| is_covered(d));
+        let range = covered.fold(None, |acc: Option<(f64, f64)>, d| match acc {
+            None => Some((d, d)),
+            Some((lo, hi)) => Some((lo.min(d), hi.max(d))),
+        });
+        let range = range.map(|(lo, hi)| {
+            if hi - lo > 1e-9 * hi {
+                (lo, hi)
+            } else {
+                let half = FLAT_RANGE_FRACTION * hi;
+                (hi - half, hi + half)
+            }
+        });
+        let ticks = range.map(|(lo, hi)| nice_ticks(lo, hi)).unwrap_or_default();
+        ColourScale { range, ticks }
+    }
+
+    /// Where `d` falls on the map, 0–1, or `None` where there is no yarn.
+    fn position(&self, d: f64) -> Option<f64> {
+        let (lo, hi) = self.range?;
+        let t = (d - lo) / (hi - lo);
+        (is_covered(d) && t.is_finite()).then(|| t.clamp(0.0, 1.0))
+    }
+}
+
+fn is_covered(d: f64) -> bool {
+    d.is_finite() && d > 0.0
+}
+
+/// Round tick values in [lo, hi]: steps of 1, 2, 2.5 or 5 × 10ᵏ, preferring 4–6 ticks (closest
+/// to 5), then steps without the half digit. Labels carry as many decimals as the step needs, or
+/// use exponent notation for steps below 10⁻⁴ or from 10⁶.
+fn nice_ticks(lo: f64, hi: f64) -> Vec<(f64, String)> {
+    let span = hi - lo;
+    if !(span > 0.0 && span.is_finite() && lo.is_finite()) {
+        return Vec::new();
+    }
+    let e0 = span.log10().floor() as i32;
+    // Candidates in a fixed order; the first with the lowest score wins.
+    let mut best: Option<TickStep> = None;
+    for e in (e0 - 2)..=(e0 + 1) {
+        for (mantissa, half_digit) in [(1.0, false), (2.0, false), (2.5, true), (5.0, false)] {
+            let step = mantissa * 10f64.powi(e);
+            let first = (lo / step - 1e-9).ceil();
+            let last = (hi / step + 1e-9).floor();
+            if !(first.is_finite() && last.is_finite()) || (last - first).abs() > 1e6 {
+                continue;
+            }
+            let count = (last - first) as i64 + 1;
+            let outside = if count < 4 {
+                4 - count
+            } else if count > 6 {
+                count - 6
+            } else {
+                0
+            };
+            let candidate = TickStep {
+                score: (outside, (count - 5).abs(), u8::from(half_digit)),
+                step,
+                first: first as i64,
+                count,
+                decimals: (-e + i32::from(half_digit)).max(0) as usize,
+            };
+            if best.as_ref().is_none_or(|b| candidate.score < b.score) {
+                best = Some(candidate);
+            }
+        }
+    }
+    let Some(TickStep {
+        step,
+        first,
+        count,
+        decimals,
+        ..
+    }) = best
+    else {
+        return Vec::new();
+    };
+    (0..count.clamp(0, 12))
+        .map(|k| {
+            let value = (first + k) as f64 * step;
+            let label = if (1e-4..1e6).contains(&step) {
+                format!("{value:.decimals$}")
+            } else {
+                format!("{value:e}")
+            };
+            (value, label)
+        })
+        .collect()
+}
+
+/// One candidate spacing of the bar's ticks.
+struct TickStep {
+    /// Ticks outside 4–6, distance from 5 ticks, 1 for a 2.5 step: lower is better.
+    score: (i64, i64, u8),
+    step: f64,
+    /// The first tick, in steps.
+    first: i64,
+    count: i64,
+    decimals: usize,
+}
+
+/// Per-vertex inputs of the colour: coverage (0 or 1) and position on the colour map.
+struct VertexColouring {
+    covered: Vec<f32>,
+    t: Vec<f32>,
+}
+
+impl VertexColouring {
+    fn new(vertices: usize, density: &[f64], scale: &ColourScale) -> Self {
+        let position: Vec<Option<f64>> = (0..vertices)
+            .map(|i| density.get(i).and_then(|&d| scale.position(d)))
+            .collect();
+        VertexColouring {
+            covered: position
+                .iter()
+                .map(|p| f32::from(u8::from(p.is_some())))
+                .collect(),
+            t: position.iter().map(|p| p.unwrap_or(0.0) as f32).collect(),
+        }
+    }
+}
+
+/// [`heat`] tabulated, linear RGB.
+struct HeatLut(Vec<[f32; 3]>);
+
+impl HeatLut {
+    fn new() -> Self {
+        HeatLut(
+            (0..LUT_SIZE)
+                .map(|k| heat(k as f64 / (LUT_SIZE - 1) as f64))
+                .collect(),
+        )
+    }
+
+    fn get(&self, t: f32) -> [f32; 3] {
+        let t = if t.is_finite() {
+            t.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        self.0[(t * (LUT_SIZE - 1) as f32).round() as usize]
+    }
+}
+
+/// A view's horizontal place in the image, pixels.
+#[derive(Clone, Copy, Debug)]
+struct ViewRect {
+    x0: usize,
+    width: usize,
+}
+
+/// Where everything goes, in image pixels.
+#[derive(Clone, Debug)]
+struct Layout {
+    width: usize,
+    height: usize,
+    /// Height of the label band above the views.
+    band: usize,
+    /// Height of the views (below the band).
+    view_px: usize,
+    supersample: usize,
+    views: [ViewRect; 2],
+    /// Pixels per metre, both views.
+    px_per_m: f64,
+    /// The point drawn at each view's centre, metres.
+    centre_m: [f64; 3],
+    font: &'static MonoFont<'static>,
+    /// The colour bar: left edge, width, top and bottom (exclusive) rows.
+    bar_x0: usize,
+    bar_width: usize,
+    bar_top: usize,
+    bar_bottom: usize,
+    /// The bar panel: left edge and width.
+    panel_x0: usize,
+    panel_width: usize,
+}
+
+impl Layout {
+    fn new(mesh: &PreparedMesh, scale: &ColourScale, style: &DensityPictureStyle) -> Self {
+        let view_px = style.view_px.clamp(VIEW_PX_RANGE.0, VIEW_PX_RANGE.1) as usize;
+        let supersample = style
+            .supersample
+            .min(MAX_SAMPLES_HIGH / view_px as u32)
+            .clamp(1, MAX_SUPERSAMPLE) as usize;
+        let font = font_for(view_px);
+        let char_w = (font.character_size.width + font.character_spacing) as usize;
+        let char_h = font.character_size.height as usize;
+        let text_w = |s: &str| s.chars().count() * char_w;
+        let band = 2 * char_h;
+        let margin_px = (MARGIN * view_px as f64).round();
+
+        let (lo, hi) = mesh.bounds.unwrap_or(([0.0; 3], [0.0; 3]));
+        let extent = |axis: [f64; 3]| {
+            let a = dot(lo, axis);
+            let b = dot(hi, axis);
+            (a - b).abs()
+        };
+        let height_m = extent(UP);
+        let widths_m = VIEWS.map(|v| extent(v.right));
+        let inner_h = view_px as f64 - 2.0 * margin_px;
+        let inner_w = MAX_VIEW_ASPECT * view_px as f64 - 2.0 * margin_px;
+        let px_per_m = [
+            inner_h / height_m,
+            inner_w / widths_m[0],
+            inner_w / widths_m[1],
+        ]
+        .into_iter()
+        .filter(|s| s.is_finite() && *s > 0.0)
+        .fold(f64::INFINITY, f64::min);
+        let px_per_m = if px_per_m.is_finite() { px_per_m } else { 1.0 };
+        let centre_m = std::array::from_fn(|c| (lo[c] + hi[c]) / 2.0);
+
+        let min_view_w = (view_px / 5).max(text_w("front") + 2 * char_w);
+        let mut x = 0;
+        let views = widths_m.map(|w_m| {
+            let w = (w_m * px_per_m + 2.0 * margin_px).ceil();
+            let w = (w.min(MAX_VIEW_ASPECT * view_px as f64) as usize).max(min_view_w);
+            let rect = ViewRect { x0: x, width: w };
+            x += w;
+            rect
+        });
+
+        let bar_width = (view_px / 28).max(8);
+        let tick_len = (bar_width / 3).max(3);
+        let label_chars = scale
+            .ticks
+            .iter()
+            .map(|(_, s)| s.chars().count())
+            .max()
+            .unwrap_or(0)
+            .max(if scale.range.is_none() {
+                NO_YARN_LABEL.len()
+            } else {
+                4
+            });
+        let swatch_row = bar_width + char_w + text_w(NO_YARN_LABEL);
+        let bar_row = bar_width + tick_len + char_w / 2 + label_chars * char_w;
+        let panel_width = 2 * char_w + text_w(UNIT_LABEL).max(bar_row).max(swatch_row);
+        let panel_x0 = x;
+        let bar_x0 = panel_x0 + char_w + (text_w(UNIT_LABEL).saturating_sub(bar_row)) / 2;
+        let bar_top = band + margin_px as usize;
+        // Below the bar: half a line of space, then the swatch (one line high).
+        let bar_bottom = (band + view_px - margin_px as usize)
+            .saturating_sub(char_h + char_h / 2)
+            .max(bar_top + 2);
+        Layout {
+            width: panel_x0 + panel_width,
+            height: band + view_px,
+            band,
+            view_px,
+            supersample,
+            views,
+            px_per_m,
+            centre_m,
+            font,
+            bar_x0,
+            bar_width,
+            bar_top,
+            bar_bottom,
+            panel_x0,
+            panel_width,
+        }
+    }
+
+    /// A world point in a view's supersampled buffer: x right, y down, samples; and its depth
+    /// towards the viewer, metres.
+    fn project_samples(&self, frame: &ViewFrame, rect: &ViewRect, p: [f64; 3]) -> [f64; 3] {
+        let d = sub(p, self.centre_m);
+        let s = self.supersample as f64;
+        [
+            (rect.width as f64 / 2.0 + dot(d, frame.right) * self.px_per_m) * s,
+            (self.view_px as f64 / 2.0 - dot(d, UP) * self.px_per_m) * s,
+            dot(d, frame.toward_viewer),
+        ]
+    }
+
+    /// A world point in image pixels (x, y), in the given view (0 front, 1 side).
+    #[cfg(test)]
+    fn project_image(&self, view: usize, p: [f64; 3]) -> [f64; 2] {
+        let rect = &self.views[view];
+        let q = self.project_samples(&VIEWS[view], rect, p);
+        let s = self.supersample as f64;
+        [rect.x0 as f64 + q[0] / s, self.band as f64 + q[1] / s]
+    }
+}
+
+fn font_for(view_px: usize) -> &'static MonoFont<'static> {
+    if view_px >= 560 {
+        &iso_8859_1::FONT_10X20
+    } else if view_px >= 400 {
+        &iso_8859_1::FONT_9X15
+    } else if view_px >= 280 {
+        &iso_8859_1::FONT_7X13
+    } else {
+        &iso_8859_1::FONT_6X10
+    }
+}
+
+/// Rasterises one view into its rectangle of `image`.
+fn draw_view(
+    image: &mut RgbImage,
+    mesh: &PreparedMesh,
+    colouring: &VertexColouring,
+    lut: &HeatLut,
+    frame: &ViewFrame,
+    rect: &ViewRect,
+    layout: &Layout,
+) {
+    let ss = layout.supersample;
+    let (w, h) = (rect.width * ss, layout.view_px * ss);
+    let light = normalised(add(
+        add(
+            scaled(frame.right, LIGHT_CAMERA[0]),
+            scaled(UP, LIGHT_CAMERA[1]),
+        ),
+        scaled(frame.toward_viewer, LIGHT_CAMERA[2]),
+    ))
+    .unwrap_or(frame.toward_viewer);
+    let lambert = |n: [f64; 3]| AMBIENT + DIFFUSE * dot(n, light).max(0.0) as f32;
+    let projected: Vec<[f64; 3]> = mesh
+        .positions
+        .iter()
+        .map(|&p| layout.project_samples(frame, rect, p))
+        .collect();
+    let vertex_shade: Vec<f32> = mesh
+        .normals
+        .iter()
+        .map(|&n| {
+            if n == [0.0; 3] {
+                lambert(frame.toward_viewer)
+            } else {
+                lambert(n)
+            }
+        })
+        .collect();
+
+    let mut depth = vec![f64::NEG_INFINITY; w * h];
+    let mut colour = vec![BACKGROUND; w * h];
+    for &tri in &mesh.triangles {
+        let [a, b, c] = tri.map(|i| projected[i]);
+        let area = edge(a, b, c);
+        // Also skips NaN areas (a vertex projected from an overflowing coordinate).
+        if area.is_nan() || area.abs() <= 1e-12 {
+            continue;
+        }
+        let n_face = face_normal(mesh.positions, tri);
+        let front_facing = dot(n_face, frame.toward_viewer) >= 0.0;
+        let back_shade = normalised(scaled(n_face, -1.0))
+            .map(|n| lambert(n) * BACK_FACE_DIM)
+            .unwrap_or(AMBIENT * BACK_FACE_DIM);
+        let xs = [a[0], b[0], c[0]];
+        let ys = [a[1], b[1], c[1]];
+        let x_lo = (min3(xs) - 0.5).floor().max(0.0);
+        let x_hi = (max3(xs) - 0.5).ceil().min(w as f64 - 1.0);
+        let y_lo = (min3(ys) - 0.5).floor().max(0.0);
+        let y_hi = (max3(ys) - 0.5).ceil().min(h as f64 - 1.0);
+        if !(x_lo <= x_hi && y_lo <= y_hi) {
+            continue;
+        }
+        let cov = tri.map(|i| colouring.covered[i]);
+        let t = tri.map(|i| colouring.t[i]);
+        let shade = tri.map(|i| vertex_shade[i]);
+        for y in y_lo as usize..=y_hi as usize {
+            for x in x_lo as usize..=x_hi as usize {
+                let p = [x as f64 + 0.5, y as f64 + 0.5, 0.0];
+                let wa = edge(b, c, p) / area;
+                let wb = edge(c, a, p) / area;
+                let wc = 1.0 - wa - wb;
+                if wa < 0.0 || wb < 0.0 || wc < 0.0 {
+                    continue;
+                }
+                let z = wa * a[2] + wb * b[2] + wc * c[2];
+                let k = y * w + x;
+                if z <= depth[k] {
+                    continue;
+                }
+                depth[k] = z;
+                let bary = [wa as f32, wb as f32, wc as f32];
+                let coverage = bary[0] * cov[0] + bary[1] * cov[1] + bary[2] * cov[2];
+                let base = if coverage > 0.0 {
+                    let tt = (bary[0] * cov[0] * t[0]
+                        + bary[1] * cov[1] * t[1]
+                        + bary[2] * cov[2] * t[2])
+                        / coverage;
+                    let hot = lut.get(tt);
+                    std::array::from_fn(|ch| UNCOVERED[ch] * (1.0 - coverage) + hot[ch] * coverage)
+                } else {
+                    UNCOVERED
+                };
+                let s = if front_facing {
+                    bary[0] * shade[0] + bary[1] * shade[1] + bary[2] * shade[2]
+                } else {
+                    back_shade
+                };
+                colour[k] = base.map(|v| v * s);
+            }
+        }
+    }
+
+    let inv = 1.0 / (ss * ss) as f32;
+    for y in 0..layout.view_px {
+        for x in 0..rect.width {
+            let mut sum = [0.0f32; 3];
+            for sy in 0..ss {
+                let row = (y * ss + sy) * w + x * ss;
+                for sample in &colour[row..row + ss] {
+                    for ch in 0..3 {
+                        sum[ch] += sample[ch];
+                    }
+                }
+            }
+            let px = Rgb(sum.map(|v| linear_to_srgb8(v * inv)));
+            image.put_pixel((rect.x0 + x) as u32, (layout.band + y) as u32, px);
+        }
+    }
+}
+
+/// The colour bar (maximum at the top), its outline and tick marks, and the "no yarn" swatch.
+fn draw_bar(image: &mut RgbImage, scale: &ColourScale, lut: &HeatLut, layout: &Layout) {
+    let (x0, x1) = (layout.bar_x0, layout.bar_x0 + layout.bar_width);
+    let (top, bottom) = (layout.bar_top, layout.bar_bottom);
+    let height = (bottom - top) as f64;
+    let grey = Rgb(UNCOVERED.map(linear_to_srgb8));
+    for y in top..bottom {
+        let px = match scale.range {
+            Some(_) => {
+                let t = 1.0 - (y - top) as f64 / (height - 1.0).max(1.0);
+                Rgb(lut.get(t as f32).map(linear_to_srgb8))
+            }
+            None => grey,
+        };
+        fill_rect(image, x0, x1, y, y + 1, px);
+    }
+    outline(image, x0, x1, top, bottom);
+    if let Some((lo, hi)) = scale.range {
+        let tick_len = (layout.bar_width / 3).max(3);
+        for (value, _) in &scale.ticks {
+            let y = tick_y(layout, *value, lo, hi);
+            fill_rect(image, x1, x1 + tick_len, y, y + 1, Rgb(INK));
+        }
+        let (s_top, s_bottom) = swatch_rows(layout);
+        fill_rect(image, x0, x1, s_top, s_bottom, grey);
+        outline(image, x0, x1, s_top, s_bottom);
+    }
+}
+
+/// The row of a tick at density `value` on a bar spanning [lo, hi].
+fn tick_y(layout: &Layout, value: f64, lo: f64, hi: f64) -> usize {
+    let t = ((value - lo) / (hi - lo)).clamp(0.0, 1.0);
+    let span = (layout.bar_bottom - layout.bar_top).saturating_sub(1) as f64;
+    layout.bar_top + ((1.0 - t) * span).round() as usize
+}
+
+/// The "no yarn" swatch under the bar: top and bottom (exclusive) rows.
+fn swatch_rows(layout: &Layout) -> (usize, usize) {
+    let char_h = layout.font.character_size.height as usize;
+    let top = layout.bar_bottom + char_h / 2;
+    (top, top + char_h)
+}
+
+/// View labels, the bar's caption and tick labels, and the swatch's label.
+fn draw_text(image: &mut RgbImage, scale: &ColourScale, layout: &Layout) {
+    let style = MonoTextStyle::new(layout.font, Rgb888::new(INK[0], INK[1], INK[2]));
+    let centred = TextStyleBuilder::new()
+        .alignment(Alignment::Center)
+        .baseline(Baseline::Middle)
+        .build();
+    let left = TextStyleBuilder::new()
+        .alignment(Alignment::Left)
+        .baseline(Baseline::Middle)
+        .build();
+    let mut target = ImageTarget(image);
+    let mut put = |text: &str, x: usize, y: usize, text_style: TextStyle| {
+        let at = Point::new(x as i32, y as i32);
+        let Ok(_) = Text::with_text_style(text, at, style, text_style).draw(&mut target);
+    };
+    let band_mid = layout.band / 2;
+    for (frame, rect) in VIEWS.iter().zip(&layout.views) {
+        put(frame.label, rect.x0 + rect.width / 2, band_mid, centred);
+    }
+    put(
+        UNIT_LABEL,
+        layout.panel_x0 + layout.panel_width / 2,
+        band_mid,
+        centred,
+    );
+    let char_w = (layout.font.character_size.width + layout.font.character_spacing) as usize;
+    let tick_len = (layout.bar_width / 3).max(3);
+    let label_x = layout.bar_x0 + layout.bar_width + tick_len + char_w / 2;
+    match scale.range {
+        Some((lo, hi)) => {
+            for (value, label) in &scale.ticks {
+                put(label, label_x, tick_y(layout, *value, lo, hi), left);
+            }
+            let (s_top, s_bottom) = swatch_rows(layout);
+            let x = layout.bar_x0 + layout.bar_width + char_w;
+            put(NO_YARN_LABEL, x, (s_top + s_bottom) / 2, left);
+        }
+        None => {
+            let y = (layout.bar_top + layout.bar_bottom) / 2;
+            put(NO_YARN_LABEL, label_x, y, left);
+        }
+    }
+}
+
+/// `embedded-graphics` drawing onto an [`RgbImage`]; pixels outside the image are dropped.
+struct ImageTarget<'a>(&'a mut RgbImage);
+
+impl OriginDimensions for ImageTarget<'_> {
+    fn size(&self) -> Size {
+        Size::new(self.0.width(), self.0.height())
+    }
+}
+
+impl DrawTarget for ImageTarget<'_> {
+    type Color = Rgb888;
+    type Error = Infallible;
+
+    fn draw_iter<I>(&mut self, pixels: I) -> Result<(), Self::Error>
+    where
+        I: IntoIterator<Item = Pixel<Self::Color>>,
+    {
+        for Pixel(at, c) in pixels {
+            if let (Ok(x), Ok(y)) = (u32::try_from(at.x), u32::try_from(at.y)) {
+                if x < self.0.width() && y < self.0.height() {
+                    self.0.put_pixel(x, y, Rgb([c.r(), c.g(), c.b()]));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Fills columns `x0..x1` of rows `y0..y1`, clipped to the image.
+fn fill_rect(image: &mut RgbImage, x0: usize, x1: usize, y0: usize, y1: usize, px: Rgb<u8>) {
+    let (w, h) = (image.width() as usize, image.height() as usize);
+    for y in y0.min(h)..y1.min(h) {
+        for x in x0.min(w)..x1.min(w) {
+            image.put_pixel(x as u32, y as u32, px);
+        }
+    }
+}
+
+/// A one-pixel ink frame just outside columns `x0..x1`, rows `y0..y1`.
+fn outline(image: &mut RgbImage, x0: usize, x1: usize, y0: usize, y1: usize) {
+    let ink = Rgb(INK);
+    let (xa, ya) = (x0.saturating_sub(1), y0.saturating_sub(1));
+    fill_rect(image, xa, x1 + 1, ya, y0, ink);
+    fill_rect(image, xa, x1 + 1, y1, y1 + 1, ink);
+    fill_rect(image, xa, x0, y0, y1, ink);
+    fill_rect(image, x1, x1 + 1, y0, y1, ink);
+}
+
+/// Twice the signed area of (a, b, p) in the xy plane.
+fn edge(a: [f64; 3], b: [f64; 3], p: [f64; 3]) -> f64 {
+    (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
+}
+
+/// Unnormalised outward normal of a counter-clockwise triangle (length: twice its area).
+fn face_normal(positions: &[[f64; 3]], [i, j, k]: [usize; 3]) -> [f64; 3] {
+    cross(
+        sub(positions[j], positions[i]),
+        sub(positions[k], positions[i]),
+    )
+}
+
+fn min3(v: [f64; 3]) -> f64 {
+    v[0].min(v[1]).min(v[2])
+}
+
+fn max3(v: [f64; 3]) -> f64 {
+    v[0].max(v[1]).max(v[2])
+}
+
+fn add(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|i| a[i] + b[i])
+}
+
+fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|i| a[i] - b[i])
+}
+
+fn scaled(a: [f64; 3], s: f64) -> [f64; 3] {
+    a.map(|v| v * s)
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+/// `a` scaled to unit length, or `None` if it has none (zero or not finite).
+fn normalised(a: [f64; 3]) -> Option<[f64; 3]> {
+    let len = dot(a, a).sqrt();
+    (len > 0.0 && len.is_finite()).then(|| scaled(a, 1.0 / len))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::encode_png;
+
+    const RADIUS_M: f64 = 0.05;
+    const HEIGHT_M: f64 = 0.5;
+
+    /// An open vertical cylinder, radius 5 cm, 0.5 m tall from y = 0, triangles counter-clockwise
+    /// seen from outside.
+    fn cylinder(segments: usize, rings: usize) -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+        let mut positions = Vec::new();
+        for r in 0..=rings {
+            let y = HEIGHT_M * r as f64 / rings as f64;
+            for s in 0..segments {
+                let a = std::f64::consts::TAU * s as f64 / segments as f64;
+                positions.push([RADIUS_M * a.sin(), y, RADIUS_M * a.cos()]);
+            }
+        }
+        let id = |r: usize, s: usize| (r * segments + s % segments) as u32;
+        let mut triangles = Vec::new();
+        for r in 0..rings {
+            for s in 0..segments {
+                // Angle grows from +Z towards +X: counter-clockwise seen from outside is
+                // (r, s) → (r, s+1) → (r+1, s+1).
+                triangles.push([id(r, s), id(r, s + 1), id(r + 1, s + 1)]);
+                triangles.push([id(r, s), id(r + 1, s + 1), id(r + 1, s)]);
+            }
+        }
+        (positions, triangles)
+    }
+
+    /// Density rising towards the bottom: 10 stitches/cm² at the top, 40 at the bottom.
+    fn rising_density(positions: &[[f64; 3]]) -> Vec<f64> {
+        positions
+            .iter()
+            .map(|p| 10.0 + 30.0 * (1.0 - p[1] / HEIGHT_M))
+            .collect()
+    }
+
+    fn pixel_at(image: &RgbImage, xy: [f64; 2]) -> [u8; 3] {
+        image.get_pixel(xy[0] as u32, xy[1] as u32).0
+    }
+
+    fn distance(a: [u8; 3], b: [u8; 3]) -> f64 {
+        (0..3)
+            .map(|c| (f64::from(a[c]) - f64::from(b[c])).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    }
+
+    fn layout_for(
+        positions: &[[f64; 3]],
+        triangles: &[[u32; 3]],
+        density: &[f64],
+        style: &DensityPictureStyle,
+    ) -> Layout {
+        let mesh = PreparedMesh::new(positions, triangles);
+        Layout::new(&mesh, &ColourScale::new(density), style)
+    }
+
+    #[test]
+    fn denser_bottom_of_cylinder_draws_hotter_than_top_in_front_view() {
+        let (positions, triangles) = cylinder(48, 40);
+        let density = rising_density(&positions);
+        let style = DensityPictureStyle::default();
+        let image = draw_density(&positions, &triangles, &density, &style);
+        let layout = layout_for(&positions, &triangles, &density, &style);
+        let hot = heat(1.0).map(linear_to_srgb8);
+        // The column facing the camera, 5 cm in from each end.
+        let bottom = pixel_at(&image, layout.project_image(0, [0.0, 0.05, RADIUS_M]));
+        let top = pixel_at(&image, layout.project_image(0, [0.0, 0.45, RADIUS_M]));
+        assert!(
+            distance(bottom, hot) < distance(top, hot),
+            "bottom {bottom:?} should be nearer heat(1) {hot:?} than top {top:?}"
+        );
+        let background = BACKGROUND.map(linear_to_srgb8);
+        assert_ne!(bottom, background);
+        assert_ne!(top, background);
+    }
+
+    #[test]
+    fn background_stays_plain_and_uncovered_skin_is_neutral_grey() {
+        let (positions, triangles) = cylinder(48, 40);
+        // Yarn on the lower half only.
+        let density: Vec<f64> = positions
+            .iter()
+            .map(|p| if p[1] < 0.2 { 20.0 + p[1] } else { 0.0 })
+            .collect();
+        let style = DensityPictureStyle::default();
+        let image = draw_density(&positions, &triangles, &density, &style);
+        let layout = layout_for(&positions, &triangles, &density, &style);
+        let background = BACKGROUND.map(linear_to_srgb8);
+        for view in 0..2 {
+            let rect = layout.views[view];
+            for (x, y) in [
+                (rect.x0 + 2, layout.band + 2),
+                (rect.x0 + rect.width - 3, layout.band + layout.view_px - 3),
+            ] {
+                assert_eq!(image.get_pixel(x as u32, y as u32).0, background);
+            }
+            let skin = pixel_at(&image, layout.project_image(view, [0.0, 0.4, 0.0]));
+            let grey = skin[0] == skin[1] && skin[1] == skin[2];
+            assert!(grey, "uncovered skin should be grey, got {skin:?}");
+            assert_ne!(skin, background);
+        }
+        let covered = pixel_at(&image, layout.project_image(0, [0.0, 0.05, RADIUS_M]));
+        assert!(covered[0] != covered[1] || covered[1] != covered[2]);
+    }
+
+    #[test]
+    fn colour_bar_runs_cold_at_the_bottom_to_hot_at_the_top() {
+        let (positions, triangles) = cylinder(24, 10);
+        let density = rising_density(&positions);
+        let style = DensityPictureStyle::default();
+        let image = draw_density(&positions, &triangles, &density, &style);
+        let layout = layout_for(&positions, &triangles, &density, &style);
+        let x = (layout.bar_x0 + layout.bar_width / 2) as u32;
+        let samples = 9;
+        let span = (layout.bar_bottom - 1 - layout.bar_top) as f64;
+        for k in 0..samples {
+            let t = k as f64 / (samples - 1) as f64;
+            let y = layout.bar_top as f64 + (1.0 - t) * span;
+            let got = image.get_pixel(x, y.round() as u32).0;
+            let want = heat(t).map(linear_to_srgb8);
+            assert!(
+                distance(got, want) <= 6.0,
+                "bar at t = {t}: got {got:?}, want {want:?}"
+            );
+        }
+        // Ticks at round numbers within 10..40.
+        let scale = ColourScale::new(&density);
+        let values: Vec<f64> = scale.ticks.iter().map(|t| t.0).collect();
+        assert_eq!(values, vec![10.0, 20.0, 30.0, 40.0]);
+    }
+
+    #[test]
+    fn ticks_are_round_and_four_to_six() {
+        for (lo, hi) in [
+            (8.5, 29.2),
+            (5.5, 19.1),
+            (19.0, 21.0),
+            (0.013, 0.071),
+            (123.0, 9876.0),
+            (1.0, 1.3),
+        ] {
+            let ticks = nice_ticks(lo, hi);
+            assert!(
+                (4..=6).contains(&ticks.len()),
+                "{lo}..{hi}: {ticks:?} should have 4 to 6 ticks"
+            );
+            for (v, label) in &ticks {
+                assert!(*v >= lo - 1e-9 && *v <= hi + 1e-9, "{v} outside {lo}..{hi}");
+                assert!((label.parse::<f64>().unwrap() - v).abs() < 1e-9 * v.abs().max(1.0));
+            }
+        }
+        assert_eq!(
+            nice_ticks(19.0, 21.0)
+                .into_iter()
+                .map(|t| t.1)
+                .collect::<Vec<_>>(),
+            ["19.0", "19.5", "20.0", "20.5", "21.0"]
+        );
+    }
+
+    #[test]
+    fn same_input_gives_same_png_bytes() {
+        let (positions, triangles) = cylinder(32, 20);
+        let density = rising_density(&positions);
+        let style = DensityPictureStyle::default();
+        let a = encode_png(
+            &draw_density(&positions, &triangles, &density, &style),
+            "density.png",
+        )
+        .unwrap();
+        let b = encode_png(
+            &draw_density(&positions, &triangles, &density, &style),
+            "density.png",
+        )
+        .unwrap();
+        assert_eq!(a, b);
+    }
+
+    #[test]
+    fn bad_input_draws_a_picture_without_panicking() {
+        let (positions, triangles) = cylinder(16, 8);
+        let density = rising_density(&positions);
+        let n = positions.len() as u32;
+        let mut nan_positions = positions.clone();
+        nan_positions[3] = [f64::NAN, 0.0, f64::INFINITY];
+        let mut bad_triangles = triangles.clone();
+        bad_triangles.extend([[0, 0, 0], [0, 1, n], [u32::MAX, 1, 2], [0, 16, 32]]);
+        let mut bad_density = density.clone();
+        bad_density[0] = f64::NAN;
+        bad_density[1] = -3.0;
+        bad_density[2] = f64::INFINITY;
+        bad_density[5] = f64::NEG_INFINITY;
+        let same = vec![12.0; positions.len()];
+        let none = vec![0.0; positions.len()];
+        let nan = vec![f64::NAN; positions.len()];
+        let point = vec![[0.1, 0.2, 0.3]; 3];
+        type Case<'a> = (&'a [[f64; 3]], &'a [[u32; 3]], &'a [f64]);
+        let cases: Vec<Case> = vec![
+            (&[], &[], &[]),
+            (&positions, &[], &density),
+            (&positions, &bad_triangles, &bad_density),
+            (&nan_positions, &triangles, &density),
+            (&positions, &triangles, &density[..10]),
+            (&positions, &triangles, &same),
+            (&positions, &triangles, &none),
+            (&positions, &triangles, &nan),
+            (&point, &[[0, 1, 2]], &[1.0, 2.0, 3.0]),
+            (
+                &[[1e300, 0.0, 0.0], [-1e300, 1e300, 0.0], [0.0, 0.0, 1e300]],
+                &[[0, 1, 2]],
+                &[1e300, 1e-300, 5.0],
+            ),
+        ];
+        for style in [
+            DensityPictureStyle::default(),
+            DensityPictureStyle {
+                view_px: 0,
+                supersample: 0,
+            },
+            DensityPictureStyle {
+                view_px: u32::MAX,
+                supersample: u32::MAX,
+            },
+        ] {
+            for (i, (p, t, d)) in cases.iter().enumerate() {
+                if style.view_px == u32::MAX && i > 0 {
+                    continue; // the largest size is slow; the empty mesh shows it clamps
+                }
+                let image = draw_density(p, t, d, &style);
+                assert!(image.width() > 0 && image.height() > 0, "case {i}");
+                assert!(encode_png(&image, "density.png").is_ok(), "case {i}");
+            }
+        }
+    }
+
+    #[test]
+    fn nothing_covered_draws_grey_bar_and_grey_leg() {
+        let (positions, triangles) = cylinder(24, 10);
+        let density = vec![0.0; positions.len()];
+        let style = DensityPictureStyle::default();
+        let image = draw_density(&positions, &triangles, &density, &style);
+        let layout = layout_for(&positions, &triangles, &density, &style);
+        let x = (layout.bar_x0 + layout.bar_width / 2) as u32;
+        let grey = UNCOVERED.map(linear_to_srgb8);
+        for y in [layout.bar_top + 2, layout.bar_bottom - 3] {
+            assert_eq!(image.get_pixel(x, y as u32).0, grey);
+        }
+        let skin = pixel_at(&image, layout.project_image(0, [0.0, 0.25, RADIUS_M]));
+        assert!(skin[0] == skin[1] && skin[1] == skin[2], "{skin:?}");
+    }
+}
