@@ -34,9 +34,9 @@ impl Plan {
     /// The plan of `knitfit patch` for `scene`: for each stretch, build a patch and relax it;
     /// then measure stitches and encode the asked-for files.
     pub fn patch(scene: &Scene) -> Plan {
-        // A flat patch has no leg to touch.
+        // A flat patch has no leg to touch or cut through.
         let mut effects = dedup(&scene.effects);
-        effects.retain(|&e| e != Effect::Contact);
+        effects.retain(|&e| e != Effect::Contact && e != Effect::PenetrationFix);
         let forces = force_terms(scene, &effects);
         let mut stages = Vec::new();
         let mut add = |name: String, why: String| stages.push(PlannedStage { name, why });
@@ -89,6 +89,12 @@ impl Plan {
         if !effects.contains(&Effect::Contact) {
             effects.push(Effect::Contact);
         }
+        // The penetration fix reroutes yarn polylines: without a file that holds them, there
+        // is nothing for it to do.
+        let polylines = scene.wants(Output::Glb) || scene.wants(Output::Ply);
+        if !polylines {
+            effects.retain(|&e| e != Effect::PenetrationFix);
+        }
         let forces = force_terms(scene, &effects);
         let mut stages = Vec::new();
         let mut add = |name: &str, why: String| {
@@ -123,16 +129,25 @@ impl Plan {
             "report.json: max_penetration_m against the exact triangles".into(),
         );
         let mut files = Vec::new();
-        if scene.wants(Output::Glb) || scene.wants(Output::Ply) {
+        if polylines || scene.wants(Output::Picture) {
             add(
-                "stitch density",
-                "the leg's _STITCH_DENSITY / stitch_density attribute".into(),
+                "leg attributes",
+                "stitch density, stretch and coverage per leg vertex, for the leg in the \
+                 files and the density picture"
+                    .into(),
+            );
+        }
+        if effects.contains(&Effect::PenetrationFix) {
+            add(
+                "penetration fix",
+                "effect penetration_fix, for the yarn polylines written".into(),
             );
         }
         for (output, file) in [
             (Output::Glb, "stocking.glb"),
             (Output::Ply, "stocking.ply"),
             (Output::Ply, "leg.ply"),
+            (Output::Picture, "density.png"),
         ] {
             if scene.wants(output) {
                 add(
@@ -150,6 +165,13 @@ impl Plan {
             stages,
             files,
         }
+    }
+}
+
+impl Plan {
+    /// True when the plan has a stage of this name.
+    pub fn has_stage(&self, name: &str) -> bool {
+        self.stages.iter().any(|s| s.name == name)
     }
 }
 
@@ -206,6 +228,24 @@ mod tests {
         let mut scene = Scene::load(None).unwrap();
         scene.effects = vec![];
         assert_eq!(Plan::patch(&scene).forces.stiffness, [1.0, 1.0]);
+    }
+
+    #[test]
+    fn the_penetration_fix_runs_only_for_written_polylines() {
+        let mut scene = Scene::load(None).unwrap();
+        scene.effects = vec![Effect::PenetrationFix];
+        let stage_names =
+            |plan: &Plan| -> Vec<String> { plan.stages.iter().map(|s| s.name.clone()).collect() };
+        let fit = Plan::fit(&scene);
+        assert!(fit.effects.contains(&Effect::PenetrationFix));
+        assert!(stage_names(&fit).contains(&"penetration fix".to_string()));
+        scene.outputs = vec![Output::Picture];
+        let fit = Plan::fit(&scene);
+        assert!(!fit.effects.contains(&Effect::PenetrationFix));
+        assert!(!stage_names(&fit).contains(&"penetration fix".to_string()));
+        assert!(!Plan::patch(&scene)
+            .effects
+            .contains(&Effect::PenetrationFix));
     }
 
     #[test]

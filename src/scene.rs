@@ -387,6 +387,9 @@ pub enum Effect {
     AlternatingYarns,
     /// Yarn slides on the leg and never enters it (paper §6.2). Always on for a fit.
     Contact,
+    /// After a fit, yarn segments that cut through the leg are rerouted over the skin (paper
+    /// §6.3). Runs only when a yarn polyline is written (`glb` or `ply`).
+    PenetrationFix,
 }
 
 impl Effect {
@@ -396,6 +399,7 @@ impl Effect {
             Effect::YarnConnection => "yarn_connection",
             Effect::AlternatingYarns => "alternating_yarns",
             Effect::Contact => "contact",
+            Effect::PenetrationFix => "penetration_fix",
         }
     }
 }
@@ -413,7 +417,8 @@ pub enum Output {
     Ply,
     /// Binary glTF (`patch.glb`; `stocking.glb` for a fit).
     Glb,
-    /// PNG picture of the relaxed stitches (`patch.png`; the patch only, for now).
+    /// PNG picture: the relaxed stitches (`patch.png`), or for a fit the leg coloured by
+    /// stitch density, front and side, with a colour bar (`density.png`).
     Picture,
 }
 

@@ -23,6 +23,8 @@ pub struct Closest {
     pub signed_distance: f64,
     /// Unit vector pointing out of the leg at the closest point.
     pub outward: Vector3<f64>,
+    /// The triangle the closest point lies on: an index into [`Collider::triangles`].
+    pub triangle: u32,
 }
 
 /// A leg prepared for contact queries.
@@ -49,6 +51,17 @@ impl Collider {
     /// Number of triangles used for contact (after dropping degenerate ones).
     pub fn triangle_count(&self) -> usize {
         self.mesh.indices().len()
+    }
+
+    /// The triangles used for contact, as indices into [`Collider::vertices`] (duplicates
+    /// merged, degenerate triangles dropped: not the file's numbering).
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        self.mesh.indices()
+    }
+
+    /// The vertices the triangles index, metres.
+    pub fn vertices(&self) -> &[Point3<f64>] {
+        self.mesh.vertices()
     }
 
     /// The contact method in use.
@@ -86,6 +99,7 @@ impl Collider {
             point: projection.point,
             signed_distance: if inside { -distance } else { distance },
             outward,
+            triangle,
         })
     }
 
@@ -160,7 +174,8 @@ impl Collider {
         (p - closest).dot(&normal) < 0.0
     }
 
-    fn face_normal(&self, triangle: u32) -> Vector3<f64> {
+    /// Outward unit normal of a triangle (+Y for a degenerate one).
+    pub fn face_normal(&self, triangle: u32) -> Vector3<f64> {
         self.mesh
             .triangle(triangle)
             .normal()

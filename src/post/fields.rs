@@ -5,6 +5,17 @@
 //!   of the cross product of its diagonals (exact for a planar quad).
 //! * **Tension** at a yarn point is the mean signed force `c1 (|x_b − x_a| − l)` of its springs
 //!   (positive in tension), in the solver's force units (unit mass, per time unit squared, metres).
+//! * **Stretch** at a yarn point, along the course and along the wale: the summed length of its
+//!   springs in that direction over their summed rest length (1 at rest, 1.5 stretched by half;
+//!   the `_STRETCH_COURSE` / `_STRETCH_WALE` attributes).
+//! * **Coverage** at a yarn point, 0–1: the fraction of skin hidden by yarn seen along the
+//!   normal (`_COVERAGE`). The knit is read as two families of opaque strips of yarn width `2r`:
+//!   course yarns, one per course, so spaced by the local wale spacing `s_w` (the length of the
+//!   point's wale springs), and wale yarn (the loops' legs), spaced by the local course spacing
+//!   `s_c`. The holes are the rectangles between strips, so
+//!   `coverage = 1 − (1 − min(1, 2 r_course / s_w)) · (1 − min(1, 2 r_wale / s_c))`,
+//!   with `r_course` the radius of the point's course yarn and `r_wale` that of its wale springs.
+//!   Overlap where strips cross is counted once; yarn flattening and loop curvature are ignored.
 //! * **On the leg**, a vertex takes the kernel-weighted mean of the yarn points within a bandwidth
 //!   (a biweight kernel, compactly supported, so far-away yarn has no say): smooth where the fit is
 //!   smooth, and 0 where no yarn is near (uncovered skin).
@@ -13,7 +24,7 @@ use std::collections::HashMap;
 
 use nalgebra::Point3;
 
-use crate::knit::{Knit, PointId, Vec3};
+use crate::knit::{Direction, Knit, PointId, Vec3};
 use crate::sim::ForceTerms;
 
 /// Square metres per square centimetre.
@@ -79,34 +90,172 @@ pub fn tension(knit: &Knit, terms: &ForceTerms) -> Vec<f64> {
         .collect()
 }
 
-/// Transfers a per-yarn-point field to leg vertices with a biweight kernel of radius
-/// `bandwidth` metres; vertices with no yarn point within the bandwidth get 0.
-pub fn transfer_to_leg(
-    yarn_points: &[Vec3],
-    values: &[f64],
-    leg_vertices: &[Point3<f64>],
-    bandwidth: f64,
-) -> Vec<f64> {
-    let grid = PointGrid::new(yarn_points, bandwidth);
-    leg_vertices
-        .iter()
-        .map(|v| {
-            let (mut weight_sum, mut value_sum) = (0.0, 0.0);
-            grid.for_each_near(&v.coords, |i| {
-                let d2 = (yarn_points[i] - v.coords).norm_squared() / (bandwidth * bandwidth);
-                if d2 < 1.0 {
-                    let w = (1.0 - d2) * (1.0 - d2);
-                    weight_sum += w;
-                    value_sum += w * values[i];
+/// Stretch along the course and along the wale at every point: `(course, wale)` (see module
+/// docs). A point with no spring in a direction gets 1 there.
+pub fn stretch(knit: &Knit) -> (Vec<f64>, Vec<f64>) {
+    (0..knit.len())
+        .map(|i| {
+            let spacing = local_spacing(knit, PointId(i as u32));
+            let ratio = |d: usize| {
+                if spacing.rest[d] > 0.0 {
+                    spacing.length[d] / spacing.rest[d]
+                } else {
+                    1.0
                 }
-            });
-            if weight_sum > 0.0 {
-                value_sum / weight_sum
-            } else {
-                0.0
-            }
+            };
+            (ratio(0), ratio(1))
+        })
+        .unzip()
+}
+
+/// Coverage at every point (see module docs); `radius_m` is the yarn radius per
+/// [`YarnKind::index`](crate::knit::YarnKind::index), metres.
+pub fn coverage(knit: &Knit, radius_m: [f64; 2]) -> Vec<f64> {
+    (0..knit.len())
+        .map(|i| {
+            let spacing = local_spacing(knit, PointId(i as u32));
+            let hidden = |radius: f64, count: u32, length: f64| {
+                if count == 0 || length <= 0.0 {
+                    0.0
+                } else {
+                    (2.0 * radius * count as f64 / length).min(1.0)
+                }
+            };
+            let r_course = radius_m[knit.course_yarn[i].index() as usize];
+            let r_wale = spacing
+                .wale_yarn
+                .map_or(0.0, |k| radius_m[k.index() as usize]);
+            // Course yarns are spaced by the wale springs' length, and the other way round.
+            let by_courses = hidden(r_course, spacing.count[1], spacing.length[1]);
+            let by_wales = hidden(r_wale, spacing.count[0], spacing.length[0]);
+            1.0 - (1.0 - by_courses) * (1.0 - by_wales)
         })
         .collect()
+}
+
+/// The springs at one point, summed per direction (index 0 course, 1 wale).
+struct LocalSpacing {
+    length: [f64; 2],
+    rest: [f64; 2],
+    count: [u32; 2],
+    /// The yarn of the point's wale springs (the first one met).
+    wale_yarn: Option<crate::knit::YarnKind>,
+}
+
+fn local_spacing(knit: &Knit, p: PointId) -> LocalSpacing {
+    let x = &knit.particles.x;
+    let mut out = LocalSpacing {
+        length: [0.0; 2],
+        rest: [0.0; 2],
+        count: [0; 2],
+        wale_yarn: None,
+    };
+    for inc in knit.incident(p) {
+        let s = &knit.springs[inc.spring as usize];
+        let d = match s.direction {
+            Direction::Course => 0,
+            Direction::Wale => {
+                out.wale_yarn.get_or_insert(s.yarn);
+                1
+            }
+        };
+        out.length[d] += (x[s.b.index()] - x[s.a.index()]).norm();
+        out.rest[d] += s.rest;
+        out.count[d] += 1;
+    }
+    out
+}
+
+/// The fields a fitted knit hands to a shader, one value per point (yarn point or leg vertex).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct KnitFields {
+    /// Stitches per cm².
+    pub stitch_density: Vec<f64>,
+    /// Spacing along the course over its rest spacing.
+    pub stretch_course: Vec<f64>,
+    /// Spacing along the wale over its rest spacing.
+    pub stretch_wale: Vec<f64>,
+    /// Fraction of skin hidden by yarn, 0–1.
+    pub coverage: Vec<f64>,
+}
+
+impl KnitFields {
+    /// Every field at every point of `knit`; `radius_m` per yarn kind, metres.
+    pub fn measure(knit: &Knit, radius_m: [f64; 2]) -> KnitFields {
+        let (stretch_course, stretch_wale) = stretch(knit);
+        KnitFields {
+            stitch_density: stitch_density(knit),
+            stretch_course,
+            stretch_wale,
+            coverage: coverage(knit, radius_m),
+        }
+    }
+
+    /// The fields with their attribute names (`_STITCH_DENSITY` … in glTF), in a fixed order.
+    pub fn named(&self) -> [(&'static str, &[f64]); 4] {
+        [
+            ("stitch_density", &self.stitch_density),
+            ("stretch_course", &self.stretch_course),
+            ("stretch_wale", &self.stretch_wale),
+            ("coverage", &self.coverage),
+        ]
+    }
+
+    /// The fields carried over to leg vertices by [`transfer_to_leg`]: 0 where no yarn is near.
+    pub fn transfer_to_leg(
+        &self,
+        yarn_points: &[Vec3],
+        leg_vertices: &[Point3<f64>],
+        bandwidth: f64,
+    ) -> KnitFields {
+        let fields = self.named().map(|(_, values)| values);
+        let [stitch_density, stretch_course, stretch_wale, coverage] =
+            transfer_to_leg(yarn_points, &fields, leg_vertices, bandwidth)
+                .try_into()
+                .expect("four fields in, four out");
+        KnitFields {
+            stitch_density,
+            stretch_course,
+            stretch_wale,
+            coverage,
+        }
+    }
+}
+
+/// Transfers per-yarn-point fields to leg vertices with a biweight kernel of radius `bandwidth`
+/// metres; vertices with no yarn point within the bandwidth get 0. Returns one vector per
+/// field, in order.
+pub fn transfer_to_leg(
+    yarn_points: &[Vec3],
+    fields: &[&[f64]],
+    leg_vertices: &[Point3<f64>],
+    bandwidth: f64,
+) -> Vec<Vec<f64>> {
+    let grid = PointGrid::new(yarn_points, bandwidth);
+    let mut out = vec![Vec::with_capacity(leg_vertices.len()); fields.len()];
+    let mut sums = vec![0.0; fields.len()];
+    for v in leg_vertices {
+        let mut weight_sum = 0.0;
+        sums.iter_mut().for_each(|s| *s = 0.0);
+        grid.for_each_near(&v.coords, |i| {
+            let d2 = (yarn_points[i] - v.coords).norm_squared() / (bandwidth * bandwidth);
+            if d2 < 1.0 {
+                let w = (1.0 - d2) * (1.0 - d2);
+                weight_sum += w;
+                for (sum, field) in sums.iter_mut().zip(fields) {
+                    *sum += w * field[i];
+                }
+            }
+        });
+        for (values, sum) in out.iter_mut().zip(&sums) {
+            values.push(if weight_sum > 0.0 {
+                sum / weight_sum
+            } else {
+                0.0
+            });
+        }
+    }
+    out
 }
 
 /// A uniform grid over points, cell size = query radius: a query visits 27 cells.
@@ -171,13 +320,61 @@ mod tests {
         }
     }
 
+    /// A flat 6×6 grid at `spacing` metres, stretched by `sx` along the course and `sy` along
+    /// the wale.
+    fn flat(pattern: Pattern, spacing: f64, sx: f64, sy: f64) -> Knit {
+        Knit::grid(6, 6, false, &Tile::of(pattern), spacing, spacing, |w, c| {
+            Vec3::new(w as f64 * spacing * sx, c as f64 * spacing * sy, 0.0)
+        })
+    }
+
+    #[test]
+    fn stretch_is_one_at_rest_and_follows_each_direction() {
+        let (course, wale) = stretch(&flat(Pattern::Plain, 0.0005, 1.0, 1.0));
+        assert!(course.iter().chain(&wale).all(|&s| (s - 1.0).abs() < 1e-12));
+        let (course, wale) = stretch(&flat(Pattern::Plain, 0.0005, 1.5, 1.2));
+        assert!(course.iter().all(|&s| (s - 1.5).abs() < 1e-12));
+        assert!(wale.iter().all(|&s| (s - 1.2).abs() < 1e-12));
+    }
+
+    #[test]
+    fn coverage_of_an_unstretched_patch_is_the_hand_calculation() {
+        // Plain knit, nylon yarn of radius 0.03 mm, 0.5 mm apart both ways: strips of 0.06 mm
+        // every 0.5 mm, so 12% of each direction is hidden and the holes are 0.88 × 0.88.
+        let knit = flat(Pattern::Plain, 0.0005, 1.0, 1.0);
+        let expected = 1.0 - 0.88 * 0.88;
+        for c in coverage(&knit, [0.00003, 0.00004]) {
+            assert!((c - expected).abs() < 1e-12, "{c} vs {expected}");
+        }
+        // Stretched ×2 along the course: wale strips twice as far apart.
+        let knit = flat(Pattern::Plain, 0.0005, 2.0, 1.0);
+        let expected = 1.0 - 0.88 * 0.94;
+        for c in coverage(&knit, [0.00003, 0.00004]) {
+            assert!((c - expected).abs() < 1e-12, "{c} vs {expected}");
+        }
+        // Yarn wider than the gap hides everything.
+        assert!(coverage(&knit, [0.001, 0.001]).iter().all(|&c| c == 1.0));
+    }
+
+    #[test]
+    fn coverage_uses_each_courses_own_yarn() {
+        let knit = flat(Pattern::Alternating, 0.0005, 1.0, 1.0);
+        let cov = coverage(&knit, [0.00003, 0.00004]);
+        let values: std::collections::BTreeSet<u64> =
+            cov.iter().map(|c| (c * 1e9).round() as u64).collect();
+        assert!(
+            values.len() > 1,
+            "nylon and support courses differ: {values:?}"
+        );
+    }
+
     #[test]
     fn transfer_is_zero_far_from_yarn_and_exact_for_a_constant_field() {
         let points = vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.001, 0.0, 0.0)];
         let values = vec![7.0, 7.0];
         let leg = vec![Point3::new(0.0005, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0)];
-        let out = transfer_to_leg(&points, &values, &leg, 0.002);
-        assert!((out[0] - 7.0).abs() < 1e-12);
-        assert_eq!(out[1], 0.0);
+        let out = transfer_to_leg(&points, &[&values], &leg, 0.002);
+        assert!((out[0][0] - 7.0).abs() < 1e-12);
+        assert_eq!(out[0][1], 0.0);
     }
 }

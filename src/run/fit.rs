@@ -14,13 +14,15 @@ use crate::error::{Error, Result};
 use crate::export::gltf::GlbNode;
 use crate::export::{self, SurfaceMesh, YarnGeometry};
 use crate::knit::tube::{build_tube, Tube, TubeSpec};
-use crate::knit::Knit;
+use crate::knit::{Direction, Knit, YarnKind};
 use crate::leg::{detect_axis, load_leg, Axis, AxisSource, Collider, Leg};
 use crate::plan::Plan;
-use crate::post::fields;
-use crate::render::colormap;
+use crate::post::fields::{self, KnitFields};
+use crate::post::penetration::fix_penetrations;
+use crate::render::density_picture::{self, DensityPictureStyle};
+use crate::render::{self, colormap};
 use crate::report::{Metrics, Report, StageClock};
-use crate::scene::{Output, Scene, RELAXED_LENGTH_FRACTION};
+use crate::scene::{Effect, Output, Scene, RELAXED_LENGTH_FRACTION};
 use crate::sim::contact::LegContact;
 use crate::sim::relax_constrained;
 
@@ -103,16 +105,19 @@ pub fn run_fit(
     let (max_penetration, axial_range) = clock.time("check penetration", || {
         (max_penetration(&knit, &collider), axial_range(&knit, &axis))
     });
-    let density = if plan.files.is_empty() {
-        (Vec::new(), Vec::new())
-    } else {
-        clock.time("stitch density", || {
-            let per_point = fields::stitch_density(&knit);
-            let bandwidth = 2.5 * mean_course_spacing(&knit);
-            let on_leg =
-                fields::transfer_to_leg(&knit.particles.x, &per_point, &leg.positions, bandwidth);
+    let radius_m = YarnKind::ALL.map(|k| scene.yarns.get(k).radius_m);
+    let (knit_fields, leg_fields) = if plan.has_stage("leg attributes") {
+        clock.time("leg attributes", || {
+            let per_point = KnitFields::measure(&knit, radius_m);
+            // Wide enough to span a nylon and a support course whichever way the knit runs,
+            // so the alternation of the yarns does not print through as speckle.
+            let bandwidth = 3.0
+                * mean_spacing(&knit, Direction::Course).max(mean_spacing(&knit, Direction::Wale));
+            let on_leg = per_point.transfer_to_leg(&knit.particles.x, &leg.positions, bandwidth);
             (per_point, on_leg)
         })
+    } else {
+        (KnitFields::default(), KnitFields::default())
     };
     let tension = fields::tension(&knit, &plan.forces);
 
@@ -121,16 +126,25 @@ pub fn run_fit(
         "tension".into(),
         tension.iter().map(|&t| t as f32).collect(),
     );
-    let leg_mesh = leg_surface(&leg, &density.1);
+    let mut penetration_fix = None;
+    if plan.effects.contains(&Effect::PenetrationFix) {
+        let (fixed, stats) = clock.time("penetration fix", || {
+            fix_penetrations(&yarns, &collider, offset)
+        });
+        yarns = fixed;
+        penetration_fix = Some(stats);
+    }
+    let leg_mesh = leg_surface(&leg, &leg_fields);
     let mut files = Vec::new();
     for &(output, name) in &plan.files {
         let bytes = clock.time(&format!("encode {name}"), || {
-            encode(output, name, scene, &knit, &yarns, &leg_mesh)
+            encode(output, name, scene, &knit, &knit_fields, &yarns, &leg_mesh)
         })?;
         files.push((name.to_string(), bytes));
     }
 
-    let covered: Vec<f64> = density.1.iter().copied().filter(|&d| d > 0.0).collect();
+    let density = &leg_fields.stitch_density;
+    let covered: Vec<f64> = density.iter().copied().filter(|&d| d > 0.0).collect();
     let metrics = Metrics {
         points: knit.len(),
         steps: stats.steps,
@@ -171,6 +185,7 @@ pub fn run_fit(
             "pushed_out": counters.pushed_out,
             "finished_out": counters.finished_out,
         },
+        "penetration_fix": penetration_fix,
         "stitch_density_per_cm2": {
             "leg_vertices_covered": covered.len(),
             "leg_vertices": leg.positions.len(),
@@ -262,15 +277,16 @@ fn axial_range(knit: &Knit, axis: &Axis) -> [f64; 2] {
         })
 }
 
-fn mean_course_spacing(knit: &Knit) -> f64 {
+/// Mean length of the springs along `direction`, metres.
+fn mean_spacing(knit: &Knit, direction: Direction) -> f64 {
     let x = &knit.particles.x;
-    let course: Vec<f64> = knit
+    let lengths: Vec<f64> = knit
         .springs
         .iter()
-        .filter(|s| s.direction == crate::knit::Direction::Course)
+        .filter(|s| s.direction == direction)
         .map(|s| (x[s.b.index()] - x[s.a.index()]).norm())
         .collect();
-    course.iter().sum::<f64>() / course.len().max(1) as f64
+    lengths.iter().sum::<f64>() / lengths.len().max(1) as f64
 }
 
 /// Encodes one output file.
@@ -279,13 +295,14 @@ fn encode(
     name: &str,
     scene: &Scene,
     knit: &Knit,
+    knit_fields: &KnitFields,
     yarns: &YarnGeometry,
     leg_mesh: &SurfaceMesh,
 ) -> Result<Vec<u8>> {
     let comments = vec![format!("knitfit {} fit", env!("CARGO_PKG_VERSION"))];
     match (output, name) {
         (Output::Glb, _) => {
-            let stocking = stocking_surface(knit, yarns);
+            let stocking = stocking_surface(knit, knit_fields, yarns);
             export::gltf::write_nodes_glb(
                 &[
                     GlbNode::Surface(leg_mesh),
@@ -297,17 +314,33 @@ fn encode(
         }
         (Output::Ply, "leg.ply") => export::ply::write_mesh_ply(leg_mesh, &comments),
         (Output::Ply, _) => export::ply::write_ply(std::slice::from_ref(yarns), &comments),
-        (Output::Picture, _) => Err(Error::Encode {
-            what: name.into(),
-            message: "the fit has no picture output yet".into(),
-        }),
+        (Output::Picture, _) => {
+            let density: Vec<f64> = leg_mesh
+                .point_attributes
+                .get("stitch_density")
+                .map(|d| d.iter().map(|&v| f64::from(v)).collect())
+                .unwrap_or_default();
+            let picture = density_picture::draw_density(
+                &leg_mesh.positions,
+                &leg_mesh.triangles,
+                &density,
+                &DensityPictureStyle::default(),
+            );
+            render::encode_png(&picture, name)
+        }
     }
 }
 
-/// The leg with `stitch_density` and its heat map as vertex colours.
-fn leg_surface(leg: &Leg, density: &[f64]) -> SurfaceMesh {
+/// The leg with its fields as attributes (`stitch_density`, `stretch_course`, `stretch_wale`,
+/// `coverage`) and the density's heat map as vertex colours.
+fn leg_surface(leg: &Leg, fields: &KnitFields) -> SurfaceMesh {
     let positions = leg.positions.iter().map(|p| p.coords.into()).collect();
     let mut mesh = SurfaceMesh::new("leg", positions, leg.triangles.clone());
+    let density = &fields.stitch_density;
+    if density.len() != leg.positions.len() {
+        // No attributes asked for.
+        return mesh;
+    }
     let covered = density.iter().copied().filter(|&d| d > 0.0);
     let (lo, hi) = covered.fold((f64::INFINITY, 0.0f64), |(lo, hi), d| {
         (lo.min(d), hi.max(d))
@@ -325,25 +358,42 @@ fn leg_surface(leg: &Leg, density: &[f64]) -> SurfaceMesh {
             })
             .collect(),
     );
-    mesh.point_attributes.insert(
-        "stitch_density".into(),
-        density.iter().map(|&d| d as f32).collect(),
-    );
+    for (name, values) in fields.named() {
+        mesh.point_attributes
+            .insert(name.into(), values.iter().map(|&v| v as f32).collect());
+    }
     mesh
 }
 
 /// The fitted knit as a triangle surface: the grid triangulated with the seam column repeated
-/// so texture coordinates (wale, course) run 0–1 without a jump; yarn attributes per vertex.
-fn stocking_surface(knit: &Knit, yarns: &YarnGeometry) -> SurfaceMesh {
+/// so texture coordinates (wale, course) run 0–1 without a jump; per vertex, the yarn point's
+/// attributes and its fields (density, stretch, coverage: what a sheer shader on this surface
+/// needs). Only the knit's own points are used: `yarns` may hold points the penetration fix
+/// inserted after them.
+fn stocking_surface(knit: &Knit, knit_fields: &KnitFields, yarns: &YarnGeometry) -> SurfaceMesh {
     let (wales, courses) = (knit.wales, knit.courses);
     let columns = wales + 1;
     let source = |w: usize, c: usize| knit.point(w % wales, c).index();
     let mut positions = Vec::with_capacity(columns * courses);
     let mut texcoords = Vec::with_capacity(columns * courses);
-    let mut attributes: BTreeMap<String, Vec<f32>> = yarns
+    let point_fields: Vec<(&str, &[f32])> = yarns
         .point_attributes
-        .keys()
-        .map(|k| (k.clone(), Vec::new()))
+        .iter()
+        .map(|(k, v)| (k.as_str(), &v[..knit.len()]))
+        .collect();
+    let knit_fields: Vec<(&str, Vec<f32>)> = knit_fields
+        .named()
+        .into_iter()
+        .filter(|(_, v)| v.len() == knit.len())
+        .map(|(k, v)| (k, v.iter().map(|&x| x as f32).collect()))
+        .collect();
+    let sources: Vec<(&str, &[f32])> = point_fields
+        .into_iter()
+        .chain(knit_fields.iter().map(|(k, v)| (*k, &v[..])))
+        .collect();
+    let mut attributes: BTreeMap<String, Vec<f32>> = sources
+        .iter()
+        .map(|(k, _)| (k.to_string(), Vec::new()))
         .collect();
     for c in 0..courses {
         for w in 0..columns {
@@ -354,8 +404,11 @@ fn stocking_surface(knit: &Knit, yarns: &YarnGeometry) -> SurfaceMesh {
                 w as f32 / wales as f32,
                 1.0 - c as f32 / (courses - 1).max(1) as f32,
             ]);
-            for (name, values) in attributes.iter_mut() {
-                values.push(yarns.point_attributes[name][i]);
+            for (name, values) in &sources {
+                attributes
+                    .get_mut(*name)
+                    .expect("made above")
+                    .push(values[i]);
             }
         }
     }

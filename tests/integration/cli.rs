@@ -1,6 +1,6 @@
 //! The command line's contract: outputs, report, determinism, and clean refusals of bad input.
 
-use crate::util::{files_in, knitfit, knitfit_env, report, stderr, stdout, write};
+use crate::util::{files_in, knitfit, knitfit_env, report, stage_names, stderr, stdout, write};
 
 #[test]
 fn no_arguments_fits_the_bundled_sample_and_says_where_outputs_went() {
@@ -9,7 +9,13 @@ fn no_arguments_fits_the_bundled_sample_and_says_where_outputs_went() {
     assert!(out.status.success(), "{}", stderr(&out));
     assert_eq!(
         files_in(&dir.path().join("out")),
-        ["leg.ply", "report.json", "stocking.glb", "stocking.ply"]
+        [
+            "density.png",
+            "leg.ply",
+            "report.json",
+            "stocking.glb",
+            "stocking.ply"
+        ]
     );
     let text = stdout(&out);
     assert!(text.contains("wrote to out/"), "{text}");
@@ -48,12 +54,7 @@ fn report_has_the_agreed_fields_and_stages_in_order() {
         r["effects"],
         serde_json::json!(["yarn_connection", "alternating_yarns"])
     );
-    let stages: Vec<&str> = r["stages"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|s| s["name"].as_str().unwrap())
-        .collect();
+    let stages = stage_names(&r);
     assert_eq!(
         stages,
         [

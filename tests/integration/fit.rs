@@ -6,64 +6,11 @@ use std::path::{Path, PathBuf};
 use knitfit::leg::{load_leg, Collider};
 use knitfit::scene::{ContactMethod, Units, UpAxis};
 use nalgebra::Point3;
-use ply_rs_bw::ply::{DefaultElement, Property};
 
-use crate::util::{files_in, knitfit, report, stderr};
-
-/// Every bundled sample leg.
-fn sample_legs() -> Vec<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples");
-    let mut legs: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "glb"))
-        .collect();
-    legs.sort();
-    assert!(!legs.is_empty());
-    legs
-}
-
-/// The procedural sample leg: closed, Y-up, at the origin; the tests that edit a leg file or
-/// know its triangle count use it.
-fn procedural_leg() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/procedural_leg.glb")
-}
-
-fn read_ply(path: &Path) -> ply_rs_bw::ply::Ply<DefaultElement> {
-    let mut file = std::fs::File::open(path).unwrap();
-    ply_rs_bw::parser::Parser::<DefaultElement>::new()
-        .read_ply(&mut file)
-        .unwrap()
-}
-
-fn float(e: &DefaultElement, name: &str) -> f64 {
-    match &e[name] {
-        Property::Float(v) => *v as f64,
-        other => panic!("{name}: {other:?}"),
-    }
-}
-
-fn point(e: &DefaultElement) -> Point3<f64> {
-    Point3::new(float(e, "x"), float(e, "y"), float(e, "z"))
-}
-
-/// Fits `leg` at `resolution` into a fresh directory and returns (dir, report).
-fn fit(leg: &Path, resolution: &str, extra: &[&str]) -> (tempfile::TempDir, serde_json::Value) {
-    let dir = tempfile::tempdir().unwrap();
-    let mut args = vec![
-        "fit",
-        "--leg",
-        leg.to_str().unwrap(),
-        "--resolution",
-        resolution,
-        "-q",
-    ];
-    args.extend_from_slice(extra);
-    let out = knitfit(dir.path(), &args);
-    assert!(out.status.success(), "{}: {}", leg.display(), stderr(&out));
-    let r = report(&dir.path().join("out"));
-    (dir, r)
-}
+use crate::util::{
+    files_in, fit, float, knitfit, point, procedural_leg, read_ply, report, sample_legs, stderr,
+    write_tube_leg,
+};
 
 #[test]
 fn every_sample_leg_fits_without_penetration_between_the_axis_points() {
@@ -77,7 +24,12 @@ fn every_sample_leg_fits_without_penetration_between_the_axis_points() {
         assert_eq!(r["metrics"]["max_penetration_m"], 0.0, "{name}");
         assert_eq!(
             r["effects"],
-            serde_json::json!(["yarn_connection", "alternating_yarns", "contact"])
+            serde_json::json!([
+                "yarn_connection",
+                "alternating_yarns",
+                "contact",
+                "penetration_fix"
+            ])
         );
 
         // Independently of the report: every yarn point from the PLY, against the exact leg.
@@ -85,7 +37,10 @@ fn every_sample_leg_fits_without_penetration_between_the_axis_points() {
         let collider = Collider::new(&leg, ContactMethod::Bvh).unwrap();
         let yarns = read_ply(&out.join("stocking.ply"));
         let points: Vec<Point3<f64>> = yarns.payload["vertex"].iter().map(point).collect();
-        assert_eq!(points.len(), 3600);
+        let inserted = r["details"]["penetration_fix"]["points_inserted"]
+            .as_u64()
+            .unwrap() as usize;
+        assert_eq!(points.len(), 3600 + inserted);
         let deepest = points
             .iter()
             .map(|p| collider.closest(p).signed_distance)
@@ -106,11 +61,15 @@ fn every_sample_leg_fits_without_penetration_between_the_axis_points() {
         let (bottom, top) = (v("bottom"), v("top"));
         let dir_axis = (top - bottom).normalize();
         let length = (top - bottom).norm();
-        for p in &points {
+        // The knit's own points exactly; points the penetration fix put on the skin between
+        // two end-ring points follow the skin, which may lean out of the ring's plane by a
+        // few hundredths of a millimetre on a faceted leg.
+        for (i, p) in points.iter().enumerate() {
             let s = (p - bottom).dot(&dir_axis);
+            let slack = if i < 3600 { 1e-6 } else { 1e-4 };
             assert!(
-                (-1e-6..=length + 1e-6).contains(&s),
-                "{name}: {s} outside 0..{length}"
+                (-slack..=length + slack).contains(&s),
+                "{name}: point {i}: {s} outside 0..{length}"
             );
         }
     }
@@ -170,11 +129,16 @@ fn ply_and_gltf_outputs_agree_and_read_back_with_their_counts() {
     let (dir, r) = fit(leg_path, "30x20", &[]);
     let out = dir.path().join("out");
     let yarns = read_ply(&out.join("stocking.ply"));
-    assert_eq!(yarns.payload["vertex"].len(), 600);
+    // Every knit point, then the points the penetration fix inserted, each of which splits a
+    // segment in two.
+    let inserted = r["details"]["penetration_fix"]["points_inserted"]
+        .as_u64()
+        .unwrap() as usize;
+    assert_eq!(yarns.payload["vertex"].len(), 600 + inserted);
     assert_eq!(
         yarns.payload["edge"].len(),
-        30 * 20 + 30 * 19,
-        "closed courses + wales"
+        30 * 20 + 30 * 19 + inserted,
+        "closed courses + wales, split where repaired"
     );
     let legply = read_ply(&out.join("leg.ply"));
     assert_eq!(
@@ -212,7 +176,14 @@ fn ply_and_gltf_outputs_agree_and_read_back_with_their_counts() {
     let leg_node = doc.nodes().next().unwrap();
     let leg_prim = leg_node.mesh().unwrap().primitives().next().unwrap();
     let semantics: Vec<String> = leg_prim.attributes().map(|(s, _)| s.to_string()).collect();
-    for name in ["_STITCH_DENSITY", "COLOR_0", "NORMAL"] {
+    for name in [
+        "_STITCH_DENSITY",
+        "_STRETCH_COURSE",
+        "_STRETCH_WALE",
+        "_COVERAGE",
+        "COLOR_0",
+        "NORMAL",
+    ] {
         assert!(
             semantics.iter().any(|s| s == name),
             "{name} missing from {semantics:?}"
@@ -244,38 +215,13 @@ fn brute_force_contact_gives_the_same_fit_as_the_bvh() {
     }
 }
 
-/// A leg-sized elliptic tube of 32 × 24 quads, capped, written as a GLB into `dir`.
+/// A leg-sized elliptic tube of 32 × 24 quads, open at both ends, written as a GLB into `dir`.
 fn coarse_leg(dir: &Path) -> PathBuf {
-    use knitfit::export::gltf::{write_nodes_glb, GlbNode};
-    use knitfit::export::SurfaceMesh;
-    let (around, along) = (32usize, 24usize);
-    let mut positions = Vec::new();
-    let mut triangles = Vec::new();
-    for j in 0..=along {
-        let y = 0.08 + 0.75 * j as f64 / along as f64;
-        let r = 0.035 + 0.045 * (y - 0.08) / 0.75;
-        for i in 0..around {
-            let t = std::f64::consts::TAU * i as f64 / around as f64;
-            positions.push([r * 1.1 * t.cos(), y, -r * 0.9 * t.sin()]);
-        }
-    }
-    for j in 0..along {
-        for i in 0..around {
-            let a = (j * around + i) as u32;
-            let b = (j * around + (i + 1) % around) as u32;
-            let (c, d) = (b + around as u32, a + around as u32);
-            triangles.push([a, b, c]);
-            triangles.push([a, c, d]);
-        }
-    }
-    let mesh = SurfaceMesh::new("leg", positions, triangles);
-    let path = dir.join("coarse_leg.glb");
-    std::fs::write(
-        &path,
-        write_nodes_glb(&[GlbNode::Surface(&mesh)], [[0.5; 3]; 2]).unwrap(),
-    )
-    .unwrap();
-    path
+    write_tube_leg(dir, "coarse_leg.glb", 32, 24, |h, t| {
+        let y = 0.08 + 0.75 * h;
+        let r = 0.035 + 0.045 * h;
+        [r * 1.1 * t.cos(), y, -r * 0.9 * t.sin()]
+    })
 }
 
 /// Runs `fit --leg FILE` on a leg file holding `bytes`, expecting a one-line error with exit
@@ -497,9 +443,11 @@ fn axis_from_the_command_line_sets_where_the_stocking_ends() {
     assert_eq!(r["details"]["axis"]["source"], "command_line");
     assert_eq!(r["metrics"]["converged"], true);
     let yarns = read_ply(&dir.path().join("out/stocking.ply"));
-    for v in &yarns.payload["vertex"] {
+    // The knit's points exactly; points the penetration fix inserted within 0.1 mm.
+    for (i, v) in yarns.payload["vertex"].iter().enumerate() {
         let y = float(v, "y");
-        assert!((0.3 - 1e-6..=0.6 + 1e-6).contains(&y), "yarn at y = {y}");
+        let slack = if i < 1600 { 1e-6 } else { 1e-4 };
+        assert!((0.3 - slack..=0.6 + slack).contains(&y), "yarn at y = {y}");
     }
 }
 

@@ -4,4 +4,5 @@
 mod cli;
 mod fit;
 mod physics;
+mod skin;
 mod util;

@@ -3,6 +3,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
+use nalgebra::Point3;
+use ply_rs_bw::ply::{DefaultElement, Property};
+
 /// Runs the knitfit binary with `args` in directory `cwd`.
 pub fn knitfit(cwd: &Path, args: &[&str]) -> Output {
     knitfit_env(cwd, args, &[])
@@ -50,4 +53,108 @@ pub fn files_in(dir: &Path) -> Vec<String> {
 /// The parsed report.json of an output directory.
 pub fn report(dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
+}
+
+/// Every bundled sample leg.
+pub fn sample_legs() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples");
+    let mut legs: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "glb"))
+        .collect();
+    legs.sort();
+    assert!(!legs.is_empty());
+    legs
+}
+
+/// The procedural sample leg: closed, Y-up, at the origin; the tests that edit a leg file or
+/// know its triangle count use it.
+pub fn procedural_leg() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/procedural_leg.glb")
+}
+
+pub fn read_ply(path: &Path) -> ply_rs_bw::ply::Ply<DefaultElement> {
+    let mut file = std::fs::File::open(path).unwrap();
+    ply_rs_bw::parser::Parser::<DefaultElement>::new()
+        .read_ply(&mut file)
+        .unwrap()
+}
+
+pub fn float(e: &DefaultElement, name: &str) -> f64 {
+    match &e[name] {
+        Property::Float(v) => *v as f64,
+        other => panic!("{name}: {other:?}"),
+    }
+}
+
+pub fn point(e: &DefaultElement) -> Point3<f64> {
+    Point3::new(float(e, "x"), float(e, "y"), float(e, "z"))
+}
+
+/// Fits `leg` at `resolution` into a fresh directory and returns (dir, report).
+pub fn fit(leg: &Path, resolution: &str, extra: &[&str]) -> (tempfile::TempDir, serde_json::Value) {
+    let dir = tempfile::tempdir().unwrap();
+    let mut args = vec![
+        "fit",
+        "--leg",
+        leg.to_str().unwrap(),
+        "--resolution",
+        resolution,
+        "-q",
+    ];
+    args.extend_from_slice(extra);
+    let out = knitfit(dir.path(), &args);
+    assert!(out.status.success(), "{}: {}", leg.display(), stderr(&out));
+    let r = report(&dir.path().join("out"));
+    (dir, r)
+}
+
+/// Writes an open tube leg as a GLB `dir/name`: `along + 1` rings of `around` vertices, ring
+/// `j`'s vertex `i` at `ring_point(j / along, angle)` (angle 0..2π), quads split in two,
+/// counter-clockwise seen from outside for a ring that runs counter-clockwise seen from +Y.
+pub fn write_tube_leg(
+    dir: &Path,
+    name: &str,
+    around: usize,
+    along: usize,
+    ring_point: impl Fn(f64, f64) -> [f64; 3],
+) -> PathBuf {
+    use knitfit::export::gltf::{write_nodes_glb, GlbNode};
+    use knitfit::export::SurfaceMesh;
+    let mut positions = Vec::new();
+    for j in 0..=along {
+        for i in 0..around {
+            let angle = std::f64::consts::TAU * i as f64 / around as f64;
+            positions.push(ring_point(j as f64 / along as f64, angle));
+        }
+    }
+    let mut triangles = Vec::new();
+    for j in 0..along {
+        for i in 0..around {
+            let a = (j * around + i) as u32;
+            let b = (j * around + (i + 1) % around) as u32;
+            let (c, d) = (b + around as u32, a + around as u32);
+            triangles.push([a, b, c]);
+            triangles.push([a, c, d]);
+        }
+    }
+    let mesh = SurfaceMesh::new("leg", positions, triangles);
+    let path = dir.join(name);
+    std::fs::write(
+        &path,
+        write_nodes_glb(&[GlbNode::Surface(&mesh)], [[0.5; 3]; 2]).unwrap(),
+    )
+    .unwrap();
+    path
+}
+
+/// The names of the stages in a report, in order.
+pub fn stage_names(report: &serde_json::Value) -> Vec<String> {
+    report["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["name"].as_str().unwrap().to_string())
+        .collect()
 }

@@ -1,0 +1,518 @@
+//! The penetration fix (paper §6.3): after the fit every yarn point is outside the leg, but a
+//! straight yarn segment between two points on different triangles can still cut through it
+//! (over a sharp shin, a coarse facet, a thin tendon). This pass finds such segments and makes
+//! the yarn follow the skin instead.
+//!
+//! **Detection.** The paper's angle test: a segment whose direction makes more than 90° with
+//! the outward normal at its start (or whose reverse does at its end) heads into the skin. It is
+//! neither sufficient nor necessary: on a convex leg almost every chord heads in slightly without
+//! reaching the skin, and a segment between two hollows can leave both ends outwards and still
+//! cut through the bump between them. So every segment is also tested directly, with a ray cast
+//! from one end to the other against the exact triangles (one BVH query per segment); a segment
+//! the ray does not cross never enters the leg, as both ends are outside. The report counts both,
+//! and the crossings the angle test would have missed.
+//!
+//! **Repair.** From the closest skin point of the start, walk over the mesh towards the closest
+//! skin point of the end: in each triangle, head straight for the target projected into the
+//! triangle's plane, and where that line leaves the triangle through an edge, insert a point on
+//! the edge, lifted off the skin by the yarn offset along the edge's normal (the mean of its two
+//! faces'), then continue in the triangle across the edge, until the target's triangle is
+//! reached. Every inserted point lies on a triangle edge, so the yarn lies on the skin from
+//! triangle to triangle. Where the walk cannot finish (an open edge, a non-manifold edge, a
+//! mesh that folds back) or a piece still crosses the skin (two sheets of skin close together),
+//! the piece is split at its midpoint, projected onto the skin, recursively: a fallback, counted
+//! separately.
+//!
+//! Inserted points carry the attributes of the segment they split: `course`, `wale` and
+//! `tension` are interpolated by arc length where they are continuous (not across the seam,
+//! where the wale number jumps), the others (`class`, `yarn_kind`) are taken from the nearer end.
+
+use std::collections::HashMap;
+
+use nalgebra::Point3;
+use rayon::prelude::*;
+use serde::Serialize;
+
+use crate::export::{Segment, YarnGeometry};
+use crate::knit::Vec3;
+use crate::leg::{Closest, Collider};
+
+/// Attributes interpolated along a repaired segment; others come from the nearer end.
+const INTERPOLATED: [&str; 3] = ["course", "wale", "tension"];
+/// How many edges one segment's walk may cross before it gives up.
+const MAX_CROSSINGS: usize = 512;
+/// How many times a piece may be halved by the fallback.
+const MAX_SPLIT_DEPTH: u32 = 8;
+
+/// What the fix did, for the report.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+pub struct PenetrationStats {
+    /// Yarn segments looked at.
+    pub segments: usize,
+    /// Segments the angle test flagged as heading into the skin at an end.
+    pub flagged_by_angle: usize,
+    /// Segments the ray cast found crossing the skin.
+    pub crossing: usize,
+    /// Crossing segments the angle test alone would have missed (both ends heading out of the
+    /// skin, a bump between them).
+    pub crossing_missed_by_angle: usize,
+    /// Crossing segments that no longer cross after the fix.
+    pub repaired: usize,
+    /// Points inserted in all.
+    pub points_inserted: usize,
+    /// Repaired segments that needed the midpoint fallback for some piece.
+    pub used_fallback: usize,
+    /// Pieces that still cross the skin after the fix (0 unless the mesh is broken).
+    pub still_crossing: usize,
+}
+
+/// Returns `yarns` with every segment that cuts through the leg replaced by a polyline on the
+/// skin (see module docs). Original points keep their indices; inserted points follow them.
+/// `offset` is how far off the skin inserted points lie (the yarn radius), metres.
+pub fn fix_penetrations(
+    yarns: &YarnGeometry,
+    collider: &Collider,
+    offset: f64,
+) -> (YarnGeometry, PenetrationStats) {
+    let closest: Vec<Closest> = yarns
+        .positions
+        .par_iter()
+        .map(|p| collider.closest(&Point3::from(*p)))
+        .collect();
+    let walker = SurfaceWalker::new(collider, offset);
+    let repairs: Vec<Option<Repair>> = yarns
+        .segments
+        .par_iter()
+        .map(|s| walker.check_and_repair(yarns, &closest, s))
+        .collect();
+
+    let mut stats = PenetrationStats {
+        segments: yarns.segments.len(),
+        ..PenetrationStats::default()
+    };
+    let mut out = yarns.clone();
+    out.segments.clear();
+    for (segment, repair) in yarns.segments.iter().zip(repairs) {
+        let Some(repair) = repair else {
+            out.segments.push(*segment);
+            continue;
+        };
+        stats.flagged_by_angle += usize::from(repair.flagged_by_angle);
+        if !repair.crossing {
+            out.segments.push(*segment);
+            continue;
+        }
+        stats.crossing += 1;
+        stats.crossing_missed_by_angle += usize::from(!repair.flagged_by_angle);
+        stats.used_fallback += usize::from(repair.used_fallback);
+        stats.still_crossing += repair.still_crossing;
+        if repair.still_crossing == 0 {
+            stats.repaired += 1;
+        }
+        stats.points_inserted += repair.points.len();
+        append_chain(&mut out, yarns, segment, &repair.points);
+    }
+    (out, stats)
+}
+
+/// Appends `points` (inserted between the ends of `segment`) to `out` with their attributes, and
+/// the chain of segments through them.
+fn append_chain(out: &mut YarnGeometry, yarns: &YarnGeometry, segment: &Segment, points: &[Vec3]) {
+    let (a, b) = (segment.a as usize, segment.b as usize);
+    let ends = [
+        Vec3::from(yarns.positions[a]),
+        Vec3::from(yarns.positions[b]),
+    ];
+    // Arc length along the chain, for interpolation.
+    let mut along = Vec::with_capacity(points.len());
+    let mut length = 0.0;
+    let mut previous = ends[0];
+    for p in points {
+        length += (p - previous).norm();
+        along.push(length);
+        previous = *p;
+    }
+    length += (ends[1] - previous).norm();
+
+    let mut chain = vec![segment.a];
+    for (p, s) in points.iter().zip(&along) {
+        let t = if length > 0.0 { s / length } else { 0.5 };
+        chain.push(out.positions.len() as u32);
+        out.positions.push([p.x, p.y, p.z]);
+        for (name, values) in out.point_attributes.iter_mut() {
+            let (va, vb) = (values[a], values[b]);
+            let continuous = INTERPOLATED.contains(&name.as_str()) && (vb - va).abs() <= 1.5;
+            let v = if continuous {
+                va + (vb - va) * t as f32
+            } else if t < 0.5 {
+                va
+            } else {
+                vb
+            };
+            values.push(v);
+        }
+    }
+    chain.push(segment.b);
+    for pair in chain.windows(2) {
+        out.segments.push(Segment {
+            a: pair[0],
+            b: pair[1],
+            ..*segment
+        });
+    }
+}
+
+/// The outcome for one segment the angle test flagged or the ray found crossing.
+struct Repair {
+    flagged_by_angle: bool,
+    /// Whether the segment crossed the skin (if not, nothing was inserted).
+    crossing: bool,
+    /// Points inserted between its ends, in order from `a` to `b`.
+    points: Vec<Vec3>,
+    used_fallback: bool,
+    /// Pieces still crossing after the fix.
+    still_crossing: usize,
+}
+
+/// The leg's triangles with their edge neighbours, for walking over the skin.
+struct SurfaceWalker<'a> {
+    collider: &'a Collider,
+    offset: f64,
+    /// For each undirected edge (smaller vertex first), the triangles on it; a third triangle
+    /// makes it non-manifold, marked by `u32::MAX` in both slots.
+    edges: HashMap<(u32, u32), [u32; 2]>,
+}
+
+/// Sentinel for "no triangle".
+const NONE: u32 = u32::MAX;
+
+impl<'a> SurfaceWalker<'a> {
+    fn new(collider: &'a Collider, offset: f64) -> SurfaceWalker<'a> {
+        let mut edges: HashMap<(u32, u32), [u32; 2]> = HashMap::new();
+        for (t, tri) in collider.triangles().iter().enumerate() {
+            for k in 0..3 {
+                let key = edge_key(tri[k], tri[(k + 1) % 3]);
+                let slot = edges.entry(key).or_insert([NONE, NONE]);
+                if slot[0] == NONE && slot[1] == NONE {
+                    slot[0] = t as u32;
+                } else if slot[1] == NONE && slot[0] != NONE {
+                    slot[1] = t as u32;
+                } else {
+                    *slot = [NONE, NONE];
+                }
+            }
+        }
+        SurfaceWalker {
+            collider,
+            offset,
+            edges,
+        }
+    }
+
+    /// The angle test and the ray test, and if the segment crosses the skin, the repair;
+    /// `None` when neither test flags it.
+    fn check_and_repair(
+        &self,
+        yarns: &YarnGeometry,
+        closest: &[Closest],
+        s: &Segment,
+    ) -> Option<Repair> {
+        let (a, b) = (s.a as usize, s.b as usize);
+        let (pa, pb) = (
+            Vec3::from(yarns.positions[a]),
+            Vec3::from(yarns.positions[b]),
+        );
+        let d = pb - pa;
+        let flagged_by_angle = d.dot(&closest[a].outward) < 0.0 || d.dot(&closest[b].outward) > 0.0;
+        if !self.crosses(&pa, &pb) {
+            return flagged_by_angle.then_some(Repair {
+                flagged_by_angle,
+                crossing: false,
+                points: Vec::new(),
+                used_fallback: false,
+                still_crossing: 0,
+            });
+        }
+        let walked = self.walk(&closest[a], &closest[b]).unwrap_or_default();
+        // Check every piece of the chain; split the ones that still cross.
+        let mut points = Vec::with_capacity(walked.len());
+        let mut used_fallback = false;
+        let mut still_crossing = 0;
+        let mut from = pa;
+        for to in walked.iter().copied().chain(std::iter::once(pb)) {
+            if self.crosses(&from, &to) {
+                used_fallback = true;
+                still_crossing += self.split(&from, &to, MAX_SPLIT_DEPTH, &mut points);
+            }
+            if to != pb {
+                points.push(to);
+            }
+            from = to;
+        }
+        Some(Repair {
+            flagged_by_angle,
+            crossing: true,
+            points,
+            used_fallback,
+            still_crossing,
+        })
+    }
+
+    /// True when the straight piece from `a` to `b` meets the skin.
+    fn crosses(&self, a: &Vec3, b: &Vec3) -> bool {
+        let d = b - a;
+        let length = d.norm();
+        length > 0.0
+            && self
+                .collider
+                .first_hit(&Point3::from(*a), &(d / length), length)
+                .is_some()
+    }
+
+    /// Halves the piece `a`–`b` at its midpoint moved onto the skin (plus offset), recursively
+    /// while a half crosses and `depth` lasts, pushing the points between `a` and `b` in order.
+    /// Returns how many pieces still cross.
+    fn split(&self, a: &Vec3, b: &Vec3, depth: u32, points: &mut Vec<Vec3>) -> usize {
+        if depth == 0 {
+            return 1;
+        }
+        let c = self.collider.closest(&Point3::from((a + b) / 2.0));
+        let mid = c.point.coords + c.outward * self.offset;
+        let mut left = 0;
+        if self.crosses(a, &mid) {
+            left = self.split(a, &mid, depth - 1, points);
+        }
+        points.push(mid);
+        let mut right = 0;
+        if self.crosses(&mid, b) {
+            right = self.split(&mid, b, depth - 1, points);
+        }
+        left + right
+    }
+
+    /// Walks over the skin from the closest point `start` to the closest point `goal`,
+    /// returning the lifted points where the path crosses triangle edges; `None` when it cannot
+    /// get there (see module docs).
+    fn walk(&self, start: &Closest, goal: &Closest) -> Option<Vec<Vec3>> {
+        let vertices = self.collider.vertices();
+        let triangles = self.collider.triangles();
+        let target = goal.point.coords;
+        let mut triangle = start.triangle;
+        let mut at = start.point.coords;
+        let mut entered_by: Option<(u32, u32)> = None;
+        let mut points = Vec::new();
+        for _ in 0..MAX_CROSSINGS {
+            if triangle == goal.triangle {
+                return Some(points);
+            }
+            let n = self.collider.face_normal(triangle);
+            let to_target = target - at;
+            let dir = to_target - n * to_target.dot(&n);
+            if dir.norm() < 1e-12 {
+                return Some(points);
+            }
+            // Where the line at + s·dir leaves the triangle: the nearest edge it meets ahead.
+            let tri = triangles[triangle as usize];
+            let mut exit: Option<(f64, (u32, u32), Vec3)> = None;
+            for k in 0..3 {
+                let (i, j) = (tri[k], tri[(k + 1) % 3]);
+                let key = edge_key(i, j);
+                if Some(key) == entered_by {
+                    continue;
+                }
+                let (vi, vj) = (vertices[i as usize].coords, vertices[j as usize].coords);
+                let e = vj - vi;
+                let denom = dir.cross(&e).dot(&n);
+                if denom.abs() < 1e-30 {
+                    continue;
+                }
+                let s = (vi - at).cross(&e).dot(&n) / denom;
+                let u = (vi - at).cross(&dir).dot(&n) / denom;
+                if s > 1e-12 && (-1e-9..=1.0 + 1e-9).contains(&u) && exit.is_none_or(|x| s < x.0) {
+                    exit = Some((s, key, vi + e * u.clamp(0.0, 1.0)));
+                }
+            }
+            let (s, key, q) = exit?;
+            let in_plane = to_target.dot(&n).abs() <= 1e-6 * to_target.norm();
+            if s >= 1.0 && in_plane {
+                // The target lies in this triangle, or in its plane just beside it: arrived.
+                return Some(points);
+            }
+            // Otherwise the target is on another face; one whose projection falls inside this
+            // triangle (round a corner) is reached through the edge the line leaves by.
+            let [t0, t1] = *self.edges.get(&key)?;
+            let next = if t0 == triangle { t1 } else { t0 };
+            if next == NONE || t0 == NONE {
+                return None;
+            }
+            let normal = (n + self.collider.face_normal(next)).normalize();
+            let lift = if normal.iter().all(|c| c.is_finite()) {
+                normal
+            } else {
+                n
+            };
+            points.push(q + lift * self.offset);
+            at = q;
+            triangle = next;
+            entered_by = Some(key);
+        }
+        None
+    }
+}
+
+fn edge_key(a: u32, b: u32) -> (u32, u32) {
+    (a.min(b), a.max(b))
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeMap;
+
+    use super::*;
+    use crate::knit::{Direction, YarnKind};
+    use crate::leg::Leg;
+    use crate::scene::{ContactMethod, Units, UpAxis};
+
+    /// A closed prism along Y with a sharp ridge on +Z, like a shin: its cross-section is a
+    /// square of half-width `w` with a triangular ridge of height `h` on top; as few triangles
+    /// as possible, so a yarn segment spans several.
+    fn ridge(w: f64, h: f64) -> Leg {
+        let section = [(w, -w), (w, w), (0.0, w + h), (-w, w), (-w, -w)];
+        let mut positions = Vec::new();
+        for y in [0.0, 0.1] {
+            for &(x, z) in &section {
+                positions.push(Point3::new(x, y, z));
+            }
+        }
+        let m = section.len() as u32;
+        let mut triangles = Vec::new();
+        for i in 0..m {
+            let j = (i + 1) % m;
+            triangles.push([i, i + m, j]);
+            triangles.push([j, i + m, j + m]);
+        }
+        // Caps (fans), bottom facing -Y, top facing +Y.
+        for i in 1..m - 1 {
+            triangles.push([0, i, i + 1]);
+            triangles.push([m, m + i + 1, m + i]);
+        }
+        Leg {
+            path: "ridge".into(),
+            positions,
+            triangles,
+            units: Units::Metres,
+            up_axis: UpAxis::PosY,
+        }
+    }
+
+    fn two_points(a: [f64; 3], b: [f64; 3]) -> YarnGeometry {
+        let mut point_attributes = BTreeMap::new();
+        point_attributes.insert("course".to_string(), vec![3.0, 3.0]);
+        point_attributes.insert("wale".to_string(), vec![7.0, 8.0]);
+        point_attributes.insert("class".to_string(), vec![1.0, 4.0]);
+        YarnGeometry {
+            name: "yarns".into(),
+            offset_m: [0.0; 3],
+            positions: vec![a, b],
+            point_attributes,
+            segments: vec![Segment {
+                a: 0,
+                b: 1,
+                yarn: YarnKind::Nylon,
+                direction: Direction::Course,
+            }],
+        }
+    }
+
+    /// The deepest point of any segment inside the leg, sampled every 10 µm.
+    fn deepest(yarns: &YarnGeometry, collider: &Collider) -> f64 {
+        let mut deepest: f64 = 0.0;
+        for s in &yarns.segments {
+            let (a, b) = (
+                Vec3::from(yarns.positions[s.a as usize]),
+                Vec3::from(yarns.positions[s.b as usize]),
+            );
+            let n = ((b - a).norm() / 1e-5).ceil() as usize + 1;
+            for k in 0..=n {
+                let p = a + (b - a) * (k as f64 / n as f64);
+                let d = collider.closest(&Point3::from(p)).signed_distance;
+                deepest = deepest.min(d);
+            }
+        }
+        -deepest
+    }
+
+    #[test]
+    fn a_segment_cutting_through_a_ridge_is_walked_over_it() {
+        let (w, h, offset) = (0.01, 0.004, 0.00003);
+        let collider = Collider::new(&ridge(w, h), ContactMethod::Bvh).unwrap();
+        assert!(
+            collider.contains(&Point3::new(0.0, 0.05, 0.0)),
+            "faces point out"
+        );
+        // Two points on either flank of the ridge: the chord between them passes under the
+        // ridge's crest, 4 mm inside.
+        let z = |x: f64| w + h * (1.0 - x.abs() / w);
+        let yarns = two_points(
+            [-0.008, 0.05, z(-0.008) + offset],
+            [0.008, 0.05, z(0.008) + offset],
+        );
+        assert!(deepest(&yarns, &collider) > 0.001);
+        let (fixed, stats) = fix_penetrations(&yarns, &collider, offset);
+        assert_eq!((stats.crossing, stats.repaired), (1, 1), "{stats:?}");
+        assert_eq!(stats.still_crossing, 0);
+        assert!(stats.points_inserted >= 1);
+        assert_eq!(fixed.positions.len(), 2 + stats.points_inserted);
+        assert_eq!(fixed.segments.len(), 1 + stats.points_inserted);
+        assert!(
+            deepest(&fixed, &collider) <= 5e-8,
+            "{}",
+            deepest(&fixed, &collider)
+        );
+        // One point on the crest, offset above it (others on the faces' diagonals).
+        let crest = fixed.positions[2..]
+            .iter()
+            .copied()
+            .max_by(|a, b| a[2].total_cmp(&b[2]))
+            .unwrap();
+        assert!((crest[0]).abs() < 1e-9 && (crest[2] - (w + h)).abs() < offset * 1.01);
+        // Attributes: course constant, wale by arc length (the crest halfway), class from the
+        // nearer end.
+        let crest_index = fixed.positions.iter().position(|p| *p == crest).unwrap();
+        assert!(fixed.point_attributes["course"].iter().all(|&c| c == 3.0));
+        assert!((fixed.point_attributes["wale"][crest_index] - 7.5).abs() < 1e-3);
+        let wale = &fixed.point_attributes["wale"];
+        assert!(wale[2] > 7.0 && wale[2] < wale[crest_index]);
+        assert_eq!(fixed.point_attributes["class"][2], 1.0);
+    }
+
+    #[test]
+    fn a_segment_above_the_skin_is_left_alone() {
+        let (w, h, offset) = (0.01, 0.004, 0.00003);
+        let collider = Collider::new(&ridge(w, h), ContactMethod::Bvh).unwrap();
+        // Both on the same flat side face (x = w), a chord on a flat face: nothing to do.
+        let yarns = two_points([w + offset, 0.03, 0.0], [w + offset, 0.06, 0.002]);
+        let (fixed, stats) = fix_penetrations(&yarns, &collider, offset);
+        assert_eq!(fixed, yarns);
+        assert_eq!(stats.crossing, 0);
+    }
+
+    #[test]
+    fn a_segment_over_a_corner_walks_across_two_edges() {
+        let (w, h, offset) = (0.01, 0.004, 0.00003);
+        let collider = Collider::new(&ridge(w, h), ContactMethod::Bvh).unwrap();
+        // From the +X side face round the corner at (w, -w) to the -Z face.
+        let yarns = two_points([w + offset, 0.05, -0.006], [0.006, 0.052, -w - offset]);
+        let (fixed, stats) = fix_penetrations(&yarns, &collider, offset);
+        assert_eq!(stats.repaired, 1, "{stats:?}");
+        assert_eq!(stats.used_fallback, 0, "{stats:?}");
+        assert!(deepest(&fixed, &collider) <= 5e-8);
+        // The attribute of the seam rule: a wale jump larger than 1 is not interpolated.
+        let mut seam = yarns.clone();
+        seam.point_attributes.get_mut("wale").unwrap()[1] = 0.0;
+        let (fixed, _) = fix_penetrations(&seam, &collider, offset);
+        assert!(fixed.point_attributes["wale"][2..]
+            .iter()
+            .all(|&w| w == 7.0 || w == 0.0));
+    }
+}
