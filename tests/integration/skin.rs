@@ -74,6 +74,10 @@ fn every_yarn_polyline_stays_on_the_skin_of_every_sample_leg() {
         assert_eq!(fix["still_crossing"], 0, "{name}: {fix}");
         assert_eq!(fix["repaired"], fix["crossing"], "{name}: {fix}");
         let depth = polyline_depth(&out, &collider_of(&leg), |_| true);
+        eprintln!(
+            "{name}: {} samples, deepest {:.2e} m, fix {fix}",
+            depth.samples, depth.deepest
+        );
         assert!(
             depth.deepest <= MAX_DEPTH_M,
             "{name}: a yarn polyline is {} mm inside the leg at {:?}",
