@@ -36,16 +36,13 @@ pub fn write_ply(parts: &[YarnGeometry], comments: &[String]) -> Result<Vec<u8>>
     };
     for part in parts {
         check_yarn_geometry(part).map_err(encode_error)?;
-        if let Some(name) = part
-            .point_attributes
-            .keys()
-            .find(|name| YARN_VERTEX_PROPERTIES.contains(&name.as_str()))
-        {
-            return Err(encode_error(format!(
-                "part {:?}: point attribute {name:?} would clash with a vertex property",
-                part.name
-            )));
-        }
+        refuse_clashing_names(
+            "part",
+            &part.name,
+            &part.point_attributes,
+            &YARN_VERTEX_PROPERTIES,
+        )
+        .map_err(encode_error)?;
     }
     let attribute_names: Vec<&String> = parts
         .first()
@@ -145,6 +142,25 @@ pub fn write_ply(parts: &[YarnGeometry], comments: &[String]) -> Result<Vec<u8>>
     Ok(bytes)
 }
 
+/// An error naming the first point attribute of `owner` that would take the name of one of the
+/// vertex properties a writer writes itself (`reserved`).
+fn refuse_clashing_names<V>(
+    kind: &str,
+    owner: &str,
+    attributes: &std::collections::BTreeMap<String, V>,
+    reserved: &[&str],
+) -> std::result::Result<(), String> {
+    match attributes
+        .keys()
+        .find(|name| reserved.contains(&name.as_str()))
+    {
+        Some(name) => Err(format!(
+            "{kind} {owner:?}: point attribute {name:?} would clash with a vertex property"
+        )),
+        None => Ok(()),
+    }
+}
+
 /// Encodes a triangle surface as a binary little-endian PLY file: `vertex` (x, y, z in metres,
 /// nx, ny, nz, every point attribute, and red/green/blue as sRGB uchar when the mesh has
 /// colours) and `face` (vertex_indices).
@@ -157,16 +173,13 @@ pub fn write_mesh_ply(mesh: &SurfaceMesh, comments: &[String]) -> Result<Vec<u8>
         message,
     };
     check_surface_mesh(mesh).map_err(encode_error)?;
-    if let Some(name) = mesh
-        .point_attributes
-        .keys()
-        .find(|name| MESH_VERTEX_PROPERTIES.contains(&name.as_str()))
-    {
-        return Err(encode_error(format!(
-            "mesh {:?}: point attribute {name:?} would clash with a vertex property",
-            mesh.name
-        )));
-    }
+    refuse_clashing_names(
+        "mesh",
+        &mesh.name,
+        &mesh.point_attributes,
+        &MESH_VERTEX_PROPERTIES,
+    )
+    .map_err(encode_error)?;
     let mut ply = Ply::<DefaultElement>::new();
     ply.header.encoding = Encoding::BinaryLittleEndian;
     ply.header.comments.extend(comments.iter().cloned());

@@ -178,8 +178,9 @@ struct Repair {
 struct SurfaceWalker<'a> {
     collider: &'a Collider,
     offset: f64,
-    /// For each undirected edge (smaller vertex first), the triangles on it; a third triangle
-    /// makes it non-manifold, marked by `u32::MAX` in both slots.
+    /// For each undirected edge (smaller vertex first), the triangles on it: two for an inner
+    /// edge, one ([`NONE`] in the second slot) on an open boundary, and [`NONE`] in both slots
+    /// for a non-manifold edge (three or more), which the walk does not cross.
     edges: HashMap<(u32, u32), [u32; 2]>,
 }
 
@@ -188,20 +189,21 @@ const NONE: u32 = u32::MAX;
 
 impl<'a> SurfaceWalker<'a> {
     fn new(collider: &'a Collider, offset: f64) -> SurfaceWalker<'a> {
-        let mut edges: HashMap<(u32, u32), [u32; 2]> = HashMap::new();
+        let mut uses: HashMap<(u32, u32), (u32, [u32; 2])> = HashMap::new();
         for (t, tri) in collider.triangles().iter().enumerate() {
             for k in 0..3 {
                 let key = edge_key(tri[k], tri[(k + 1) % 3]);
-                let slot = edges.entry(key).or_insert([NONE, NONE]);
-                if slot[0] == NONE && slot[1] == NONE {
-                    slot[0] = t as u32;
-                } else if slot[1] == NONE && slot[0] != NONE {
-                    slot[1] = t as u32;
-                } else {
-                    *slot = [NONE, NONE];
+                let (count, slots) = uses.entry(key).or_insert((0, [NONE, NONE]));
+                if let Some(slot) = slots.get_mut(*count as usize) {
+                    *slot = t as u32;
                 }
+                *count += 1;
             }
         }
+        let edges = uses
+            .into_iter()
+            .map(|(key, (count, slots))| (key, if count <= 2 { slots } else { [NONE, NONE] }))
+            .collect();
         SurfaceWalker {
             collider,
             offset,
@@ -484,6 +486,35 @@ mod tests {
         let wale = &fixed.point_attributes["wale"];
         assert!(wale[2] > 7.0 && wale[2] < wale[crest_index]);
         assert_eq!(fixed.point_attributes["class"][2], 1.0);
+    }
+
+    #[test]
+    fn edges_know_their_triangles_and_a_non_manifold_edge_is_not_crossed() {
+        // Four triangles fanned around the edge 0–1: non-manifold however many there are.
+        let mut leg = ridge(0.01, 0.004);
+        let base = leg.positions.len() as u32;
+        for k in 0..4 {
+            let t = k as f64 * 1.5;
+            leg.positions
+                .push(Point3::new(0.5 + t.cos(), 0.5, 0.5 + t.sin()));
+        }
+        leg.positions.push(Point3::new(0.5, 0.0, 0.5));
+        leg.positions.push(Point3::new(0.5, 1.0, 0.5));
+        let (a, b) = (base + 4, base + 5);
+        for k in 0..4 {
+            leg.triangles.push([a, b, base + k]);
+        }
+        let collider = Collider::new(&leg, ContactMethod::Bvh).unwrap();
+        let walker = SurfaceWalker::new(&collider, 0.00003);
+        let slots: Vec<[u32; 2]> = walker.edges.values().copied().collect();
+        let non_manifold = slots.iter().filter(|s| **s == [NONE, NONE]).count();
+        assert_eq!(non_manifold, 1, "the fanned edge only");
+        // The closed prism's edges all have two triangles; the fan's outer edges one.
+        let open = slots
+            .iter()
+            .filter(|s| s[0] != NONE && s[1] == NONE)
+            .count();
+        assert_eq!(open, 8, "each fan triangle's two outer edges");
     }
 
     #[test]

@@ -60,6 +60,16 @@ pub struct ContactCounters {
     pub finished_out: u64,
 }
 
+impl ContactCounters {
+    /// Adds another chunk's counts to these.
+    fn add(&mut self, other: &ContactCounters) {
+        self.closest_queries += other.closest_queries;
+        self.slides += other.slides;
+        self.pushed_out += other.pushed_out;
+        self.finished_out += other.finished_out;
+    }
+}
+
 /// Contact with the leg plus the tube's locked end rings.
 pub struct LegContact<'a> {
     collider: &'a Collider,
@@ -109,18 +119,23 @@ impl<'a> LegContact<'a> {
         self.counters
     }
 
+    /// What one point's contact needs, copied out so parallel chunks can share it.
+    fn slide_params(&self) -> SlideParams<'a> {
+        SlideParams {
+            collider: self.collider,
+            offset: self.offset,
+            query_radius: self.query_radius,
+            axis: self.axis,
+        }
+    }
+
     /// The exact pass after the fit: every point is checked against the exact triangles and
     /// any closer than the offset is moved out to it, as the final check of a slide would. During
     /// the fit a point resting on the leg slides on a cached tangent plane, which a sharp crease
     /// or a coarse mesh can dip below by a few micrometres; this pass is what makes "no yarn
     /// point inside the leg" exact. Points with `inv_mass` 0 are left alone.
     pub fn finish(&mut self, x: &mut [Vec3], inv_mass: &[f64]) {
-        let params = SlideParams {
-            collider: self.collider,
-            offset: self.offset,
-            query_radius: self.query_radius,
-            axis: self.axis,
-        };
+        let params = self.slide_params();
         let locked = &self.axially_locked;
         let counters: Vec<ContactCounters> = x
             .par_chunks_mut(CHUNK)
@@ -145,16 +160,15 @@ impl<'a> LegContact<'a> {
             })
             .collect();
         for c in counters {
-            self.counters.closest_queries += c.closest_queries;
-            self.counters.finished_out += c.finished_out;
+            self.counters.add(&c);
         }
     }
 }
 
 impl SlideParams<'_> {
     /// Where a point too close to (or inside) the leg goes: `offset` out along the normal, or,
-    /// for a point held at its height, out within its ring's plane, as long as the normal is not
-    /// nearly along the axis (then along the normal, the lesser evil).
+    /// for a point held at its height, out within its ring's plane (up to [`PUSH_TRIES`]
+    /// pushes), falling back to the normal, the lesser evil, where that does not clear it.
     /// Returns the new position and the closest point that goes with it.
     fn push_out(
         &self,
@@ -310,12 +324,7 @@ impl SlideParams<'_> {
 
 impl Constraints for LegContact<'_> {
     fn constrain(&mut self, from: &[Vec3], x: &mut [Vec3], inv_mass: &[f64]) {
-        let params = SlideParams {
-            collider: self.collider,
-            offset: self.offset,
-            query_radius: self.query_radius,
-            axis: self.axis,
-        };
+        let params = self.slide_params();
         let locked = &self.axially_locked;
         let counters: Vec<ContactCounters> = self
             .state
@@ -341,9 +350,7 @@ impl Constraints for LegContact<'_> {
             })
             .collect();
         for c in counters {
-            self.counters.closest_queries += c.closest_queries;
-            self.counters.slides += c.slides;
-            self.counters.pushed_out += c.pushed_out;
+            self.counters.add(&c);
         }
     }
 
