@@ -80,6 +80,18 @@ pub enum Error {
         time_step: f64,
         limit: f64,
     },
+    /// The multilevel solver met a value that stopped being finite, or a residual that grew
+    /// without bound. Its iteration restarts its momentum whenever motion goes against the
+    /// force, so this points at the input (a knit compressed to a point, a leg with NaNs that
+    /// slipped through) rather than at a step size.
+    #[error(
+        "multilevel solver diverged on the {grid} grid at iteration {iteration} ({what}); nothing          was written. Check the scene's yarn stiffnesses and tube size, or run the paper's          solver (solver.method \"paper\", --solver paper) to compare"
+    )]
+    SolverDiverged {
+        grid: String,
+        iteration: usize,
+        what: String,
+    },
     /// Encoding an output (PNG, glTF) failed.
     #[error("{what}: {message}")]
     Encode { what: String, message: String },
@@ -98,7 +110,10 @@ impl Error {
             | Error::OutputDir { .. }
             | Error::WouldOverwriteInput { .. }
             | Error::TimeStepTooLarge { .. } => 2,
-            Error::Write { .. } | Error::Diverged { .. } | Error::Encode { .. } => 1,
+            Error::Write { .. }
+            | Error::Diverged { .. }
+            | Error::SolverDiverged { .. }
+            | Error::Encode { .. } => 1,
         }
     }
 }

@@ -12,8 +12,8 @@ use knitfit::leg::AxisSource;
 use knitfit::run::fit::scene_dir;
 use knitfit::run::{run_fit, run_patch, FitInputs, Progress, RunPaths};
 use knitfit::scene::{
-    check_axis, check_patch_points, check_stretch_factor, check_tube_points, ContactMethod,
-    LegAxis, Stretch, StretchAxis,
+    check_axis, check_patch_points, check_stretch_factor, check_tolerance, check_tube_points,
+    ContactMethod, LegAxis, SolverMethod, Stretch, StretchAxis,
 };
 use knitfit::{Error, Scene};
 
@@ -63,6 +63,14 @@ struct FitArgs {
     /// contact.method.
     #[arg(long, value_name = "bvh|brute")]
     contact: Option<String>,
+    /// Solver: multilevel (fast, the default) or paper (the paper's explicit steps, the
+    /// reference). Overrides solver.method.
+    #[arg(long, value_name = "multilevel|paper")]
+    solver: Option<String>,
+    /// Convergence tolerance on the relative residual and the largest move. Overrides
+    /// solver.tolerance.
+    #[arg(long, value_name = "TOL")]
+    tolerance: Option<f64>,
     /// Output directory (created if missing).
     #[arg(long, default_value = "out")]
     out: PathBuf,
@@ -181,6 +189,25 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
                 })
             }
         };
+    }
+    if let Some(method) = &args.solver {
+        scene.solver.method = match method.as_str() {
+            "multilevel" => SolverMethod::Multilevel,
+            "paper" => SolverMethod::Paper,
+            other => {
+                return Err(Error::InvalidArgument {
+                    flag: "--solver".into(),
+                    message: format!("must be multilevel or paper, got {other:?}"),
+                })
+            }
+        };
+    }
+    if let Some(tolerance) = args.tolerance {
+        check_tolerance(tolerance).map_err(|message| Error::InvalidArgument {
+            flag: "--tolerance".into(),
+            message,
+        })?;
+        scene.solver.tolerance = tolerance;
     }
     let leg = match &args.leg {
         Some(path) => path.clone(),

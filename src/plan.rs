@@ -3,7 +3,8 @@
 //! the report lists the stages that did.
 
 use crate::knit::YarnKind;
-use crate::scene::{Effect, Output, Scene};
+use crate::scene::{Effect, Output, Scene, SolverMethod};
+use crate::sim::multilevel::grid_sizes;
 use crate::sim::ForceTerms;
 
 /// One stage a run will execute, and why.
@@ -115,15 +116,34 @@ impl Plan {
             "build collider",
             format!("contact ({} queries)", scene.contact.method.name()),
         );
-        add(
-            "knit tube",
-            format!("tube {}×{}", scene.tube.wales, scene.tube.courses),
-        );
+        let (wales, courses) = (scene.tube.wales, scene.tube.courses);
         let terms = match forces.connection_factor {
             Some(c2) => format!("spring force + yarn connection (c2 = {c2}) + sliding contact"),
             None => "spring force + sliding contact".to_string(),
         };
-        add("fit", terms);
+        match scene.solver.method {
+            SolverMethod::Paper => {
+                add("knit tube", format!("tube {wales}×{courses}"));
+                add(
+                    "fit",
+                    format!("{terms}; solver.method \"paper\": explicit damped steps"),
+                );
+            }
+            SolverMethod::Multilevel => {
+                let grids: Vec<String> = grid_sizes(wales, courses)
+                    .iter()
+                    .map(|(w, c)| format!("{w}×{c}"))
+                    .collect();
+                add(
+                    "fit",
+                    format!(
+                        "{terms}; solver.method \"multilevel\": tubes knitted and relaxed \
+                         coarse to fine on grids {}",
+                        grids.join(" → ")
+                    ),
+                );
+            }
+        }
         add(
             "check penetration",
             "report.json: max_penetration_m against the exact triangles".into(),
@@ -246,6 +266,18 @@ mod tests {
         assert!(!Plan::patch(&scene)
             .effects
             .contains(&Effect::PenetrationFix));
+    }
+
+    #[test]
+    fn the_multilevel_fit_knits_each_grid_inside_the_fit_stage() {
+        let mut scene = Scene::load(None).unwrap();
+        let fit = Plan::fit(&scene);
+        assert!(!fit.has_stage("knit tube"));
+        let why = &fit.stages.iter().find(|s| s.name == "fit").unwrap().why;
+        assert!(why.contains("19×20 → 38×39 → 75×76 → 150×150"), "{why}");
+        scene.solver.method = SolverMethod::Paper;
+        let fit = Plan::fit(&scene);
+        assert!(fit.has_stage("knit tube"));
     }
 
     #[test]

@@ -345,10 +345,36 @@ pub enum OnUnstable {
     Ignore,
 }
 
-/// Relaxation solver settings (the paper's explicit damped steps, §5).
+/// Which solver relaxes a fit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum SolverMethod {
+    /// Coarse-to-fine grids with an accelerated (momentum with restart) iteration on each
+    /// (`sim::multilevel`; default). The same rest state as `paper`, in a small fraction of the
+    /// time; `time_step`, `damping` and `on_unstable` do not apply to it.
+    #[default]
+    Multilevel,
+    /// The paper's explicit damped steps (§5) on the full grid: the reference.
+    Paper,
+}
+
+impl SolverMethod {
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            SolverMethod::Multilevel => "multilevel",
+            SolverMethod::Paper => "paper",
+        }
+    }
+}
+
+/// Relaxation solver settings. `knitfit patch` always runs the paper's explicit solver, since it
+/// reproduces the paper's experiment; `knitfit fit` runs `method`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct SolverSettings {
+    /// Which solver relaxes a fit (default: `"multilevel"`).
+    pub method: SolverMethod,
     /// Time step t, in solver time units (default: 0.1, the paper's value).
     pub time_step: f64,
     /// Velocity damper: velocities decay as `exp(-damping · t)` each step; per solver time unit
@@ -358,7 +384,8 @@ pub struct SolverSettings {
     /// spring-force magnitude) and on the largest move per step relative to the shortest rest
     /// length (default: 0.001).
     pub tolerance: f64,
-    /// Step limit; a run that reaches it is reported as not converged (default: 100000).
+    /// Step limit (for `multilevel`, iterations per grid level); a run that reaches it is
+    /// reported as not converged (default: 100000).
     pub max_steps: usize,
     /// What to do when `time_step` is above the explicit stability limit (default: `"substep"`).
     pub on_unstable: OnUnstable,
@@ -367,6 +394,7 @@ pub struct SolverSettings {
 impl Default for SolverSettings {
     fn default() -> Self {
         SolverSettings {
+            method: SolverMethod::Multilevel,
             time_step: 0.1,
             damping: 1.0,
             tolerance: 1e-3,
@@ -577,13 +605,7 @@ impl Scene {
                 format!("must be zero or positive, got {damping}"),
             ));
         }
-        let tol = self.solver.tolerance;
-        if !(tol.is_finite() && tol > 0.0 && tol < 1.0) {
-            return Err(bad(
-                "solver.tolerance",
-                format!("must be in (0, 1), got {tol}"),
-            ));
-        }
+        check_tolerance(self.solver.tolerance).map_err(|m| bad("solver.tolerance", m))?;
         if self.solver.max_steps == 0 {
             return Err(bad("solver.max_steps", "must be at least 1".into()));
         }
@@ -713,6 +735,15 @@ pub fn check_axis(axis: &LegAxis) -> std::result::Result<(), String> {
         return Err("bottom and top must be different points".into());
     }
     Ok(())
+}
+
+/// Checks a convergence tolerance is in (0, 1).
+pub fn check_tolerance(tolerance: f64) -> std::result::Result<(), String> {
+    if tolerance.is_finite() && tolerance > 0.0 && tolerance < 1.0 {
+        Ok(())
+    } else {
+        Err(format!("must be in (0, 1), got {tolerance}"))
+    }
 }
 
 /// Checks a stretch factor is usable.

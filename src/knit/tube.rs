@@ -79,17 +79,22 @@ pub fn build_tube(spec: &TubeSpec, axis: &Axis, leg_vertices: &[Point3<f64>]) ->
             bottom.coords + a * s + (u * theta.cos() + v * theta.sin()) * radii[c]
         },
     );
-    let end_ring = (0..knit.len())
-        .map(|i| {
-            let c = i / w_count;
-            c == 0 || c == c_count - 1
-        })
-        .collect();
     Tube {
+        end_ring: end_rings(&knit),
         knit,
-        end_ring,
         frame: (u, v),
     }
+}
+
+/// Per point of a tube's knit, true on the first and last ring (held at their heights along the
+/// axis during the fit).
+pub fn end_rings(knit: &Knit) -> Vec<bool> {
+    (0..knit.len())
+        .map(|i| {
+            let c = i / knit.wales;
+            c == 0 || c + 1 == knit.courses
+        })
+        .collect()
 }
 
 /// Per ring, a radius that clears every leg vertex near that ring's height, with margin.

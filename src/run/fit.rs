@@ -13,7 +13,7 @@ use super::{Progress, RunPaths, StepProgress};
 use crate::error::{Error, Result};
 use crate::export::gltf::GlbNode;
 use crate::export::{self, SurfaceMesh, YarnGeometry};
-use crate::knit::tube::{build_tube, Tube, TubeSpec};
+use crate::knit::tube::{build_tube, end_rings, TubeSpec};
 use crate::knit::{Direction, Knit, YarnKind};
 use crate::leg::{detect_axis, load_leg, Axis, AxisSource, Collider, Leg};
 use crate::plan::Plan;
@@ -22,9 +22,11 @@ use crate::post::penetration::fix_penetrations;
 use crate::render::density_picture::{self, DensityPictureStyle};
 use crate::render::{self, colormap};
 use crate::report::{Metrics, Report, StageClock};
-use crate::scene::{Effect, Output, Scene, RELAXED_LENGTH_FRACTION};
-use crate::sim::contact::LegContact;
-use crate::sim::relax_constrained;
+use crate::scene::{Effect, Output, Scene, SolverMethod, RELAXED_LENGTH_FRACTION};
+use crate::sim::contact::{ContactCounters, LegContact};
+use crate::sim::{
+    relax_constrained, relax_multilevel, Constraints, Levels, MultilevelStats, RelaxStats,
+};
 
 /// Where the leg comes from and who chose the axis.
 #[derive(Clone, Debug)]
@@ -63,59 +65,28 @@ pub fn run_fit(
         .collect();
     export::atomic::prepare_dir(&paths.out_dir, &file_names, &all_inputs)?;
 
-    let leg = clock.time("load leg", || {
-        load_leg(&inputs.leg, scene.leg.units, scene.leg.up_axis)
-    })?;
-    let axis = clock.time("find axis", || choose_axis(scene, inputs, &leg))?;
-    let collider = clock.time("build collider", || {
-        Collider::new(&leg, scene.contact.method)
-    })?;
-    let relaxed_length = relaxed_length(scene, &axis, &paths.scene_name)?;
-    let spec = TubeSpec {
-        wales: scene.tube.wales,
-        courses: scene.tube.courses,
-        pattern: scene.knit.pattern,
-        relaxed_circumference_m: scene.tube.relaxed_circumference_m,
-        relaxed_length_m: relaxed_length,
-    };
-    let Tube {
-        mut knit, end_ring, ..
-    } = clock.time("knit tube", || build_tube(&spec, &axis, &leg.positions));
-
-    let offset = scene.contact.offset(&scene.yarns);
-    let rest_spacing = spec.relaxed_circumference_m / spec.wales as f64;
-    let query_radius = (10.0 * rest_spacing).max(0.005);
-    let mut contact = LegContact::new(&collider, offset, query_radius, axis.direction(), end_ring);
-    progress.begin("fit", scene.solver.max_steps as u64);
-    let stats = clock.time("fit", || {
-        relax_constrained(
-            &mut knit,
-            &plan.forces,
-            &scene.solver,
-            &mut contact,
-            &mut StepProgress(progress),
-        )
-    });
-    progress.end();
-    let stats = stats?;
-    clock.time("exact contact pass", || {
-        contact.finish(&mut knit.particles.x, &knit.particles.inv_mass)
-    });
-
-    let (max_penetration, axial_range) = clock.time("check penetration", || {
-        (max_penetration(&knit, &collider), axial_range(&knit, &axis))
-    });
+    let SolvedFit {
+        leg,
+        axis,
+        collider,
+        spec,
+        offset,
+        knit,
+        solver,
+        counters,
+        max_penetration_m: max_penetration,
+        axial_range_m: axial_range,
+    } = solve_fit(
+        scene,
+        &plan,
+        inputs,
+        &paths.scene_name,
+        &mut clock,
+        progress,
+    )?;
     let radius_m = YarnKind::ALL.map(|k| scene.yarns.get(k).radius_m);
     let (knit_fields, leg_fields) = if plan.has_stage("leg attributes") {
-        clock.time("leg attributes", || {
-            let per_point = KnitFields::measure(&knit, radius_m);
-            // Wide enough to span a nylon and a support course whichever way the knit runs,
-            // so the alternation of the yarns does not print through as speckle.
-            let bandwidth = 3.0
-                * mean_spacing(&knit, Direction::Course).max(mean_spacing(&knit, Direction::Wale));
-            let on_leg = per_point.transfer_to_leg(&knit.particles.x, &leg.positions, bandwidth);
-            (per_point, on_leg)
-        })
+        clock.time("leg attributes", || measure_fields(&knit, &leg, radius_m))
     } else {
         (KnitFields::default(), KnitFields::default())
     };
@@ -147,14 +118,13 @@ pub fn run_fit(
     let covered: Vec<f64> = density.iter().copied().filter(|&d| d > 0.0).collect();
     let metrics = Metrics {
         points: knit.len(),
-        steps: stats.steps,
-        residual: stats.residual,
-        max_move: stats.max_move,
-        converged: stats.converged,
+        steps: solver.steps(),
+        residual: solver.residual(),
+        max_move: solver.max_move(),
+        converged: solver.converged(),
         max_penetration_m: Some(max_penetration),
         leg_triangles: Some(leg.triangles.len()),
     };
-    let counters = contact.counters();
     let details = json!({
         "leg": {
             "file": leg.path.display().to_string(),
@@ -166,17 +136,13 @@ pub fn run_fit(
         "tube": {
             "wales": spec.wales,
             "courses": spec.courses,
-            "rest_course_spacing_m": rest_spacing,
+            "rest_course_spacing_m": spec.relaxed_circumference_m / spec.wales as f64,
             "rest_wale_spacing_m": spec.relaxed_length_m / (spec.courses - 1) as f64,
             "relaxed_length_m": spec.relaxed_length_m,
             "relaxed_circumference_m": spec.relaxed_circumference_m,
             "axial_range_m": axial_range,
         },
-        "solver": {
-            "time_step": scene.solver.time_step,
-            "time_step_limit": stats.time_step_limit,
-            "substeps_per_step": stats.substeps_per_step,
-        },
+        "solver": solver.details(scene),
         "contact": {
             "method": scene.contact.method.name(),
             "offset_m": offset,
@@ -184,6 +150,7 @@ pub fn run_fit(
             "slides": counters.slides,
             "pushed_out": counters.pushed_out,
             "finished_out": counters.finished_out,
+            "settled_out": counters.settled_out,
         },
         "penetration_fix": penetration_fix,
         "stitch_density_per_cm2": {
@@ -214,6 +181,242 @@ pub fn run_fit(
         &all_inputs,
     )?);
     Ok(FitOutcome { report, written })
+}
+
+/// A fitted knit on its leg, before any post-processing or file: what `fit` goes on to write
+/// and what `bench` measures.
+pub struct SolvedFit {
+    /// The leg, in world space (metres, +Y up).
+    pub leg: Leg,
+    /// The axis the tube was stretched along.
+    pub axis: Axis,
+    /// The leg's collider.
+    pub collider: Collider,
+    /// The tube asked for.
+    pub spec: TubeSpec,
+    /// Distance kept between yarn centre line and skin, metres.
+    pub offset: f64,
+    /// The knit at rest on the leg, after the exact contact pass.
+    pub knit: Knit,
+    /// What the solver did.
+    pub solver: SolverRun,
+    /// Contact counters over all levels.
+    pub counters: ContactCounters,
+    /// Deepest yarn point inside the leg against the exact triangles, metres (0 when none is).
+    pub max_penetration_m: f64,
+    /// Lowest and highest yarn point along the axis, metres from the bottom point.
+    pub axial_range_m: [f64; 2],
+}
+
+/// Loads the leg, finds its axis, builds the collider and fits the tube with the scene's solver,
+/// then the exact contact pass and the penetration check: the stages of `plan` up to "check
+/// penetration", timed on `clock`.
+pub fn solve_fit(
+    scene: &Scene,
+    plan: &Plan,
+    inputs: &FitInputs,
+    scene_name: &str,
+    clock: &mut StageClock,
+    progress: &mut dyn Progress,
+) -> Result<SolvedFit> {
+    let leg = clock.time("load leg", || {
+        load_leg(&inputs.leg, scene.leg.units, scene.leg.up_axis)
+    })?;
+    let axis = clock.time("find axis", || choose_axis(scene, inputs, &leg))?;
+    let collider = clock.time("build collider", || {
+        Collider::new(&leg, scene.contact.method)
+    })?;
+    let relaxed_length = relaxed_length(scene, &axis, scene_name)?;
+    let spec = TubeSpec {
+        wales: scene.tube.wales,
+        courses: scene.tube.courses,
+        pattern: scene.knit.pattern,
+        relaxed_circumference_m: scene.tube.relaxed_circumference_m,
+        relaxed_length_m: relaxed_length,
+    };
+    let offset = scene.contact.offset(&scene.yarns);
+    let mut levels = TubeLevels {
+        spec,
+        axis: &axis,
+        leg: &leg,
+        collider: &collider,
+        offset,
+        contact: None,
+        retired: ContactCounters::default(),
+    };
+    let (mut knit, solver) = match scene.solver.method {
+        SolverMethod::Paper => {
+            let mut knit = clock.time("knit tube", || levels.knit(spec.wales, spec.courses));
+            progress.begin("fit", scene.solver.max_steps as u64);
+            let stats = clock.time("fit", || {
+                let contact = levels.constraints(&knit);
+                relax_constrained(
+                    &mut knit,
+                    &plan.forces,
+                    &scene.solver,
+                    contact,
+                    &mut StepProgress(progress),
+                )
+            });
+            progress.end();
+            (knit, SolverRun::Paper(stats?))
+        }
+        SolverMethod::Multilevel => {
+            progress.begin("fit", scene.solver.max_steps as u64);
+            let solved = clock.time("fit", || {
+                relax_multilevel(
+                    &mut levels,
+                    spec.wales,
+                    spec.courses,
+                    &plan.forces,
+                    scene.solver.tolerance,
+                    scene.solver.max_steps,
+                    &mut StepProgress(progress),
+                )
+            });
+            progress.end();
+            let (knit, stats) = solved?;
+            (knit, SolverRun::Multilevel(stats))
+        }
+    };
+    let mut contact = levels
+        .contact
+        .take()
+        .expect("the solver made the fine grid's contact");
+    clock.time("exact contact pass", || {
+        contact.finish(&mut knit.particles.x, &knit.particles.inv_mass)
+    });
+
+    let mut counters = levels.retired;
+    counters.add(&contact.counters());
+    let (max_penetration_m, axial_range_m) = clock.time("check penetration", || {
+        (max_penetration(&knit, &collider), axial_range(&knit, &axis))
+    });
+    Ok(SolvedFit {
+        leg,
+        axis,
+        collider,
+        spec,
+        offset,
+        knit,
+        solver,
+        counters,
+        max_penetration_m,
+        axial_range_m,
+    })
+}
+
+/// Per-point stitch fields of `knit` and their transfer to the leg's vertices.
+pub fn measure_fields(knit: &Knit, leg: &Leg, radius_m: [f64; 2]) -> (KnitFields, KnitFields) {
+    let per_point = KnitFields::measure(knit, radius_m);
+    // Wide enough to span a nylon and a support course whichever way the knit runs, so the
+    // alternation of the yarns does not print through as speckle.
+    let bandwidth =
+        3.0 * mean_spacing(knit, Direction::Course).max(mean_spacing(knit, Direction::Wale));
+    let on_leg = per_point.transfer_to_leg(&knit.particles.x, &leg.positions, bandwidth);
+    (per_point, on_leg)
+}
+
+/// The tube at any grid size, and its contact with the leg: what the solvers knit and constrain.
+struct TubeLevels<'a> {
+    /// The tube asked for; other levels change only its wales and courses.
+    spec: TubeSpec,
+    axis: &'a Axis,
+    leg: &'a Leg,
+    collider: &'a Collider,
+    /// Distance kept between yarn centre line and skin, metres.
+    offset: f64,
+    /// Contact of the level being solved.
+    contact: Option<LegContact<'a>>,
+    /// Counters of the levels solved before it.
+    retired: ContactCounters,
+}
+
+impl<'a> Levels for TubeLevels<'a> {
+    fn knit(&mut self, wales: usize, courses: usize) -> Knit {
+        let spec = TubeSpec {
+            wales,
+            courses,
+            ..self.spec
+        };
+        build_tube(&spec, self.axis, &self.leg.positions).knit
+    }
+
+    fn constraints(&mut self, knit: &Knit) -> &mut dyn Constraints {
+        if let Some(done) = self.contact.take() {
+            self.retired.add(&done.counters());
+        }
+        let rest_spacing = self.spec.relaxed_circumference_m / knit.wales as f64;
+        let query_radius = (10.0 * rest_spacing).max(0.005);
+        self.contact.insert(LegContact::new(
+            self.collider,
+            self.offset,
+            query_radius,
+            self.axis.direction(),
+            end_rings(knit),
+        ))
+    }
+}
+
+/// What the fit's solver did.
+pub enum SolverRun {
+    /// The paper's explicit solver.
+    Paper(RelaxStats),
+    /// The multilevel solver.
+    Multilevel(MultilevelStats),
+}
+
+impl SolverRun {
+    /// Steps (paper) or iterations over all levels (multilevel).
+    pub fn steps(&self) -> usize {
+        match self {
+            SolverRun::Paper(s) => s.steps,
+            SolverRun::Multilevel(s) => s.total_iterations(),
+        }
+    }
+
+    /// Final relative residual on the grid asked for.
+    pub fn residual(&self) -> f64 {
+        match self {
+            SolverRun::Paper(s) => s.residual,
+            SolverRun::Multilevel(s) => s.fine().residual,
+        }
+    }
+
+    /// Final largest move per step on the grid asked for, over the shortest rest length.
+    pub fn max_move(&self) -> f64 {
+        match self {
+            SolverRun::Paper(s) => s.max_move,
+            SolverRun::Multilevel(s) => s.fine().max_move,
+        }
+    }
+
+    /// True when the grid asked for converged.
+    pub fn converged(&self) -> bool {
+        match self {
+            SolverRun::Paper(s) => s.converged,
+            SolverRun::Multilevel(s) => s.fine().converged,
+        }
+    }
+
+    /// The report's `details.solver`.
+    pub fn details(&self, scene: &Scene) -> serde_json::Value {
+        match self {
+            SolverRun::Paper(stats) => json!({
+                "method": "paper",
+                "tolerance": scene.solver.tolerance,
+                "time_step": scene.solver.time_step,
+                "time_step_limit": stats.time_step_limit,
+                "substeps_per_step": stats.substeps_per_step,
+            }),
+            SolverRun::Multilevel(stats) => json!({
+                "method": "multilevel",
+                "tolerance": scene.solver.tolerance,
+                "fine_grid_equivalent_iterations": stats.fine_grid_equivalent_iterations(),
+                "levels": stats.levels,
+            }),
+        }
+    }
 }
 
 /// The axis from the scene (converted from file coordinates) or detected.

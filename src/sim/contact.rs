@@ -58,15 +58,19 @@ pub struct ContactCounters {
     pub pushed_out: u64,
     /// Points the exact pass after the fit ([`LegContact::finish`]) moved out to the offset.
     pub finished_out: u64,
+    /// Points moved out when a level of the multilevel solver started from positions
+    /// interpolated from the coarser level ([`Constraints::settle`]).
+    pub settled_out: u64,
 }
 
 impl ContactCounters {
     /// Adds another chunk's counts to these.
-    fn add(&mut self, other: &ContactCounters) {
+    pub fn add(&mut self, other: &ContactCounters) {
         self.closest_queries += other.closest_queries;
         self.slides += other.slides;
         self.pushed_out += other.pushed_out;
         self.finished_out += other.finished_out;
+        self.settled_out += other.settled_out;
     }
 }
 
@@ -135,13 +139,21 @@ impl<'a> LegContact<'a> {
     /// or a coarse mesh can dip below by a few micrometres; this pass is what makes "no yarn
     /// point inside the leg" exact. Points with `inv_mass` 0 are left alone.
     pub fn finish(&mut self, x: &mut [Vec3], inv_mass: &[f64]) {
+        let moved = self.push_out_all(x, inv_mass);
+        self.counters.finished_out += moved;
+    }
+
+    /// Moves every free point closer to the skin than the offset (or inside) out to it, by exact
+    /// queries; returns how many moved.
+    fn push_out_all(&mut self, x: &mut [Vec3], inv_mass: &[f64]) -> u64 {
         let params = self.slide_params();
         let locked = &self.axially_locked;
-        let counters: Vec<ContactCounters> = x
+        let counters: Vec<(ContactCounters, u64)> = x
             .par_chunks_mut(CHUNK)
             .enumerate()
             .map(|(chunk, x)| {
                 let mut counters = ContactCounters::default();
+                let mut moved = 0;
                 for (k, p) in x.iter_mut().enumerate() {
                     let i = chunk * CHUNK + k;
                     if inv_mass[i] == 0.0 {
@@ -152,16 +164,19 @@ impl<'a> LegContact<'a> {
                     if let Some(c) = params.collider.closest_within(&at, params.query_radius) {
                         if c.signed_distance < params.offset * (1.0 - 1e-6) {
                             *p = params.push_out(&at, &c, locked[i], &mut counters).0.coords;
-                            counters.finished_out += 1;
+                            moved += 1;
                         }
                     }
                 }
-                counters
+                (counters, moved)
             })
             .collect();
-        for c in counters {
+        let mut moved = 0;
+        for (c, m) in counters {
             self.counters.add(&c);
+            moved += m;
         }
+        moved
     }
 }
 
@@ -352,6 +367,13 @@ impl Constraints for LegContact<'_> {
         for c in counters {
             self.counters.add(&c);
         }
+    }
+
+    fn settle(&mut self, x: &mut [Vec3], inv_mass: &[f64]) {
+        // Forget cached planes and clearances: they belong to positions before the jump.
+        self.state.fill(PointContact::default());
+        let moved = self.push_out_all(x, inv_mass);
+        self.counters.settled_out += moved;
     }
 
     fn unheld_force(&self, i: usize, f: &Vec3) -> Vec3 {

@@ -23,26 +23,17 @@
 
 use rayon::prelude::*;
 
+pub use super::evaluation::ForceTerms;
+use super::evaluation::{
+    evaluate, relative_residual, rest_force_floor, shortest_rest, spring_stiffness_bound,
+    Workspace, CHUNK,
+};
 use crate::error::{Error, Result};
 use crate::knit::{Knit, Vec3};
 use crate::scene::{OnUnstable, SolverSettings};
 
-/// Points or springs per parallel chunk. Fixed, so that sums do not depend on the thread count.
-const CHUNK: usize = 4096;
-/// A strain this small is rest: it sets the floor of the residual's denominator.
-const REST_STRAIN: f64 = 1e-9;
 /// Energy growth over the starting energy that counts as divergence.
 const DIVERGENCE_ENERGY_GROWTH: f64 = 1e3;
-
-/// Which force terms run, with their coefficients. Built by the plan from the scene's effects.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ForceTerms {
-    /// Spring stiffness c1 per yarn kind (indexed by `YarnKind::index()`). Equal entries when the
-    /// scene does not ask for `alternating_yarns`.
-    pub stiffness: [f64; 2],
-    /// Connection factor c2 of eq. (2), or `None` when `yarn_connection` is off.
-    pub connection_factor: Option<f64>,
-}
 
 /// What a relaxation did.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -71,6 +62,10 @@ pub trait Constraints: Sync {
     /// reaction and a locked direction removed), so the residual measures only what can still
     /// move points.
     fn unheld_force(&self, i: usize, f: &Vec3) -> Vec3;
+    /// Puts every free point where the constraints allow it to rest, with no move to follow:
+    /// for a start from positions that were not reached by constrained moves (interpolated from
+    /// a coarser grid, say), which may break the constraints. Default: nothing to do.
+    fn settle(&mut self, _x: &mut [Vec3], _inv_mass: &[f64]) {}
 }
 
 /// No constraints: points go wherever the forces take them.
@@ -93,34 +88,10 @@ impl RelaxObserver for () {
     fn on_step(&mut self, _step: usize, _residual: f64) {}
 }
 
-/// Per-spring state of one force evaluation.
-#[derive(Clone, Copy, Debug, Default)]
-struct SpringState {
-    /// Signed spring force magnitude `c1 (|x_b − x_a| − l)`: positive in tension.
-    tension: f64,
-    /// Unit vector from end `a` to end `b` (zero when they coincide).
-    unit_ab: Vec3,
-}
-
-/// Scratch space for force evaluations, reused across steps.
-struct Workspace {
-    springs: Vec<SpringState>,
-    force: Vec<Vec3>,
-}
-
-/// Sums of one force evaluation.
-struct Evaluation {
-    /// Σ over springs of (spring force magnitude)².
-    spring_force_sq: f64,
-    /// Σ over springs of ½ c1 (|x_b − x_a| − l)².
-    potential_energy: f64,
-}
-
 /// The explicit stability limit on the time step for `knit` under `terms` (see module docs).
 /// Infinite when no point is free.
 pub fn stability_limit(knit: &Knit, terms: &ForceTerms) -> f64 {
     let x = &knit.particles.x;
-    let c1 = |s: u32| terms.stiffness[knit.springs[s as usize].yarn.index() as usize];
     let mut lambda_max: f64 = 0.0;
     for i in 0..knit.len() {
         let p = crate::knit::PointId(i as u32);
@@ -132,18 +103,11 @@ pub fn stability_limit(knit: &Knit, terms: &ForceTerms) -> f64 {
         for inc in knit.incident(p) {
             let s = &knit.springs[inc.spring as usize];
             let len = (x[s.b.index()] - x[s.a.index()]).norm();
-            // Geometric stiffness across a spring is c1 (1 − l/len): larger than c1 only when
-            // the spring is compressed below half its length.
-            let geometric = if len > 0.0 {
-                (1.0 - s.rest / len).abs()
-            } else {
-                1.0
-            };
-            lambda += 2.0 * c1(inc.spring) * geometric.max(1.0);
+            lambda += spring_stiffness_bound(terms.c1(knit, inc.spring), s.rest, len);
         }
         if let Some(c2) = terms.connection_factor {
             for conn in knit.connections(p) {
-                lambda += 2.0 * c2 * c1(conn.spring);
+                lambda += 2.0 * c2 * terms.c1(knit, conn.spring);
             }
         }
         lambda_max = lambda_max.max(lambda * inv_mass);
@@ -180,17 +144,8 @@ pub fn relax_constrained(
     let substeps = substeps_for(settings, limit, terms)?;
     let h = settings.time_step / substeps as f64;
     let decay = (-settings.damping * h).exp();
-    let shortest_rest = knit
-        .springs
-        .iter()
-        .map(|s| s.rest)
-        .fold(f64::INFINITY, f64::min);
-    let softest = terms
-        .stiffness
-        .iter()
-        .copied()
-        .fold(f64::INFINITY, f64::min);
-    let force_floor = REST_STRAIN * softest * shortest_rest;
+    let shortest_rest = shortest_rest(knit);
+    let force_floor = rest_force_floor(knit, terms);
     // Energy of a strain of 1e-6 on every spring: below this, growth is rounding, not divergence.
     let energy_floor: f64 = knit
         .springs
@@ -198,10 +153,7 @@ pub fn relax_constrained(
         .map(|s| 0.5 * terms.stiffness[s.yarn.index() as usize] * (1e-6 * s.rest).powi(2))
         .sum();
 
-    let mut ws = Workspace {
-        springs: vec![SpringState::default(); knit.springs.len()],
-        force: vec![Vec3::zeros(); knit.len()],
-    };
+    let mut ws = Workspace::new(knit);
     let mut start_energy = None;
     let mut step = 0;
     let mut from = Vec::new();
@@ -283,119 +235,6 @@ fn substeps_for(settings: &SolverSettings, limit: f64, terms: &ForceTerms) -> Re
             stiffest: terms.stiffness.iter().copied().fold(0.0, f64::max),
         }),
     }
-}
-
-/// Computes spring states and the net force on every point; returns the sums the convergence
-/// test and the watchdog need.
-fn evaluate(knit: &Knit, terms: &ForceTerms, ws: &mut Workspace) -> Evaluation {
-    let x = &knit.particles.x;
-    let springs = &knit.springs;
-    let partial: Vec<(f64, f64)> = ws
-        .springs
-        .par_chunks_mut(CHUNK)
-        .enumerate()
-        .map(|(chunk, states)| {
-            let (mut force_sq, mut energy) = (0.0, 0.0);
-            for (k, state) in states.iter_mut().enumerate() {
-                let s = &springs[chunk * CHUNK + k];
-                let c1 = terms.stiffness[s.yarn.index() as usize];
-                let d = x[s.b.index()] - x[s.a.index()];
-                let len = d.norm();
-                let stretch = len - s.rest;
-                state.tension = c1 * stretch;
-                state.unit_ab = if len > 0.0 { d / len } else { Vec3::zeros() };
-                force_sq += state.tension * state.tension;
-                energy += 0.5 * c1 * stretch * stretch;
-            }
-            (force_sq, energy)
-        })
-        .collect();
-    let states = &ws.springs;
-    ws.force
-        .par_chunks_mut(CHUNK)
-        .enumerate()
-        .for_each(|(chunk, forces)| {
-            for (k, f) in forces.iter_mut().enumerate() {
-                let p = crate::knit::PointId((chunk * CHUNK + k) as u32);
-                *f = net_force(knit, terms, states, p);
-            }
-        });
-    let (spring_force_sq, potential_energy) = partial
-        .iter()
-        .fold((0.0, 0.0), |(a, b), (c, d)| (a + c, b + d));
-    Evaluation {
-        spring_force_sq,
-        potential_energy,
-    }
-}
-
-/// Net force on point `p`: eq. (1) over its springs, plus eq. (2) over its connection terms when
-/// the yarn connection runs. Summed in the knit's fixed incident order.
-fn net_force(
-    knit: &Knit,
-    terms: &ForceTerms,
-    states: &[SpringState],
-    p: crate::knit::PointId,
-) -> Vec3 {
-    // Unit vector along spring `s`, pointing away from `p` (which is end `a` when `at_a`).
-    let away = |s: u32, at_a: bool| {
-        let unit = states[s as usize].unit_ab;
-        if at_a {
-            unit
-        } else {
-            -unit
-        }
-    };
-    let mut f = Vec3::zeros();
-    for inc in knit.incident(p) {
-        // Tension pulls p along the spring, compression pushes it back: eq. (1).
-        f += away(inc.spring, inc.at_a) * states[inc.spring as usize].tension;
-    }
-    if let Some(c2) = terms.connection_factor {
-        for conn in knit.connections(p) {
-            let tension = states[conn.spring as usize].tension.max(0.0);
-            // Drawn towards the middle point j, along spring i–j (sign: see forces.rs).
-            f += away(conn.from, conn.from_at_a) * (c2 * tension);
-        }
-    }
-    f
-}
-
-/// RMS net force on free points over RMS spring force. Spring forces below that of a strain of
-/// [`REST_STRAIN`] on the softest spring count as that floor: such a knit is at rest, and both
-/// sums are rounding noise whose ratio means nothing.
-fn relative_residual(
-    knit: &Knit,
-    force: &[Vec3],
-    constraints: &dyn Constraints,
-    spring_force_sq: f64,
-    force_floor: f64,
-) -> f64 {
-    let inv_mass = &knit.particles.inv_mass;
-    let partial: Vec<(f64, usize)> = force
-        .par_chunks(CHUNK)
-        .enumerate()
-        .map(|(chunk, f)| {
-            let mut sum = (0.0, 0usize);
-            for (k, f) in f.iter().enumerate() {
-                let i = chunk * CHUNK + k;
-                if inv_mass[i] > 0.0 {
-                    sum.0 += constraints.unheld_force(i, f).norm_squared();
-                    sum.1 += 1;
-                }
-            }
-            sum
-        })
-        .collect();
-    let (sum_sq, free) = partial
-        .iter()
-        .fold((0.0, 0), |(a, n), (b, k)| (a + b, n + k));
-    if free == 0 {
-        return 0.0;
-    }
-    let rms_net = (sum_sq / free as f64).sqrt();
-    let rms_spring = (spring_force_sq / knit.springs.len().max(1) as f64).sqrt();
-    rms_net / rms_spring.max(force_floor)
 }
 
 /// Largest speed and kinetic energy over free points.

@@ -1,0 +1,210 @@
+//! The fast solver's iteration on one grid: a Jacobi-preconditioned heavy-ball (momentum)
+//! iteration with adaptive restart, after Polyak (1964) for the momentum, Nesterov's `k/(k+3)`
+//! schedule for its weight, and O'Donoghue & Candès, "Adaptive restart for accelerated gradient
+//! schemes" (2015), for the restart.
+//!
+//! Each iteration, with `F` the net force (eq. 1 + eq. 2) and `m_i` point `i`'s Gershgorin bound
+//! on the stiffness (`evaluation::Workspace::stiffness_bound`):
+//!
+//! ```text
+//! if Σ F·v < 0:  v ← 0, k ← 0              (moving against the force: restart)
+//! v_i ← β_k v_i + s · F_i / m_i,  β_k = k / (k + 3)
+//! x_i ← constrain(x_i + v_i);  v_i ← the move actually made
+//! ```
+//!
+//! **Why this method.** The fit is a static problem: only the rest state matters, not the path
+//! (the paper's damped dynamics is one way to reach it). Dividing by `m_i` makes every point's
+//! largest mode stiffness at most 1, so one step size `s` suits nylon and the 10× stiffer support
+//! yarn alike; the paper's fixed step must suit the stiffest spring and crawls on the soft ones.
+//! Momentum turns the `O(N²)` iterations plain relaxation needs on smooth, grid-wide error into
+//! `O(N)`; the restart takes the momentum away whenever it overshoots, which needs no estimate
+//! of the spectrum (Chebyshev does) and no energy (FIRE and line searches do). That matters
+//! here, because the connection force of eq. (2) is not the gradient of any energy: the power
+//! `F·v` is defined for any force, so eq. (2) enters like every other force, evaluated at the
+//! current positions (lagged by nothing). What this iteration cannot do alone is remove smooth
+//! error fast on a fine grid; [`super::multilevel`] starts it from a coarser grid's rest state so
+//! that little smooth error is left.
+//!
+//! Contact and the held end rings act through [`Constraints`] exactly as for the paper's solver:
+//! the move is limited, and the momentum carries only the move that was allowed.
+//!
+//! Convergence is the paper solver's: the relative residual (RMS unheld net force over RMS
+//! spring force) and the largest move of the last iteration over the shortest rest length, both
+//! below the tolerance.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+
+use super::evaluation::{
+    evaluate, relative_residual, rest_force_floor, shortest_rest, Workspace, CHUNK,
+};
+use super::{Constraints, ForceTerms, RelaxObserver};
+use crate::error::{Error, Result};
+use crate::knit::{Knit, Vec3};
+
+/// Step size `s`, as a fraction of the largest step the Gershgorin bound allows without momentum
+/// (2). Below 2 by a margin, as the bound is only an estimate where springs change length fast.
+const STEP: f64 = 1.5;
+/// A residual this many times its starting value means the iteration is running away.
+const RUNAWAY_GROWTH: f64 = 1e6;
+
+/// What the iteration on one grid did.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct LevelStats {
+    /// Points around the grid.
+    pub wales: usize,
+    /// Rings along the grid.
+    pub courses: usize,
+    /// Iterations taken.
+    pub iterations: usize,
+    /// Times the momentum was restarted.
+    pub restarts: usize,
+    /// Relative residual when the level started (after interpolation from the coarser grid).
+    pub start_residual: f64,
+    /// Final relative residual.
+    pub residual: f64,
+    /// Final largest move per iteration relative to the shortest rest length.
+    pub max_move: f64,
+    /// True when both went below the tolerance.
+    pub converged: bool,
+    /// Wall-clock seconds the level took.
+    pub seconds: f64,
+}
+
+/// Relaxes `knit` in place on its own grid until the residual and the largest move are below
+/// `tolerance`, or `max_iterations` is reached. `first_step` numbers the observer's steps
+/// (levels of a multilevel solve count on from each other).
+///
+/// Errors: [`Error::SolverDiverged`] when a value stops being finite or the residual runs away.
+pub fn relax_accelerated(
+    knit: &mut Knit,
+    terms: &ForceTerms,
+    tolerance: f64,
+    max_iterations: usize,
+    constraints: &mut dyn Constraints,
+    observer: &mut dyn RelaxObserver,
+    first_step: usize,
+) -> Result<LevelStats> {
+    let started = Instant::now();
+    let shortest_rest = shortest_rest(knit);
+    let force_floor = rest_force_floor(knit, terms);
+    let mut ws = Workspace::new(knit);
+    let mut velocity = vec![Vec3::zeros(); knit.len()];
+    let mut from = Vec::new();
+    let mut since_restart = 0usize;
+    let mut restarts = 0;
+    let mut start_residual = None;
+    // No move has been made yet: the first evaluation cannot count as converged.
+    let mut max_move = f64::INFINITY;
+    let mut iteration = 0;
+    loop {
+        let eval = evaluate(knit, terms, &mut ws);
+        let residual = relative_residual(
+            knit,
+            &ws.force,
+            &*constraints,
+            eval.spring_force_sq,
+            force_floor,
+        );
+        observer.on_step(first_step + iteration, residual);
+        let start = *start_residual.get_or_insert(residual);
+        let diverged = |what: String| Error::SolverDiverged {
+            grid: format!("{}×{}", knit.wales, knit.courses),
+            iteration,
+            what,
+        };
+        if !residual.is_finite() || !(max_move.is_finite() || iteration == 0) {
+            return Err(diverged("a position or force stopped being finite".into()));
+        }
+        if residual > RUNAWAY_GROWTH * start.max(tolerance) {
+            return Err(diverged(format!(
+                "the residual grew from {start:.3e} to {residual:.3e}"
+            )));
+        }
+        let converged = residual < tolerance && max_move < tolerance;
+        if converged || iteration >= max_iterations {
+            return Ok(LevelStats {
+                wales: knit.wales,
+                courses: knit.courses,
+                iterations: iteration,
+                restarts,
+                start_residual: start,
+                residual,
+                max_move,
+                converged,
+                seconds: started.elapsed().as_secs_f64(),
+            });
+        }
+
+        if power(knit, &ws.force, &velocity) < 0.0 {
+            velocity.fill(Vec3::zeros());
+            since_restart = 0;
+            restarts += 1;
+        }
+        let beta = since_restart as f64 / (since_restart as f64 + 3.0);
+        from.clone_from(&knit.particles.x);
+        step(knit, &ws, &mut velocity, beta);
+        let p = &mut knit.particles;
+        constraints.constrain(&from, &mut p.x, &p.inv_mass);
+        max_move = allowed_moves(&p.x, &from, &p.inv_mass, &mut velocity) / shortest_rest;
+        since_restart += 1;
+        iteration += 1;
+    }
+}
+
+/// Σ F·v over free points, in fixed chunks.
+fn power(knit: &Knit, force: &[Vec3], velocity: &[Vec3]) -> f64 {
+    let inv_mass = &knit.particles.inv_mass;
+    let partial: Vec<f64> = force
+        .par_chunks(CHUNK)
+        .zip(velocity.par_chunks(CHUNK))
+        .zip(inv_mass.par_chunks(CHUNK))
+        .map(|((f, v), m)| {
+            f.iter()
+                .zip(v)
+                .zip(m)
+                .filter(|(_, &m)| m > 0.0)
+                .map(|((f, v), _)| f.dot(v))
+                .sum::<f64>()
+        })
+        .collect();
+    partial.iter().sum()
+}
+
+/// The momentum update and the unconstrained move, on free points.
+fn step(knit: &mut Knit, ws: &Workspace, velocity: &mut [Vec3], beta: f64) {
+    let p = &mut knit.particles;
+    p.x.par_chunks_mut(CHUNK)
+        .zip(velocity.par_chunks_mut(CHUNK))
+        .zip(p.inv_mass.par_chunks(CHUNK))
+        .zip(ws.force.par_chunks(CHUNK))
+        .zip(ws.stiffness_bound.par_chunks(CHUNK))
+        .for_each(|((((x, v), inv_mass), f), bound)| {
+            for k in 0..x.len() {
+                if inv_mass[k] > 0.0 && bound[k] > 0.0 {
+                    v[k] = v[k] * beta + f[k] * (STEP / bound[k]);
+                    x[k] += v[k];
+                }
+            }
+        });
+}
+
+/// Sets each free point's velocity to the move it was allowed to make; returns the largest.
+fn allowed_moves(x: &[Vec3], from: &[Vec3], inv_mass: &[f64], velocity: &mut [Vec3]) -> f64 {
+    velocity
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .map(|(chunk, v)| {
+            let mut largest: f64 = 0.0;
+            for (k, v) in v.iter_mut().enumerate() {
+                let i = chunk * CHUNK + k;
+                if inv_mass[i] > 0.0 {
+                    *v = x[i] - from[i];
+                    largest = largest.max(v.norm());
+                }
+            }
+            largest
+        })
+        .reduce(|| 0.0, f64::max)
+}

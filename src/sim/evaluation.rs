@@ -1,0 +1,219 @@
+//! One evaluation of the knit's forces, shared by every solver: the spring states of eq. (1), the
+//! net force on each point with the connection terms of eq. (2), a per-point bound on the
+//! stiffness (Gershgorin), and the relative residual that says how far from rest the knit is.
+//!
+//! Every sum is taken in fixed-size chunks in a fixed order, so results are bit-identical
+//! whatever the number of threads.
+
+use rayon::prelude::*;
+
+use super::Constraints;
+use crate::knit::{Knit, PointId, Vec3};
+
+/// Points or springs per parallel chunk. Fixed, so that sums do not depend on the thread count.
+pub(crate) const CHUNK: usize = 4096;
+/// A strain this small is rest: it sets the floor of the residual's denominator.
+const REST_STRAIN: f64 = 1e-9;
+
+/// Which force terms run, with their coefficients. Built by the plan from the scene's effects.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ForceTerms {
+    /// Spring stiffness c1 per yarn kind (indexed by `YarnKind::index()`). Equal entries when the
+    /// scene does not ask for `alternating_yarns`.
+    pub stiffness: [f64; 2],
+    /// Connection factor c2 of eq. (2), or `None` when `yarn_connection` is off.
+    pub connection_factor: Option<f64>,
+}
+
+impl ForceTerms {
+    /// c1 of a spring of the knit.
+    pub(crate) fn c1(&self, knit: &Knit, spring: u32) -> f64 {
+        self.stiffness[knit.springs[spring as usize].yarn.index() as usize]
+    }
+}
+
+/// Gershgorin contribution of one spring to the stiffness bound of each of its ends: `2 c1`
+/// scaled by the spring's geometric stiffness `|1 − l/len|` where that exceeds 1 (a spring
+/// compressed below half its rest length is stiffer across than along).
+pub(crate) fn spring_stiffness_bound(c1: f64, rest: f64, len: f64) -> f64 {
+    let geometric = if len > 0.0 {
+        (1.0 - rest / len).abs()
+    } else {
+        1.0
+    };
+    2.0 * c1 * geometric.max(1.0)
+}
+
+/// Per-spring state of one force evaluation.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct SpringState {
+    /// Signed spring force magnitude `c1 (|x_b − x_a| − l)`: positive in tension.
+    pub tension: f64,
+    /// Unit vector from end `a` to end `b` (zero when they coincide).
+    pub unit_ab: Vec3,
+    /// [`spring_stiffness_bound`] of this spring.
+    pub stiffness_bound: f64,
+}
+
+/// Scratch space and results of force evaluations, reused across iterations.
+pub(crate) struct Workspace {
+    /// Per spring.
+    pub springs: Vec<SpringState>,
+    /// Net force per point.
+    pub force: Vec<Vec3>,
+    /// Per point, a bound on the largest eigenvalue of the stiffness seen from that point
+    /// (Gershgorin row sum): the sum of its springs' bounds and of `2 c2 c1` per connection term.
+    pub stiffness_bound: Vec<f64>,
+}
+
+impl Workspace {
+    /// Space for `knit`.
+    pub fn new(knit: &Knit) -> Workspace {
+        Workspace {
+            springs: vec![SpringState::default(); knit.springs.len()],
+            force: vec![Vec3::zeros(); knit.len()],
+            stiffness_bound: vec![0.0; knit.len()],
+        }
+    }
+}
+
+/// Sums of one force evaluation.
+pub(crate) struct Evaluation {
+    /// Σ over springs of (spring force magnitude)².
+    pub spring_force_sq: f64,
+    /// Σ over springs of ½ c1 (|x_b − x_a| − l)².
+    pub potential_energy: f64,
+}
+
+/// Computes spring states, the net force and the stiffness bound of every point; returns the
+/// sums the convergence test and the watchdog need.
+pub(crate) fn evaluate(knit: &Knit, terms: &ForceTerms, ws: &mut Workspace) -> Evaluation {
+    let x = &knit.particles.x;
+    let springs = &knit.springs;
+    let partial: Vec<(f64, f64)> = ws
+        .springs
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .map(|(chunk, states)| {
+            let (mut force_sq, mut energy) = (0.0, 0.0);
+            for (k, state) in states.iter_mut().enumerate() {
+                let s = &springs[chunk * CHUNK + k];
+                let c1 = terms.stiffness[s.yarn.index() as usize];
+                let d = x[s.b.index()] - x[s.a.index()];
+                let len = d.norm();
+                let stretch = len - s.rest;
+                state.tension = c1 * stretch;
+                state.unit_ab = if len > 0.0 { d / len } else { Vec3::zeros() };
+                state.stiffness_bound = spring_stiffness_bound(c1, s.rest, len);
+                force_sq += state.tension * state.tension;
+                energy += 0.5 * c1 * stretch * stretch;
+            }
+            (force_sq, energy)
+        })
+        .collect();
+    let states = &ws.springs;
+    ws.force
+        .par_chunks_mut(CHUNK)
+        .zip(ws.stiffness_bound.par_chunks_mut(CHUNK))
+        .enumerate()
+        .for_each(|(chunk, (forces, bounds))| {
+            for (k, (f, bound)) in forces.iter_mut().zip(bounds.iter_mut()).enumerate() {
+                let p = PointId((chunk * CHUNK + k) as u32);
+                (*f, *bound) = net_force(knit, terms, states, p);
+            }
+        });
+    let (spring_force_sq, potential_energy) = partial
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (c, d)| (a + c, b + d));
+    Evaluation {
+        spring_force_sq,
+        potential_energy,
+    }
+}
+
+/// Net force on point `p` and its stiffness bound: eq. (1) over its springs, plus eq. (2) over
+/// its connection terms when the yarn connection runs. Summed in the knit's fixed incident order.
+fn net_force(knit: &Knit, terms: &ForceTerms, states: &[SpringState], p: PointId) -> (Vec3, f64) {
+    // Unit vector along spring `s`, pointing away from `p` (which is end `a` when `at_a`).
+    let away = |s: u32, at_a: bool| {
+        let unit = states[s as usize].unit_ab;
+        if at_a {
+            unit
+        } else {
+            -unit
+        }
+    };
+    let mut f = Vec3::zeros();
+    let mut bound = 0.0;
+    for inc in knit.incident(p) {
+        let state = &states[inc.spring as usize];
+        // Tension pulls p along the spring, compression pushes it back: eq. (1).
+        f += away(inc.spring, inc.at_a) * state.tension;
+        bound += state.stiffness_bound;
+    }
+    if let Some(c2) = terms.connection_factor {
+        for conn in knit.connections(p) {
+            let tension = states[conn.spring as usize].tension.max(0.0);
+            // Drawn towards the middle point j, along spring i–j (sign: see forces.rs).
+            f += away(conn.from, conn.from_at_a) * (c2 * tension);
+            bound += 2.0 * c2 * terms.c1(knit, conn.spring);
+        }
+    }
+    (f, bound)
+}
+
+/// The residual's floor: the spring force of a strain of [`REST_STRAIN`] on the softest, shortest
+/// spring.
+pub(crate) fn rest_force_floor(knit: &Knit, terms: &ForceTerms) -> f64 {
+    let softest = terms
+        .stiffness
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    REST_STRAIN * softest * shortest_rest(knit)
+}
+
+/// The shortest rest length of the knit's springs, metres.
+pub(crate) fn shortest_rest(knit: &Knit) -> f64 {
+    knit.springs
+        .iter()
+        .map(|s| s.rest)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// RMS net force on free points over RMS spring force, counting only the part of each net force
+/// the constraints do not hold. Spring forces below [`rest_force_floor`] count as that floor:
+/// such a knit is at rest, and both sums are rounding noise whose ratio means nothing.
+pub(crate) fn relative_residual(
+    knit: &Knit,
+    force: &[Vec3],
+    constraints: &dyn Constraints,
+    spring_force_sq: f64,
+    force_floor: f64,
+) -> f64 {
+    let inv_mass = &knit.particles.inv_mass;
+    let partial: Vec<(f64, usize)> = force
+        .par_chunks(CHUNK)
+        .enumerate()
+        .map(|(chunk, f)| {
+            let mut sum = (0.0, 0usize);
+            for (k, f) in f.iter().enumerate() {
+                let i = chunk * CHUNK + k;
+                if inv_mass[i] > 0.0 {
+                    sum.0 += constraints.unheld_force(i, f).norm_squared();
+                    sum.1 += 1;
+                }
+            }
+            sum
+        })
+        .collect();
+    let (sum_sq, free) = partial
+        .iter()
+        .fold((0.0, 0), |(a, n), (b, k)| (a + b, n + k));
+    if free == 0 {
+        return 0.0;
+    }
+    let rms_net = (sum_sq / free as f64).sqrt();
+    let rms_spring = (spring_force_sq / knit.springs.len().max(1) as f64).sqrt();
+    rms_net / rms_spring.max(force_floor)
+}

@@ -1,0 +1,236 @@
+//! The fast solver: coarse-to-fine relaxation, the "nested iteration" half of full multigrid
+//! (Brandt, "Multi-level adaptive solutions to boundary-value problems", 1977).
+//!
+//! The knit is first relaxed on a grid with about half the wales and half the courses of the
+//! one asked for (and that on a grid half as fine again, down to [`COARSEST`] points a side).
+//! A coarse grid stands for the same stocking: its rest lengths are twice as long, so the same
+//! relaxed circumference and length. Its rest state is interpolated (bilinearly, around the
+//! closed courses and along the wales) onto the next finer grid, the constraints put any
+//! interpolated point that fell inside the leg back out ([`Constraints::settle`]), and the
+//! accelerated iteration ([`super::accelerated`]) continues there.
+//!
+//! Why: a local iteration removes error on the scale of a few stitches quickly, but error that
+//! is smooth across the whole grid (the tube's overall slide along the leg, its girth) takes a
+//! number of iterations that grows with the grid size: as its square for plain relaxation like
+//! the paper's, linearly with momentum. On a coarse grid that same smooth error is a few stitches
+//! wide and cheap to remove, and each level starts with only the little error a grid twice as
+//! fine adds, so the fine grid needs about as many iterations whatever its size. Full multigrid
+//! would also send the fine grid's residual back down (V-cycles); contact makes that transfer
+//! awkward, and in our measurements (README, `knitfit bench`) nested iteration alone already
+//! keeps the fine-grid work nearly flat.
+
+use super::accelerated::{relax_accelerated, LevelStats};
+use super::{Constraints, ForceTerms, RelaxObserver};
+use crate::error::Result;
+use crate::knit::{Knit, Vec3};
+
+/// Coarsening stops before a grid would have fewer than this many wales or courses.
+pub const COARSEST: usize = 16;
+
+/// How the caller makes the knit and constraints of each level: the solver knows grids, the
+/// caller knows what is knitted and what it touches.
+pub trait Levels {
+    /// The knit of a `wales × courses` grid, at its starting positions (used as they are on the
+    /// coarsest level; finer levels are overwritten by interpolation).
+    fn knit(&mut self, wales: usize, courses: usize) -> Knit;
+    /// Fresh constraints for `knit` (per-point state belongs to one level), keeping any counters
+    /// the caller reports.
+    fn constraints(&mut self, knit: &Knit) -> &mut dyn Constraints;
+}
+
+/// What a multilevel relaxation did, level by level.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct MultilevelStats {
+    /// Coarsest level first; the last is the grid asked for.
+    pub levels: Vec<LevelStats>,
+}
+
+impl MultilevelStats {
+    /// The level of the grid asked for.
+    pub fn fine(&self) -> &LevelStats {
+        self.levels.last().expect("a multilevel solve has a level")
+    }
+
+    /// Iterations over all levels.
+    pub fn total_iterations(&self) -> usize {
+        self.levels.iter().map(|l| l.iterations).sum()
+    }
+
+    /// Work in iterations of the finest grid: each level's iterations weighted by its points.
+    pub fn fine_grid_equivalent_iterations(&self) -> f64 {
+        let fine = self.fine();
+        let fine_points = (fine.wales * fine.courses) as f64;
+        self.levels
+            .iter()
+            .map(|l| l.iterations as f64 * (l.wales * l.courses) as f64 / fine_points)
+            .sum()
+    }
+}
+
+/// Grid sizes from the coarsest to `wales × courses`, each about half the next in both
+/// directions. A closed course of `w` points coarsens to `⌈w/2⌉`; a wale of `c` points (`c − 1`
+/// intervals between the held end rings) to `⌈(c − 1)/2⌉ + 1`.
+pub fn grid_sizes(wales: usize, courses: usize) -> Vec<(usize, usize)> {
+    let mut sizes = vec![(wales, courses)];
+    loop {
+        let (w, c) = *sizes.last().expect("starts non-empty");
+        let coarser = (w.div_ceil(2), (c - 1).div_ceil(2) + 1);
+        if coarser.0 < COARSEST || coarser.1 < COARSEST {
+            break;
+        }
+        sizes.push(coarser);
+    }
+    sizes.reverse();
+    sizes
+}
+
+/// Relaxes a `wales × courses` knit coarse to fine (module docs); returns the fine knit at rest
+/// and each level's figures. Every level runs to `tolerance` or `max_iterations`.
+///
+/// Errors: those of [`relax_accelerated`].
+pub fn relax_multilevel(
+    levels: &mut dyn Levels,
+    wales: usize,
+    courses: usize,
+    terms: &ForceTerms,
+    tolerance: f64,
+    max_iterations: usize,
+    observer: &mut dyn RelaxObserver,
+) -> Result<(Knit, MultilevelStats)> {
+    let mut stats = MultilevelStats::default();
+    let mut coarser: Option<Knit> = None;
+    for (w, c) in grid_sizes(wales, courses) {
+        let mut knit = levels.knit(w, c);
+        if let Some(coarse) = &coarser {
+            prolong(coarse, &mut knit);
+        }
+        let constraints = levels.constraints(&knit);
+        if coarser.is_some() {
+            let p = &mut knit.particles;
+            constraints.settle(&mut p.x, &p.inv_mass);
+        }
+        let level = relax_accelerated(
+            &mut knit,
+            terms,
+            tolerance,
+            max_iterations,
+            constraints,
+            observer,
+            stats.total_iterations(),
+        )?;
+        stats.levels.push(level);
+        coarser = Some(knit);
+    }
+    Ok((coarser.expect("at least one level"), stats))
+}
+
+/// Sets the free points of `fine` to the bilinear interpolation of `coarse` at the same place
+/// in the fabric: the same fraction of the way around (or across) the courses and along the
+/// wales. Closed courses interpolate across the seam.
+pub fn prolong(coarse: &Knit, fine: &mut Knit) {
+    let (cw, cc) = (coarse.wales, coarse.courses);
+    let (fw, fc) = (fine.wales, fine.courses);
+    let closed = coarse.closed_courses && fine.closed_courses;
+    // Position of a fine index on the coarse grid's axis of `n` points.
+    let across = |w: usize| -> (usize, usize, f64) {
+        if closed {
+            let u = w as f64 * cw as f64 / fw as f64;
+            let w0 = (u.floor() as usize).min(cw - 1);
+            (w0, (w0 + 1) % cw, u - w0 as f64)
+        } else {
+            along(w, fw, cw)
+        }
+    };
+    let x = &coarse.particles.x;
+    for c in 0..fc {
+        let (c0, c1, tc) = along(c, fc, cc);
+        for w in 0..fw {
+            let i = fine.point(w, c).index();
+            if fine.particles.inv_mass[i] == 0.0 {
+                continue;
+            }
+            let (w0, w1, tw) = across(w);
+            let at = |w: usize, c: usize| x[coarse.point(w, c).index()];
+            let lower: Vec3 = at(w0, c0) * (1.0 - tw) + at(w1, c0) * tw;
+            let upper: Vec3 = at(w0, c1) * (1.0 - tw) + at(w1, c1) * tw;
+            fine.particles.x[i] = lower * (1.0 - tc) + upper * tc;
+            fine.particles.v[i] = Vec3::zeros();
+        }
+    }
+}
+
+/// Index `i` of `n_fine` points spread end to end, as the two neighbouring points of `n_coarse`
+/// and the fraction between them.
+fn along(i: usize, n_fine: usize, n_coarse: usize) -> (usize, usize, f64) {
+    if n_coarse < 2 || n_fine < 2 {
+        return (0, 0, 0.0);
+    }
+    let t = i as f64 * (n_coarse - 1) as f64 / (n_fine - 1) as f64;
+    let i0 = (t.floor() as usize).min(n_coarse - 2);
+    (i0, i0 + 1, t - i0 as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::knit::{Pattern, Tile};
+
+    fn tube(wales: usize, courses: usize) -> Knit {
+        Knit::grid(
+            wales,
+            courses,
+            true,
+            &Tile::of(Pattern::Alternating),
+            1.0,
+            1.0,
+            |w, c| {
+                let t = std::f64::consts::TAU * w as f64 / wales as f64;
+                Vec3::new(t.cos(), c as f64 / (courses - 1) as f64, t.sin())
+            },
+        )
+    }
+
+    #[test]
+    fn grids_halve_down_to_the_coarsest_and_end_at_the_asked_size() {
+        assert_eq!(
+            grid_sizes(150, 150),
+            vec![(19, 20), (38, 39), (75, 76), (150, 150)]
+        );
+        assert_eq!(grid_sizes(20, 20), vec![(20, 20)]);
+        let real = grid_sizes(400, 1600);
+        assert_eq!(real.first(), Some(&(25, 101)));
+        assert_eq!(real.last(), Some(&(400, 1600)));
+        for pair in real.windows(2) {
+            assert!(pair[0].0 * 2 >= pair[1].0 && pair[0].1 * 2 > pair[1].1);
+        }
+    }
+
+    #[test]
+    fn prolongation_keeps_end_rings_and_interpolates_across_the_seam() {
+        let coarse = tube(8, 5);
+        let mut fine = tube(16, 9);
+        for x in &mut fine.particles.x {
+            *x = Vec3::zeros();
+        }
+        prolong(&coarse, &mut fine);
+        // Every second fine point of every second ring lies on a coarse point.
+        for c in 0..5 {
+            for w in 0..8 {
+                let f = fine.particles.x[fine.point(2 * w, 2 * c).index()];
+                let k = coarse.particles.x[coarse.point(w, c).index()];
+                assert!((f - k).norm() < 1e-12);
+            }
+        }
+        // The last fine wale sits halfway between the last coarse wale and the first.
+        let seam = fine.particles.x[fine.point(15, 0).index()];
+        let mid = (coarse.particles.x[coarse.point(7, 0).index()]
+            + coarse.particles.x[coarse.point(0, 0).index()])
+            / 2.0;
+        assert!((seam - mid).norm() < 1e-12);
+        // End rings stay at their heights.
+        for w in 0..16 {
+            assert!(fine.particles.x[fine.point(w, 0).index()].y.abs() < 1e-12);
+            assert!((fine.particles.x[fine.point(w, 8).index()].y - 1.0).abs() < 1e-12);
+        }
+    }
+}
