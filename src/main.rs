@@ -10,7 +10,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use knitfit::leg::AxisSource;
 use knitfit::run::fit::scene_dir;
-use knitfit::run::{run_fit, run_patch, FitInputs, Progress, RunPaths};
+use knitfit::run::{run_bench, run_fit, run_patch, BenchOptions, FitInputs, Progress, RunPaths};
 use knitfit::scene::{
     check_axis, check_patch_points, check_stretch_factor, check_tolerance, check_tube_points,
     ContactMethod, LegAxis, SolverMethod, Stretch, StretchAxis,
@@ -43,6 +43,19 @@ enum Command {
     Fit(FitArgs),
     /// The paper's flat-patch experiment: hold two edges of a knit patch, pull them apart, relax.
     Patch(PatchArgs),
+    /// What accuracy costs in time: sweep resolution × solver × tolerance on the bundled legs;
+    /// write bench.md, bench.csv and bench.png.
+    Bench(BenchArgs),
+}
+
+#[derive(clap::Args, Debug, Default)]
+struct BenchArgs {
+    /// The short sweep (50×50 and 100×100 on the MakeHuman leg): under two minutes.
+    #[arg(long)]
+    quick: bool,
+    /// Output directory (created if missing).
+    #[arg(long, default_value = "out/bench")]
+    out: PathBuf,
 }
 
 #[derive(clap::Args, Debug, Default)]
@@ -98,6 +111,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Some(Command::Patch(args)) => patch(args, quiet),
         Some(Command::Fit(args)) => fit(args, quiet),
+        Some(Command::Bench(args)) => bench(args, quiet),
         None => fit(
             FitArgs {
                 out: PathBuf::from("out"),
@@ -247,6 +261,20 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
         &scene,
         "raise solver.max_steps, or solver.damping if the residual oscillates",
     ))
+}
+
+fn bench(args: BenchArgs, quiet: bool) -> Result<ExitCode, Error> {
+    let options = BenchOptions {
+        quick: args.quick,
+        out_dir: args.out.clone(),
+    };
+    let mut bar = Bar::new(quiet);
+    let outcome = run_bench(&options, &mut bar)?;
+    if !quiet {
+        print!("{}", outcome.markdown);
+        print_written(&args.out, &outcome.written);
+    }
+    Ok(ExitCode::SUCCESS)
 }
 
 fn scene_name(scene: &Option<PathBuf>) -> String {

@@ -274,7 +274,7 @@ mod tests {
         let fit = Plan::fit(&scene);
         assert!(!fit.has_stage("knit tube"));
         let why = &fit.stages.iter().find(|s| s.name == "fit").unwrap().why;
-        assert!(why.contains("19×20 → 38×39 → 75×76 → 150×150"), "{why}");
+        assert!(why.contains("38×39 → 75×76 → 150×150"), "{why}");
         scene.solver.method = SolverMethod::Paper;
         let fit = Plan::fit(&scene);
         assert!(fit.has_stage("knit tube"));

@@ -5,6 +5,7 @@ use image::{ImageEncoder, RgbImage};
 
 use crate::error::{Error, Result};
 
+pub mod bench_plot;
 pub mod colormap;
 pub mod density_picture;
 pub mod patch_picture;

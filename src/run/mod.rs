@@ -2,11 +2,13 @@
 //! load → knit → solve → post-process → export. The library prints nothing; long stages report
 //! to a [`Progress`] the caller supplies (the CLI draws a progress bar with it).
 
+pub mod bench;
 pub mod fit;
 pub mod patch;
 
 use std::path::PathBuf;
 
+pub use bench::{run_bench, BenchOptions, BenchOutcome};
 pub use fit::{run_fit, FitInputs, FitOutcome};
 pub use patch::{run_patch, PatchOutcome};
 

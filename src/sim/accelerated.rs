@@ -102,7 +102,7 @@ pub fn relax_accelerated(
         let eval = evaluate(knit, terms, &mut ws);
         let residual = relative_residual(
             knit,
-            &ws.force,
+            &mut ws,
             &*constraints,
             eval.spring_force_sq,
             force_floor,
@@ -137,7 +137,7 @@ pub fn relax_accelerated(
             });
         }
 
-        if power(knit, &ws.force, &velocity) < 0.0 {
+        if power(knit, &ws.unheld, &velocity) < 0.0 {
             velocity.fill(Vec3::zeros());
             since_restart = 0;
             restarts += 1;
@@ -178,7 +178,7 @@ fn step(knit: &mut Knit, ws: &Workspace, velocity: &mut [Vec3], beta: f64) {
     p.x.par_chunks_mut(CHUNK)
         .zip(velocity.par_chunks_mut(CHUNK))
         .zip(p.inv_mass.par_chunks(CHUNK))
-        .zip(ws.force.par_chunks(CHUNK))
+        .zip(ws.unheld.par_chunks(CHUNK))
         .zip(ws.stiffness_bound.par_chunks(CHUNK))
         .for_each(|((((x, v), inv_mass), f), bound)| {
             for k in 0..x.len() {

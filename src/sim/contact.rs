@@ -31,8 +31,22 @@ const PUSH_TRIES: usize = 4;
 const MAX_SLIDES: usize = 4;
 /// Points per parallel chunk.
 const CHUNK: usize = 1024;
-/// How far a point may slide on a cached tangent plane before it is queried again, metres.
+/// How far a point may slide on a cached tangent plane before it is queried again, at most,
+/// metres. [`plane_reuse_for`] shortens it where the tolerance asks for more.
 pub const PLANE_REUSE_M: f64 = 0.0005;
+/// The sharpest skin curvature the plane cache is sized for: a radius of 1 cm.
+const SKIN_RADIUS_MIN_M: f64 = 0.01;
+
+/// The distance a point may slide on a cached tangent plane so that the plane's departure from
+/// a skin of radius [`SKIN_RADIUS_MIN_M`], `d² / 2R`, stays below `tolerance × spacing`: the
+/// move the convergence test resolves. Re-querying then moves no point by more than the
+/// tolerance, so the plane cache cannot hold a converging fit above it. At most
+/// [`PLANE_REUSE_M`].
+pub fn plane_reuse_for(tolerance: f64, spacing_m: f64) -> f64 {
+    (2.0 * SKIN_RADIUS_MIN_M * tolerance * spacing_m)
+        .sqrt()
+        .min(PLANE_REUSE_M)
+}
 
 /// Per-point contact bookkeeping.
 #[derive(Clone, Copy, Debug, Default)]
@@ -82,6 +96,8 @@ pub struct LegContact<'a> {
     query_radius: f64,
     axis: Vec3,
     axially_locked: Vec<bool>,
+    /// How far a point slides on a cached plane before an exact query, metres.
+    plane_reuse: f64,
     state: Vec<PointContact>,
     counters: ContactCounters,
 }
@@ -93,6 +109,7 @@ struct SlideParams<'a> {
     offset: f64,
     query_radius: f64,
     axis: Vec3,
+    plane_reuse: f64,
 }
 
 impl<'a> LegContact<'a> {
@@ -113,9 +130,17 @@ impl<'a> LegContact<'a> {
             query_radius,
             axis,
             axially_locked,
+            plane_reuse: PLANE_REUSE_M,
             state: vec![PointContact::default(); points],
             counters: ContactCounters::default(),
         }
+    }
+
+    /// Sets how far a point slides on a cached tangent plane before it is queried exactly
+    /// (metres; default [`PLANE_REUSE_M`]; see [`plane_reuse_for`]).
+    pub fn with_plane_reuse(mut self, plane_reuse_m: f64) -> Self {
+        self.plane_reuse = plane_reuse_m.min(PLANE_REUSE_M);
+        self
     }
 
     /// What contact has done so far.
@@ -130,6 +155,7 @@ impl<'a> LegContact<'a> {
             offset: self.offset,
             query_radius: self.query_radius,
             axis: self.axis,
+            plane_reuse: self.plane_reuse,
         }
     }
 
@@ -234,7 +260,7 @@ impl SlideParams<'_> {
         }
         let to = from + delta;
         let touching = state.normal != Vec3::zeros();
-        let on_plane = touching && (to - state.queried_at).norm() < PLANE_REUSE_M;
+        let on_plane = touching && (to - state.queried_at).norm() < self.plane_reuse;
         if let Some(slid) = on_plane
             .then(|| self.onto_cached_plane(&to, locked, state))
             .flatten()

@@ -64,6 +64,9 @@ pub(crate) struct Workspace {
     /// Per point, a bound on the largest eigenvalue of the stiffness seen from that point
     /// (Gershgorin row sum): the sum of its springs' bounds and of `2 c2 c1` per connection term.
     pub stiffness_bound: Vec<f64>,
+    /// Per point, the part of the net force the constraints do not hold (contact reactions and
+    /// locked directions removed; zero on pinned points): what can still move it.
+    pub unheld: Vec<Vec3>,
 }
 
 impl Workspace {
@@ -73,6 +76,7 @@ impl Workspace {
             springs: vec![SpringState::default(); knit.springs.len()],
             force: vec![Vec3::zeros(); knit.len()],
             stiffness_bound: vec![0.0; knit.len()],
+            unheld: vec![Vec3::zeros(); knit.len()],
         }
     }
 }
@@ -181,28 +185,35 @@ pub(crate) fn shortest_rest(knit: &Knit) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// RMS net force on free points over RMS spring force, counting only the part of each net force
-/// the constraints do not hold. Spring forces below [`rest_force_floor`] count as that floor:
-/// such a knit is at rest, and both sums are rounding noise whose ratio means nothing.
+/// Fills `ws.unheld` with the part of each free point's net force the constraints do not hold
+/// (zero on pinned points), and returns the relative residual: RMS unheld force over RMS spring
+/// force. Spring forces below [`rest_force_floor`] count as that floor: such a knit is at rest,
+/// and both sums are rounding noise whose ratio means nothing.
 pub(crate) fn relative_residual(
     knit: &Knit,
-    force: &[Vec3],
+    ws: &mut Workspace,
     constraints: &dyn Constraints,
     spring_force_sq: f64,
     force_floor: f64,
 ) -> f64 {
     let inv_mass = &knit.particles.inv_mass;
-    let partial: Vec<(f64, usize)> = force
-        .par_chunks(CHUNK)
+    let force = &ws.force;
+    let partial: Vec<(f64, usize)> = ws
+        .unheld
+        .par_chunks_mut(CHUNK)
         .enumerate()
-        .map(|(chunk, f)| {
+        .map(|(chunk, unheld)| {
             let mut sum = (0.0, 0usize);
-            for (k, f) in f.iter().enumerate() {
+            for (k, u) in unheld.iter_mut().enumerate() {
                 let i = chunk * CHUNK + k;
-                if inv_mass[i] > 0.0 {
-                    sum.0 += constraints.unheld_force(i, f).norm_squared();
+                *u = if inv_mass[i] > 0.0 {
+                    let u = constraints.unheld_force(i, &force[i]);
+                    sum.0 += u.norm_squared();
                     sum.1 += 1;
-                }
+                    u
+                } else {
+                    Vec3::zeros()
+                };
             }
             sum
         })

@@ -161,7 +161,7 @@ pub fn relax_constrained(
         let eval = evaluate(knit, terms, &mut ws);
         let residual = relative_residual(
             knit,
-            &ws.force,
+            &mut ws,
             &*constraints,
             eval.spring_force_sq,
             force_floor,

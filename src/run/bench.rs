@@ -1,0 +1,510 @@
+//! `knitfit bench`: what accuracy costs in time, measured. For each bundled leg, resolution,
+//! solver and tolerance, fit the bundled scene and record the wall time, iterations, final
+//! residual and largest move, the true maximum penetration, the peak memory, and the accuracy:
+//! how far the result is from a reference fit of the same leg and resolution relaxed to a
+//! tight tolerance, as the relative L2 difference of the leg's stitch density
+//! (`_STITCH_DENSITY`) and the RMS distance between corresponding yarn points.
+//!
+//! The reference is the multilevel solver at [`REFERENCE_TOLERANCE`]; both solvers reach the
+//! same rest state (a test checks it), so it serves both. Cases run one after another in one
+//! process; the peak memory of each is the process's peak resident set since the case began
+//! (Linux `/proc/self/clear_refs`), `None` where the system does not tell.
+
+use std::path::{Path, PathBuf};
+
+use super::fit::{measure_fields, solve_fit, FitInputs, SolvedFit};
+use super::{NoProgress, Progress};
+use crate::error::Result;
+use crate::export;
+use crate::knit::YarnKind;
+use crate::leg::AxisSource;
+use crate::plan::Plan;
+use crate::render::bench_plot::{self, Curve};
+use crate::report::StageClock;
+use crate::scene::{Scene, SolverMethod, BUNDLED_SCENE_DIR};
+
+/// Tolerance of the reference fits: a hundred times tighter than the tightest swept.
+pub const REFERENCE_TOLERANCE: f64 = 1e-6;
+
+/// What to sweep.
+#[derive(Clone, Debug)]
+pub struct BenchOptions {
+    /// The short sweep (two small resolutions, one leg): under two minutes on two cores.
+    pub quick: bool,
+    /// Where `bench.md`, `bench.csv` and `bench.png` go.
+    pub out_dir: PathBuf,
+}
+
+/// One fit of the sweep.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BenchCase {
+    /// Leg file name in `samples/`.
+    pub leg: &'static str,
+    /// Tube size.
+    pub wales: usize,
+    /// Tube size.
+    pub courses: usize,
+    /// Solver.
+    pub solver: SolverMethod,
+    /// Convergence tolerance.
+    pub tolerance: f64,
+}
+
+/// What one case measured.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BenchRow {
+    /// The case.
+    pub case: BenchCase,
+    /// Seconds of the solve (the fit and the exact contact pass).
+    pub seconds: f64,
+    /// Steps (paper) or iterations over all levels (multilevel).
+    pub iterations: usize,
+    /// Final relative residual.
+    pub residual: f64,
+    /// Final largest move per step over the shortest rest length.
+    pub max_move: f64,
+    /// Whether it converged within `solver.max_steps`.
+    pub converged: bool,
+    /// Deepest yarn point inside the leg, metres.
+    pub max_penetration_m: f64,
+    /// Peak resident memory during the case, bytes.
+    pub peak_memory_bytes: Option<u64>,
+    /// ‖density − reference‖₂ / ‖reference‖₂ over the leg's vertices.
+    pub density_error: f64,
+    /// RMS distance to the reference's yarn points, metres.
+    pub rms_distance_m: f64,
+}
+
+/// A case that was not run, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SkippedCase {
+    /// The case.
+    pub case: BenchCase,
+    /// Why it was not run.
+    pub why: String,
+}
+
+/// The sweep's results and the files that hold them.
+#[derive(Debug)]
+pub struct BenchOutcome {
+    /// Measured cases, in sweep order.
+    pub rows: Vec<BenchRow>,
+    /// Cases left out.
+    pub skipped: Vec<SkippedCase>,
+    /// `bench.md` as written.
+    pub markdown: String,
+    /// Files written.
+    pub written: Vec<PathBuf>,
+}
+
+/// The sweep `options` ask for: per leg, resolutions × solvers × tolerances, and what is left
+/// out (the paper's solver beyond the size where it takes minutes).
+pub fn bench_cases(options: &BenchOptions) -> (Vec<BenchCase>, Vec<SkippedCase>) {
+    let tolerances = [1e-2, 1e-3, 1e-4];
+    let sweeps: &[(&'static str, &[(usize, usize)])] = if options.quick {
+        &[("makehuman_leg.glb", &[(50, 50), (100, 100)])]
+    } else {
+        &[
+            (
+                "makehuman_leg.glb",
+                &[(50, 50), (100, 100), (150, 150), (300, 300), (400, 1600)],
+            ),
+            ("procedural_leg.glb", &[(50, 50), (150, 150)]),
+        ]
+    };
+    let mut cases = Vec::new();
+    let mut skipped = Vec::new();
+    for &(leg, sizes) in sweeps {
+        for &(wales, courses) in sizes {
+            for solver in [SolverMethod::Paper, SolverMethod::Multilevel] {
+                for &tolerance in &tolerances {
+                    let case = BenchCase {
+                        leg,
+                        wales,
+                        courses,
+                        solver,
+                        tolerance,
+                    };
+                    if solver == SolverMethod::Paper && wales * courses > 300 * 300 {
+                        skipped.push(SkippedCase {
+                            case,
+                            why: "the paper's solver needs hours at this size (its steps grow \
+                                  with the square of the resolution); compare at 300×300"
+                                .into(),
+                        });
+                    } else {
+                        cases.push(case);
+                    }
+                }
+            }
+        }
+    }
+    (cases, skipped)
+}
+
+/// Runs the sweep, writes `bench.md`, `bench.csv` and `bench.png` into `options.out_dir`.
+pub fn run_bench(options: &BenchOptions, progress: &mut dyn Progress) -> Result<BenchOutcome> {
+    let files = ["bench.md", "bench.csv", "bench.png"];
+    export::atomic::prepare_dir(&options.out_dir, &files, &[])?;
+    let (cases, skipped) = bench_cases(options);
+    let base = Scene::load(None)?;
+    progress.begin("bench", cases.len() as u64);
+    let mut rows = Vec::new();
+    let mut reference: Option<(BenchCase, Reference)> = None;
+    for (n, case) in cases.iter().enumerate() {
+        let same_grid =
+            |r: &BenchCase| (r.leg, r.wales, r.courses) == (case.leg, case.wales, case.courses);
+        if !reference.as_ref().is_some_and(|(r, _)| same_grid(r)) {
+            let ref_case = BenchCase {
+                solver: SolverMethod::Multilevel,
+                tolerance: REFERENCE_TOLERANCE,
+                ..case.clone()
+            };
+            let (fit, _, _) = fit_case(&base, &ref_case)?;
+            reference = Some((ref_case, Reference::of(&fit, &base)));
+        }
+        let (_, reference) = reference.as_ref().expect("made above");
+        let (fit, seconds, peak_memory_bytes) = fit_case(&base, case)?;
+        let (density_error, rms_distance_m) = reference.compare(&fit, &base);
+        rows.push(BenchRow {
+            case: case.clone(),
+            seconds,
+            iterations: fit.solver.steps(),
+            residual: fit.solver.residual(),
+            max_move: fit.solver.max_move(),
+            converged: fit.solver.converged(),
+            max_penetration_m: fit.max_penetration_m,
+            peak_memory_bytes,
+            density_error,
+            rms_distance_m,
+        });
+        progress.advance(n as u64 + 1, fit.solver.residual());
+    }
+    progress.end();
+    let markdown = markdown(&rows, &skipped, options.quick);
+    let png = bench_plot::draw(&curves(&rows), "bench.png")?;
+    let written = export::atomic::write_all(
+        &options.out_dir,
+        &[
+            ("bench.md".to_string(), markdown.clone().into_bytes()),
+            ("bench.csv".to_string(), csv(&rows).into_bytes()),
+            ("bench.png".to_string(), png),
+        ],
+        &[],
+    )?;
+    Ok(BenchOutcome {
+        rows,
+        skipped,
+        markdown,
+        written,
+    })
+}
+
+/// Fits one case with the bundled scene; returns the fit, the solve's seconds and the peak
+/// memory.
+fn fit_case(base: &Scene, case: &BenchCase) -> Result<(SolvedFit, f64, Option<u64>)> {
+    let mut scene = base.clone();
+    scene.tube.wales = case.wales;
+    scene.tube.courses = case.courses;
+    scene.solver.method = case.solver;
+    scene.solver.tolerance = case.tolerance;
+    let plan = Plan::fit(&scene);
+    let inputs = FitInputs {
+        leg: Path::new(BUNDLED_SCENE_DIR).join(case.leg),
+        axis_source: AxisSource::Scene,
+    };
+    reset_peak_memory();
+    let mut clock = StageClock::default();
+    let fit = solve_fit(
+        &scene,
+        &plan,
+        &inputs,
+        crate::scene::BUNDLED_SCENE_NAME,
+        &mut clock,
+        &mut NoProgress,
+    )?;
+    let seconds = clock
+        .stages()
+        .iter()
+        .filter(|s| s.name == "fit" || s.name == "exact contact pass")
+        .map(|s| s.seconds)
+        .sum();
+    Ok((fit, seconds, peak_memory()))
+}
+
+/// What a case is compared with.
+struct Reference {
+    density: Vec<f64>,
+    positions: Vec<crate::knit::Vec3>,
+}
+
+impl Reference {
+    fn of(fit: &SolvedFit, scene: &Scene) -> Reference {
+        Reference {
+            density: leg_density(fit, scene),
+            positions: fit.knit.particles.x.clone(),
+        }
+    }
+
+    /// Relative L2 density difference and RMS point distance of `fit` from this reference.
+    fn compare(&self, fit: &SolvedFit, scene: &Scene) -> (f64, f64) {
+        let density = leg_density(fit, scene);
+        let (mut diff_sq, mut ref_sq) = (0.0, 0.0);
+        for (d, r) in density.iter().zip(&self.density) {
+            diff_sq += (d - r) * (d - r);
+            ref_sq += r * r;
+        }
+        let density_error = if ref_sq > 0.0 {
+            (diff_sq / ref_sq).sqrt()
+        } else {
+            0.0
+        };
+        let x = &fit.knit.particles.x;
+        let sum_sq: f64 = x
+            .iter()
+            .zip(&self.positions)
+            .map(|(a, b)| (a - b).norm_squared())
+            .sum();
+        (density_error, (sum_sq / x.len().max(1) as f64).sqrt())
+    }
+}
+
+/// The stitch density on the leg's vertices, stitches per cm².
+fn leg_density(fit: &SolvedFit, scene: &Scene) -> Vec<f64> {
+    let radius_m = YarnKind::ALL.map(|k| scene.yarns.get(k).radius_m);
+    measure_fields(&fit.knit, &fit.leg, radius_m)
+        .1
+        .stitch_density
+}
+
+/// Starts a new peak-memory measurement (Linux: resets the process's peak resident set).
+fn reset_peak_memory() {
+    // Writing 5 to clear_refs resets VmHWM to the current resident set (Linux ≥ 4.0). Where it
+    // fails, the peak is the process's since it began, which is still an upper bound.
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+/// Peak resident memory since the last reset, bytes (Linux `VmHWM`).
+fn peak_memory() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+/// One curve per leg, solver and resolution: error against time over the tolerances.
+fn curves(rows: &[BenchRow]) -> Vec<Curve> {
+    let mut curves: Vec<Curve> = Vec::new();
+    for row in rows {
+        let c = &row.case;
+        let label = format!(
+            "{} {}x{} {}",
+            c.solver.name(),
+            c.wales,
+            c.courses,
+            c.leg.trim_end_matches(".glb").trim_end_matches("_leg")
+        );
+        let point = (row.seconds, row.density_error);
+        match curves.iter_mut().find(|k| k.label == label) {
+            Some(k) => k.points.push(point),
+            None => curves.push(Curve {
+                label,
+                paper: c.solver == SolverMethod::Paper,
+                points: vec![point],
+            }),
+        }
+    }
+    curves
+}
+
+/// The machine the bench ran on, in words.
+pub fn machine() -> String {
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|info| {
+            info.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|s| s.trim().to_string())
+        })
+        .unwrap_or_else(|| "unknown CPU".into());
+    format!(
+        "{cpu}, {} threads (rayon), {} build",
+        rayon::current_num_threads(),
+        if cfg!(debug_assertions) {
+            "debug"
+        } else {
+            "release"
+        }
+    )
+}
+
+fn mib(bytes: Option<u64>) -> String {
+    bytes.map_or("n/a".into(), |b| format!("{:.0}", b as f64 / 1048576.0))
+}
+
+/// `bench.md`: the table, what was left out, and how to read it.
+fn markdown(rows: &[BenchRow], skipped: &[SkippedCase], quick: bool) -> String {
+    let mut md = String::new();
+    md.push_str(&format!(
+        "# knitfit bench{}\n\nMachine: {}. Scene: the bundled one; reference per leg and \
+         resolution: multilevel at tolerance {REFERENCE_TOLERANCE:.0e}. Time: the solve (fit and \
+         exact contact pass). Density error: ‖ρ − ρ_ref‖₂ / ‖ρ_ref‖₂ over the leg's vertices; \
+         distance: RMS over yarn points.\n\n",
+        if quick { " --quick" } else { "" },
+        machine()
+    ));
+    md.push_str(
+        "| leg | grid | points | solver | tol | time s | iterations | residual | max move | \
+         converged | max penetration mm | peak MiB | density error | RMS distance mm |\n",
+    );
+    md.push_str("|---|---|---:|---|---:|---:|---:|---:|---:|---|---:|---:|---:|---:|\n");
+    for r in rows {
+        let c = &r.case;
+        md.push_str(&format!(
+            "| {} | {}×{} | {} | {} | {:.0e} | {:.2} | {} | {:.1e} | {:.1e} | {} | {:.4} | {} | \
+             {:.2e} | {:.4} |\n",
+            c.leg.trim_end_matches(".glb"),
+            c.wales,
+            c.courses,
+            c.wales * c.courses,
+            c.solver.name(),
+            c.tolerance,
+            r.seconds,
+            r.iterations,
+            r.residual,
+            r.max_move,
+            if r.converged { "yes" } else { "no" },
+            r.max_penetration_m * 1000.0,
+            mib(r.peak_memory_bytes),
+            r.density_error,
+            r.rms_distance_m * 1000.0,
+        ));
+    }
+    let speedups = speedups(rows);
+    if !speedups.is_empty() {
+        md.push_str("\nSpeed-up of multilevel over paper at the same leg, grid and tolerance:\n\n");
+        md.push_str("| leg | grid | tol | paper s | multilevel s | ratio |\n");
+        md.push_str("|---|---|---:|---:|---:|---:|\n");
+        for (c, paper, fast) in speedups {
+            md.push_str(&format!(
+                "| {} | {}×{} | {:.0e} | {:.2} | {:.2} | {:.0}× |\n",
+                c.leg.trim_end_matches(".glb"),
+                c.wales,
+                c.courses,
+                c.tolerance,
+                paper,
+                fast,
+                paper / fast.max(1e-9)
+            ));
+        }
+    }
+    let matched = same_accuracy(rows);
+    if !matched.is_empty() {
+        md.push_str(
+            "\nAt the same accuracy: for each paper run, the fastest multilevel run on the same leg \
+             and grid whose density error is no larger:\n\n",
+        );
+        md.push_str("| leg | grid | paper tol | paper s | density error | multilevel tol | multilevel s | density error | ratio |\n");
+        md.push_str("|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
+        for (paper, fast) in matched {
+            let c = &paper.case;
+            md.push_str(&format!(
+                "| {} | {}×{} | {:.0e} | {:.2} | {:.2e} | {:.0e} | {:.2} | {:.2e} | {:.0}× |\n",
+                c.leg.trim_end_matches(".glb"),
+                c.wales,
+                c.courses,
+                c.tolerance,
+                paper.seconds,
+                paper.density_error,
+                fast.case.tolerance,
+                fast.seconds,
+                fast.density_error,
+                paper.seconds / fast.seconds.max(1e-9)
+            ));
+        }
+    }
+    if !skipped.is_empty() {
+        md.push_str("\nNot run:\n\n");
+        for s in skipped {
+            let c = &s.case;
+            md.push_str(&format!(
+                "- {} {}×{} {} tol {:.0e}: {}\n",
+                c.leg.trim_end_matches(".glb"),
+                c.wales,
+                c.courses,
+                c.solver.name(),
+                c.tolerance,
+                s.why
+            ));
+        }
+    }
+    md
+}
+
+/// Pairs of (paper, multilevel) seconds for the same leg, grid and tolerance.
+fn speedups(rows: &[BenchRow]) -> Vec<(BenchCase, f64, f64)> {
+    rows.iter()
+        .filter(|r| r.case.solver == SolverMethod::Paper)
+        .filter_map(|paper| {
+            rows.iter()
+                .find(|r| {
+                    r.case
+                        == BenchCase {
+                            solver: SolverMethod::Multilevel,
+                            ..paper.case.clone()
+                        }
+                })
+                .map(|fast| (paper.case.clone(), paper.seconds, fast.seconds))
+        })
+        .collect()
+}
+
+/// For each paper row, the fastest multilevel row of the same leg and grid that is at least as
+/// accurate (density error no larger), if any.
+fn same_accuracy(rows: &[BenchRow]) -> Vec<(&BenchRow, &BenchRow)> {
+    rows.iter()
+        .filter(|r| r.case.solver == SolverMethod::Paper)
+        .filter_map(|paper| {
+            rows.iter()
+                .filter(|r| {
+                    r.case.solver == SolverMethod::Multilevel
+                        && (r.case.leg, r.case.wales, r.case.courses)
+                            == (paper.case.leg, paper.case.wales, paper.case.courses)
+                        && r.density_error <= paper.density_error
+                })
+                .min_by(|a, b| a.seconds.total_cmp(&b.seconds))
+                .map(|fast| (paper, fast))
+        })
+        .collect()
+}
+
+/// `bench.csv`: one line per case, SI units.
+fn csv(rows: &[BenchRow]) -> String {
+    let mut out = String::from(
+        "leg,wales,courses,points,solver,tolerance,seconds,iterations,residual,max_move,\
+         converged,max_penetration_m,peak_memory_bytes,density_error,rms_distance_m\n",
+    );
+    for r in rows {
+        let c = &r.case;
+        out.push_str(&format!(
+            "{},{},{},{},{},{:e},{:.6},{},{:e},{:e},{},{:e},{},{:e},{:e}\n",
+            c.leg,
+            c.wales,
+            c.courses,
+            c.wales * c.courses,
+            c.solver.name(),
+            c.tolerance,
+            r.seconds,
+            r.iterations,
+            r.residual,
+            r.max_move,
+            r.converged,
+            r.max_penetration_m,
+            r.peak_memory_bytes.map_or(String::new(), |b| b.to_string()),
+            r.density_error,
+            r.rms_distance_m,
+        ));
+    }
+    out
+}
