@@ -588,16 +588,16 @@ pub struct RenderSettings {
     pub mode: RenderMode,
     /// A fixed camera; absent means auto-framed on the leg from `view` (default: absent).
     pub camera: Option<CameraSettings>,
-    /// Skin albedo (default: `[0.56, 0.37, 0.28]`, a warm light skin tone).
+    /// Skin albedo (default: `[0.52, 0.31, 0.22]`, a warm light skin tone).
     pub skin_colour: [f64; 3],
     /// Background (default: `[0.78, 0.78, 0.80]`, a light grey).
     pub background: [f64; 3],
     /// Direction towards the key light in the camera's frame (right, up, towards the viewer),
     /// any length (default: `[-0.45, 0.55, 0.70]`: from the upper left, in front).
     pub light_direction: [f64; 3],
-    /// Radiance of the key light (default: 2.2).
+    /// Radiance of the key light (default: 1.1).
     pub light_intensity: f64,
-    /// Ambient (environment) light, as a fraction of the key light (default: 0.3).
+    /// Ambient (environment) light, as a fraction of the key light (default: 0.35).
     pub ambient: f64,
     /// Strength of the yarn's anisotropic highlight (Kajiya–Kay), 0 = none (default: 0.5).
     pub yarn_sheen: f64,
@@ -614,11 +614,11 @@ impl Default for RenderSettings {
             spp: 16,
             mode: RenderMode::Yarn,
             camera: None,
-            skin_colour: [0.56, 0.37, 0.28],
+            skin_colour: [0.52, 0.31, 0.22],
             background: [0.78, 0.78, 0.80],
             light_direction: [-0.45, 0.55, 0.70],
-            light_intensity: 2.2,
-            ambient: 0.3,
+            light_intensity: 1.1,
+            ambient: 0.35,
             yarn_sheen: 0.5,
             yarn_sheen_exponent: 48.0,
         }

@@ -11,11 +11,14 @@
 //! is a few hundredths of a millimetre wide, far below a pixel.
 //!
 //! Anti-aliasing: each pixel is split into a grid of ⌈√spp⌉ × ⌈spp/⌈√spp⌉⌉ strata with one
-//! jittered sample each (stratified sampling), all of one box-filtered pixel. The radiance of
-//! the samples is averaged *before* tone mapping, so where the yarn spacing is below a pixel the
-//! pixel converges to the area-weighted mix of yarn and skin — the mean sheerness — instead of
-//! aliasing into moiré or vanishing (a single centred sample would alias; stratification
-//! keeps the error of that mean falling faster than independent samples would).
+//! sample each, placed by correlated multi-jittered sampling (Kensler, "Correlated
+//! Multi-Jittered Sampling", Pixar 2013): stratified in 2D *and* along each axis alone, so that
+//! yarns running along the picture's axes (wales down a standing leg, courses across it) are
+//! sampled at spp distinct offsets, not ⌈√spp⌉. A plain jittered grid is no better than random
+//! samples when the yarn period equals a stratum. All samples belong to one box-filtered pixel,
+//! and their radiance is averaged *before* tone mapping, so where the yarn spacing is below a
+//! pixel the pixel converges to the area-weighted mix of yarn and skin — the mean sheerness —
+//! instead of aliasing into moiré (as one centred sample would) or vanishing.
 //!
 //! Determinism: every random number comes from a hash of (pixel index, sample index) and a fixed
 //! seed (SplitMix64), rows are rendered in parallel but each pixel depends only on its own
@@ -402,16 +405,24 @@ impl Context<'_> {
         let mut sum = [0.0f64; 3];
         let (mut legs, mut yarns) = (0u32, 0u32);
         let (mut coverage, mut height, mut facing) = (0.0f64, 0.0f64, 0.0f64);
+        let seed = splitmix64(SEED ^ pixel_index.wrapping_mul(0x9e37_79b9_7f4a_7c15));
+        let col_perm = permutation(cols, splitmix64(seed ^ 0xa511_e9b3));
+        let row_perm = permutation(rows, splitmix64(seed ^ 0x63d8_3595));
         for j in 0..rows {
             for i in 0..cols {
                 let k = u64::from(j * cols + i);
-                let bits = splitmix64(SEED ^ pixel_index.wrapping_mul(0x9e37_79b9_7f4a_7c15) ^ k);
+                let bits = splitmix64(seed ^ k.wrapping_mul(0xd1b5_4a32_d192_ed03));
                 let (jx, jy) = (unit(bits), unit(bits >> 32));
-                let u = (f64::from(x) + (f64::from(i) + jx) / f64::from(cols)) / f64::from(w);
-                let v = (f64::from(y) + (f64::from(j) + jy) / f64::from(rows)) / f64::from(h);
+                // Correlated multi-jitter: stratum (i, j), and within it the sub-stratum given by
+                // the other axis's permuted index, so the samples are also stratified along x
+                // alone and along y alone.
+                let sx = (f64::from(row_perm[j as usize]) + jx) / f64::from(rows);
+                let sy = (f64::from(col_perm[i as usize]) + jy) / f64::from(cols);
+                let u = (f64::from(x) + (f64::from(i) + sx) / f64::from(cols)) / f64::from(w);
+                let v = (f64::from(y) + (f64::from(j) + sy) / f64::from(rows)) / f64::from(h);
                 let s = self.sample(u, v);
-                for c in 0..3 {
-                    sum[c] += s.radiance[c];
+                for (total, r) in sum.iter_mut().zip(s.radiance) {
+                    *total += r;
                 }
                 if s.leg {
                     legs += 1;
@@ -552,7 +563,7 @@ fn barycentric(c: &[Point3<f64>; 3], p: &Point3<f64>) -> [f64; 3] {
     let (d00, d01, d11) = (e0.dot(&e0), e0.dot(&e1), e1.dot(&e1));
     let (d20, d21) = (ep.dot(&e0), ep.dot(&e1));
     let denom = d00 * d11 - d01 * d01;
-    if !(denom.abs() > 0.0) {
+    if denom.abs() <= 0.0 || !denom.is_finite() {
         return [1.0, 0.0, 0.0];
     }
     let v = ((d11 * d20 - d01 * d21) / denom).clamp(0.0, 1.0);
@@ -567,6 +578,22 @@ pub fn splitmix64(x: u64) -> u64 {
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
     z ^ (z >> 31)
 }
+
+/// A permutation of `0..n` (n ≤ [`MAX_STRATA`]) drawn by Fisher–Yates from `seed`.
+fn permutation(n: u32, seed: u64) -> [u32; MAX_STRATA] {
+    let mut p: [u32; MAX_STRATA] = std::array::from_fn(|i| i as u32);
+    let n = (n as usize).min(MAX_STRATA);
+    let mut state = seed;
+    for i in (1..n).rev() {
+        state = splitmix64(state);
+        let j = (state % (i as u64 + 1)) as usize;
+        p.swap(i, j);
+    }
+    p
+}
+
+/// Most strata along one axis: ⌈√1024⌉.
+const MAX_STRATA: usize = 32;
 
 /// The low 32 bits as a number in [0, 1).
 fn unit(bits: u64) -> f64 {

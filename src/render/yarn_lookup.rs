@@ -14,8 +14,8 @@
 //! the leg darkens by itself, as a real stocking's does (paper §9).
 //!
 //! The grid: cubic cells of side ≈ the median segment length; every segment is listed in each
-//! cell its radius-inflated bounding box touches. A query lists the cells overlapped by the
-//! bounding box of the ray's stretch through the yarn layer. Cells are found through a hash map
+//! cell its radius-inflated bounding box touches. A query walks the cells the ray's stretch
+//! through the yarn layer crosses, front to back, and stops once the nearest hit is settled. Cells are found through a hash map
 //! with a fixed multiplicative hash (no per-process seed, so behaviour is reproducible).
 
 use std::collections::HashMap;
@@ -197,9 +197,8 @@ impl YarnIndex {
     }
 
     /// The nearest yarn the ray `origin + t·dir` (`dir` a unit vector) meets for `t` in
-    /// `t0..t1`, looking only at segments listed in the cells that stretch overlaps (so keep it
-    /// short: the layer above the skin, a few cells at most). A ray starting inside a yarn hits
-    /// it at `t0`.
+    /// `t0..t1`, walking the grid cells that stretch crosses (its cost grows with its length:
+    /// keep it to the layer above the skin). A ray starting inside a yarn hits it at `t0`.
     pub fn nearest_hit(
         &self,
         origin: &Point3<f64>,
@@ -207,28 +206,59 @@ impl YarnIndex {
         t0: f64,
         t1: f64,
     ) -> Option<YarnHit> {
-        if self.capsules.is_empty() || !(t1 > t0) {
+        if self.capsules.is_empty() || t1.partial_cmp(&t0) != Some(std::cmp::Ordering::Greater) {
             return None;
         }
         // Work from the start of the stretch: keeps the quadratic's terms at millimetre scale,
         // far from cancellation.
         let start = origin + dir * t0;
-        let end = origin + dir * t1;
-        let (lo, hi) = (start.inf(&end), start.sup(&end));
         let span = t1 - t0;
         let mut best: Option<(f64, u32)> = None;
-        for key in self.cell_range(&lo, &hi) {
-            let Some(&(first, count)) = self.cells.get(&key) else {
-                continue;
-            };
-            for &i in &self.items[first as usize..(first + count) as usize] {
-                let c = &self.capsules[i as usize];
-                if let Some(t) = ray_capsule(&start, dir, c) {
-                    if t <= span && best.is_none_or(|(bt, bi)| t < bt || (t == bt && i < bi)) {
-                        best = Some((t, i));
+        // Cells in the order the ray crosses them (Amanatides & Woo's traversal), so a long
+        // stretch costs the cells it crosses, not its bounding box; and it stops at the first
+        // cell whose exit lies beyond the best hit: a capsule is listed in every cell its box
+        // touches, so the cell holding any nearer hit point has been visited already.
+        let rel = (start - self.origin) / self.cell;
+        let mut cell: [i64; 3] = std::array::from_fn(|k| rel[k].floor() as i64);
+        let mut step = [0i64; 3];
+        let mut t_max = [f64::INFINITY; 3];
+        let mut t_delta = [f64::INFINITY; 3];
+        for k in 0..3 {
+            if dir[k] > 0.0 {
+                step[k] = 1;
+                t_max[k] = ((cell[k] + 1) as f64 - rel[k]) * self.cell / dir[k];
+                t_delta[k] = self.cell / dir[k];
+            } else if dir[k] < 0.0 {
+                step[k] = -1;
+                t_max[k] = (cell[k] as f64 - rel[k]) * self.cell / dir[k];
+                t_delta[k] = -self.cell / dir[k];
+            }
+        }
+        const LIMIT: i64 = 1 << 21;
+        loop {
+            if cell.iter().all(|&c| (0..LIMIT).contains(&c)) {
+                let key = cell[0] as u64 | (cell[1] as u64) << 21 | (cell[2] as u64) << 42;
+                if let Some(&(first, count)) = self.cells.get(&key) {
+                    for &i in &self.items[first as usize..(first + count) as usize] {
+                        let c = &self.capsules[i as usize];
+                        if let Some(t) = ray_capsule(&start, dir, c) {
+                            let better = best.is_none_or(|(bt, bi)| t < bt || (t == bt && i < bi));
+                            if t <= span && better {
+                                best = Some((t, i));
+                            }
+                        }
                     }
                 }
             }
+            let axis = (0..3)
+                .min_by(|&a, &b| t_max[a].total_cmp(&t_max[b]))
+                .unwrap_or(0);
+            let exit = t_max[axis];
+            if exit > span || exit.is_nan() || best.is_some_and(|(bt, _)| bt <= exit) {
+                break;
+            }
+            cell[axis] += step[axis];
+            t_max[axis] += t_delta[axis];
         }
         let (t, i) = best?;
         let c = &self.capsules[i as usize];
