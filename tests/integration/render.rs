@@ -463,3 +463,74 @@ fn yarn_finer_than_a_pixel_averages_to_the_true_coverage_without_moire() {
     assert!(spread16 < 0.25 * spread1 * 1.1, "{spread16} vs {spread1}");
     assert!(spread64 < 0.5 * spread16 * 1.1, "{spread64} vs {spread16}");
 }
+
+#[test]
+fn density_mode_draws_the_denser_ankle_hotter_than_the_thigh_with_a_colour_bar() {
+    let (_, glb, scene) = thick_fit();
+    let stocking = read_stocking_glb(glb).unwrap();
+    let input = PreviewInput::from_scene(&stocking.leg, &stocking.yarns, scene);
+    let settings = RenderSettings {
+        mode: knitfit::scene::RenderMode::Density,
+        ..tall_settings()
+    };
+    let preview = render_preview(input, &settings, "test").unwrap();
+    let b = &preview.buffers;
+    assert!(preview.image.width() > b.width, "the bar panel is appended");
+    let (lo, hi) = stocking_heights();
+    let l = hi - lo;
+    // Inferno runs dark to bright, so brighter means denser.
+    let brightness = |heights: (f32, f32)| {
+        let (mut sum, mut n) = (0.0, 0);
+        for y in 0..b.height {
+            for x in 0..b.width {
+                let i = (y * b.width + x) as usize;
+                if b.leg[i] >= 0.999 && (heights.0..heights.1).contains(&b.height_m[i]) {
+                    let p = preview.image.get_pixel(x, y).0;
+                    sum += p.iter().map(|&c| f64::from(c)).sum::<f64>();
+                    n += 1;
+                }
+            }
+        }
+        sum / n.max(1) as f64
+    };
+    let ankle = brightness((lo + 0.04 * l, lo + 0.14 * l));
+    let thigh = brightness((hi - 0.22 * l, hi - 0.08 * l));
+    assert!(ankle > thigh + 30.0, "ankle {ankle:.0} vs thigh {thigh:.0}");
+}
+
+#[test]
+fn the_spp_sweep_prints_time_and_error_per_sample_count_and_writes_nothing() {
+    let (_, glb, _) = thick_fit();
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(glb, dir.path().join("stocking.glb")).unwrap();
+    let out = knitfit(
+        dir.path(),
+        &[
+            "render",
+            ".",
+            "--width",
+            "32",
+            "--height",
+            "48",
+            "--spp-sweep",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = crate::util::stdout(&out);
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .filter(|l| l.starts_with("| ") && !l.contains("spp"))
+        .map(|l| {
+            l.split('|')
+                .filter_map(|c| c.trim().parse::<f64>().ok())
+                .collect()
+        })
+        .collect();
+    assert_eq!(rows.len(), 3, "{text}");
+    assert_eq!(
+        rows.iter().map(|r| r[0]).collect::<Vec<_>>(),
+        [1.0, 4.0, 16.0]
+    );
+    assert!(rows[2][2] < rows[0][2], "error falls with samples: {text}");
+    assert_eq!(files_in(dir.path()), ["stocking.glb"]);
+}
