@@ -14,8 +14,9 @@ use knitfit::run::{
     run_fit, run_patch, run_render, run_spp_sweep, FitInputs, Progress, RenderInputs, RunPaths,
 };
 use knitfit::scene::{
-    check_axis, check_patch_points, check_render_side, check_spp, check_stretch_factor,
-    check_tube_points, ContactMethod, LegAxis, RenderMode, Stretch, StretchAxis, View,
+    check_axis, check_patch_points, check_render_budget, check_render_side, check_spp,
+    check_stretch_factor, check_tube_points, ContactMethod, LegAxis, RenderMode, Stretch,
+    StretchAxis, View,
 };
 use knitfit::{Error, Scene};
 
@@ -300,6 +301,10 @@ fn render(args: RenderArgs, quiet: bool) -> Result<ExitCode, Error> {
             }
         };
     }
+    // The sweep's reference takes 64 samples per pixel whatever --spp says.
+    let r = &scene.render;
+    let spp = if args.spp_sweep { 64 } else { r.spp };
+    check_render_budget(r.width, r.height, spp).map_err(|m| bad("--width/--height/--spp", m))?;
     if args.spp_sweep {
         let sweep = run_spp_sweep(&scene, &args.input)?;
         println!(

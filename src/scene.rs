@@ -640,6 +640,31 @@ pub fn check_render_side(px: u32) -> std::result::Result<(), String> {
     }
 }
 
+/// Most pixels and most samples one preview may take: beyond them a render needs gigabytes
+/// of buffers or hours.
+pub const MAX_RENDER_PIXELS: u64 = 4096 * 4096;
+/// See [`MAX_RENDER_PIXELS`].
+pub const MAX_RENDER_SAMPLES: u64 = 1 << 31;
+
+/// Checks that a picture of `width × height` at `spp` stays within [`MAX_RENDER_PIXELS`] and
+/// [`MAX_RENDER_SAMPLES`].
+pub fn check_render_budget(width: u32, height: u32, spp: u32) -> std::result::Result<(), String> {
+    let pixels = u64::from(width) * u64::from(height);
+    let samples = pixels * u64::from(spp);
+    if pixels > MAX_RENDER_PIXELS {
+        Err(format!(
+            "{width}×{height} is over the limit of {MAX_RENDER_PIXELS} pixels (4096×4096)"
+        ))
+    } else if samples > MAX_RENDER_SAMPLES {
+        Err(format!(
+            "{width}×{height} at {spp} spp is {samples} samples, over the limit of \
+             {MAX_RENDER_SAMPLES}; lower the size or the samples per pixel"
+        ))
+    } else {
+        Ok(())
+    }
+}
+
 /// Checks samples per pixel (`--spp`, `render.spp`).
 pub fn check_spp(spp: u32) -> std::result::Result<(), String> {
     if (1..=MAX_SPP).contains(&spp) {
@@ -662,6 +687,7 @@ impl RenderSettings {
         check_render_side(self.width).map_err(|m| bad("width", m))?;
         check_render_side(self.height).map_err(|m| bad("height", m))?;
         check_spp(self.spp).map_err(|m| bad("spp", m))?;
+        check_render_budget(self.width, self.height, self.spp).map_err(|m| bad("spp", m))?;
         for (field, colour) in [
             ("skin_colour", self.skin_colour),
             ("background", self.background),
@@ -1037,6 +1063,23 @@ mod tests {
         )
         .unwrap_err();
         assert!(err.to_string().contains("alternating_yarns"), "{err}");
+    }
+
+    #[test]
+    fn render_settings_are_checked_by_field() {
+        let err = Scene::from_json(r#"{"render": {"spp": 0}}"#, "s.json").unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("s.json: render.spp: must be 1 to"),
+            "{err}"
+        );
+        let err = Scene::from_json(r#"{"render": {"width": 8192, "height": 8192}}"#, "s.json")
+            .unwrap_err();
+        assert!(err.to_string().contains("over the limit"), "{err}");
+        let err = Scene::from_json(r#"{"render": {"view": "top"}}"#, "s.json").unwrap_err();
+        assert!(err.to_string().contains("unknown variant `top`"), "{err}");
+        let scene = Scene::from_json(r#"{"render": {"view": "three-quarter"}}"#, "s").unwrap();
+        assert_eq!(scene.render.view, View::ThreeQuarter);
     }
 
     #[test]

@@ -13,6 +13,8 @@ use super::density_picture::{font_for, nice_ticks, ImageTarget, NO_YARN_LABEL, U
 
 /// sRGB of text and outlines.
 const INK: [u8; 3] = [40, 40, 40];
+/// sRGB of the "no yarn" swatch: the grey the preview gives skin without yarn (linear 0.3).
+const UNCOVERED_SRGB: [u8; 3] = [149, 149, 149];
 
 /// `picture` with a colour-bar panel appended on the right, `fraction` of its height wide (at
 /// least wide enough for the labels). `range`: density at the bar's bottom and top, stitches
@@ -38,12 +40,13 @@ pub fn with_bar(picture: &RgbImage, range: Option<(f64, f64)>, fraction: f64) ->
     }
     let x0 = w + char_w;
     let top = 3 * char_h;
-    let bottom = h.saturating_sub(2 * char_h).max(top + 2);
+    // Room below the bar for the "no yarn" swatch: half a line of space, then one line.
+    let bottom = h.saturating_sub(3 * char_h + char_h / 2).max(top + 2);
     for y in top..bottom {
         let t = 1.0 - (y - top) as f64 / (bottom - top - 1).max(1) as f64;
         let c = match range {
             Some(_) => heat(t).map(linear_to_srgb8),
-            None => [77; 3],
+            None => UNCOVERED_SRGB,
         };
         for x in x0..x0 + bar_w {
             out.put_pixel(x, y, Rgb(c));
@@ -75,6 +78,20 @@ pub fn with_bar(picture: &RgbImage, range: Option<(f64, f64)>, fraction: f64) ->
                 }
                 labels.push((label.clone(), tick_x + bar_w / 3 + char_w / 2, y));
             }
+            // Skin without yarn is drawn grey on the leg; the swatch says so.
+            let s_top = bottom + char_h / 2;
+            for y in s_top..(s_top + char_h).min(h) {
+                for x in x0..x0 + bar_w {
+                    let edge =
+                        y == s_top || y + 1 == s_top + char_h || x == x0 || x + 1 == x0 + bar_w;
+                    out.put_pixel(x, y, Rgb(if edge { INK } else { UNCOVERED_SRGB }));
+                }
+            }
+            labels.push((
+                NO_YARN_LABEL.to_string(),
+                tick_x + char_w,
+                s_top + char_h / 2,
+            ));
         }
         None => labels.push((
             NO_YARN_LABEL.to_string(),

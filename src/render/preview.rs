@@ -133,7 +133,7 @@ pub struct PreviewStats {
     pub leg_samples: u64,
     /// Of those, samples that met yarn first.
     pub yarn_samples: u64,
-    /// Camera eye and target, metres.
+    /// Camera eye, metres, world space.
     pub eye_m: [f64; 3],
     /// Vertical field of view, degrees.
     pub fov_deg: f64,

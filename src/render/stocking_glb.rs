@@ -4,7 +4,9 @@
 //!
 //! A segment's yarn kind is that of its primitive's material (`nylon` / `support`, one primitive
 //! per kind as `export::gltf` writes them); without a known material name, the `_YARN_KIND`
-//! attribute of the segment's first point (the yarn of its course) is used.
+//! attribute of the segment's first point (the yarn of its course) is used. The GLB does not
+//! say whether a segment runs along the course or the wale; every segment read back is marked
+//! `Course`, which the renderer never looks at.
 
 use std::collections::BTreeMap;
 use std::path::Path;

@@ -253,6 +253,10 @@ fn bad_render_arguments_are_refused_by_name_and_write_nothing() {
             &["stocking.glb", "--out", "p.jpg"][..],
             "--out: must name a .png file",
         ),
+        (
+            &["stocking.glb", "--width", "5000", "--height", "5000"][..],
+            "5000×5000 is over the limit",
+        ),
         (&["missing.glb"][..], "missing.glb: cannot read"),
         (&["notes.glb"][..], "notes.glb: not a glTF file"),
         (
