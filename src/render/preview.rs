@@ -244,8 +244,10 @@ impl<'a> PreparedScene<'a> {
 }
 
 /// Height above the skin within which yarn is looked for: the 99th percentile of how far a
-/// sample of yarn points lies from the skin, plus the yarn radius, at least four radii; at most
-/// two grid cells (beyond that a ray meets several yarns anyway).
+/// sample of yarn points lies from the skin, plus the yarn radius, at least four radii. Most
+/// yarn lies at the contact offset; the percentile is there for the few stretches that bridge
+/// a hollow or hang off an end ring, millimetres up. At most two grid cells, which bounds each
+/// ray's walk: yarn floating higher still is missed where its skin is seen face on.
 fn yarn_layer(mesh: &TriMesh, yarns: &YarnGeometry, index: &YarnIndex) -> f64 {
     let r = index.max_radius();
     let offset = Vector3::from(yarns.offset_m);
