@@ -31,6 +31,10 @@ pub enum Error {
     /// implausible units.
     #[error("{path}: {message}")]
     Leg { path: PathBuf, message: String },
+    /// The file given to `knitfit render` is missing, not glTF, or lacks the `leg` or `yarns`
+    /// node a `knitfit fit` writes; render the `stocking.glb` of a fit.
+    #[error("{path}: {message}")]
+    RenderInput { path: PathBuf, message: String },
     /// A command-line argument has a value the run cannot use.
     #[error("{flag}: {message}")]
     InvalidArgument { flag: String, message: String },
@@ -106,6 +110,7 @@ impl Error {
             | Error::InvalidScene { .. }
             | Error::InvalidArgument { .. }
             | Error::Leg { .. }
+            | Error::RenderInput { .. }
             | Error::TooLarge { .. }
             | Error::OutputDir { .. }
             | Error::WouldOverwriteInput { .. }

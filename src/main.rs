@@ -10,10 +10,14 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use knitfit::leg::AxisSource;
 use knitfit::run::fit::scene_dir;
-use knitfit::run::{run_bench, run_fit, run_patch, BenchOptions, FitInputs, Progress, RunPaths};
+use knitfit::run::{
+    run_bench, run_fit, run_patch, run_render, run_spp_sweep, BenchOptions, FitInputs, Progress,
+    RenderInputs, RunPaths,
+};
 use knitfit::scene::{
-    check_axis, check_patch_points, check_stretch_factor, check_tolerance, check_tube_points,
-    ContactMethod, LegAxis, SolverMethod, Stretch, StretchAxis,
+    check_axis, check_patch_points, check_render_budget, check_render_side, check_spp,
+    check_stretch_factor, check_tolerance, check_tube_points, ContactMethod, LegAxis, RenderMode,
+    SolverMethod, Stretch, StretchAxis, View,
 };
 use knitfit::{Error, Scene};
 
@@ -46,6 +50,8 @@ enum Command {
     /// What accuracy costs in time: sweep resolution × solver × tolerance on the bundled legs;
     /// write bench.md, bench.csv and bench.png.
     Bench(BenchArgs),
+    /// Ray-trace the yarn-level preview of a fit from its stocking.glb (or its directory).
+    Render(RenderArgs),
 }
 
 #[derive(clap::Args, Debug, Default)]
@@ -56,6 +62,39 @@ struct BenchArgs {
     /// Output directory (created if missing).
     #[arg(long, default_value = "out/bench")]
     out: PathBuf,
+}
+
+#[derive(clap::Args, Debug, Default)]
+struct RenderArgs {
+    /// A fit's output directory or its stocking.glb.
+    input: PathBuf,
+    /// Scene file (JSON) for yarn radii, colours and render settings. Default: the bundled
+    /// samples/scene.json.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+    /// Image width, pixels. Overrides render.width.
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height, pixels. Overrides render.height.
+    #[arg(long)]
+    height: Option<u32>,
+    /// Camera side: front, side, back or three-quarter. Overrides render.view.
+    #[arg(long, value_name = "VIEW")]
+    view: Option<String>,
+    /// Samples per pixel (stratified). Overrides render.spp.
+    #[arg(long)]
+    spp: Option<u32>,
+    /// yarn (the shaded yarns) or density (stitch density with a colour bar). Overrides
+    /// render.mode.
+    #[arg(long, value_name = "yarn|density")]
+    mode: Option<String>,
+    /// Picture to write (.png). Default: preview.png next to the input.
+    #[arg(long, value_name = "FILE.png")]
+    out: Option<PathBuf>,
+    /// Instead of writing a picture, print time and error against a 64-spp reference for 1, 4
+    /// and 16 samples per pixel.
+    #[arg(long)]
+    spp_sweep: bool,
 }
 
 #[derive(clap::Args, Debug, Default)]
@@ -112,6 +151,7 @@ fn main() -> ExitCode {
         Some(Command::Patch(args)) => patch(args, quiet),
         Some(Command::Fit(args)) => fit(args, quiet),
         Some(Command::Bench(args)) => bench(args, quiet),
+        Some(Command::Render(args)) => render(args, quiet),
         None => fit(
             FitArgs {
                 out: PathBuf::from("out"),
@@ -273,6 +313,100 @@ fn bench(args: BenchArgs, quiet: bool) -> Result<ExitCode, Error> {
     if !quiet {
         print!("{}", outcome.markdown);
         print_written(&args.out, &outcome.written);
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn render(args: RenderArgs, quiet: bool) -> Result<ExitCode, Error> {
+    let mut scene = Scene::load(args.scene.as_deref())?;
+    let bad = |flag: &str, message: String| Error::InvalidArgument {
+        flag: flag.into(),
+        message,
+    };
+    if let Some(w) = args.width {
+        check_render_side(w).map_err(|m| bad("--width", m))?;
+        scene.render.width = w;
+    }
+    if let Some(h) = args.height {
+        check_render_side(h).map_err(|m| bad("--height", m))?;
+        scene.render.height = h;
+    }
+    if let Some(spp) = args.spp {
+        check_spp(spp).map_err(|m| bad("--spp", m))?;
+        scene.render.spp = spp;
+    }
+    if let Some(view) = &args.view {
+        scene.render.view = View::parse(view).ok_or_else(|| {
+            bad(
+                "--view",
+                format!("must be front, side, back or three-quarter, got {view:?}"),
+            )
+        })?;
+        // A view asked for on the command line wins over the scene's fixed camera.
+        scene.render.camera = None;
+    }
+    if let Some(mode) = &args.mode {
+        scene.render.mode = match mode.as_str() {
+            "yarn" => RenderMode::Yarn,
+            "density" => RenderMode::Density,
+            other => {
+                return Err(bad(
+                    "--mode",
+                    format!("must be yarn or density, got {other:?}"),
+                ))
+            }
+        };
+    }
+    // The sweep's reference takes 64 samples per pixel whatever --spp says.
+    let r = &scene.render;
+    let spp = if args.spp_sweep { 64 } else { r.spp };
+    check_render_budget(r.width, r.height, spp).map_err(|m| bad("--width/--height/--spp", m))?;
+    if args.spp_sweep {
+        let sweep = run_spp_sweep(&scene, &args.input)?;
+        println!(
+            "{}×{} {} mode; scene prepared in {:.2} s; reference {} spp in {:.2} s; error over {} \
+             leg pixels, RMS in 8-bit sRGB levels",
+            scene.render.width,
+            scene.render.height,
+            scene.render.mode.name(),
+            sweep.prepare_seconds,
+            sweep.reference_spp,
+            sweep.reference_seconds,
+            sweep.leg_pixels
+        );
+        println!(
+            "| spp | seconds | RMS error vs {} spp |",
+            sweep.reference_spp
+        );
+        println!("|---|---|---|");
+        for row in &sweep.rows {
+            println!(
+                "| {} | {:.2} | {:.2} |",
+                row.spp, row.seconds, row.rms_error
+            );
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+    let inputs = RenderInputs {
+        input: args.input.clone(),
+        out: args.out.clone(),
+        scene_name: scene_name(&args.scene),
+        inputs: args.scene.iter().cloned().collect(),
+    };
+    let outcome = run_render(&scene, &inputs)?;
+    if !quiet {
+        let r = &scene.render;
+        println!(
+            "rendered {}×{} at {} spp ({} mode) in {:.2} s",
+            r.width,
+            r.height,
+            outcome.report.details["render"]["spp"],
+            r.mode.name(),
+            outcome.report.wall_seconds
+        );
+        for path in &outcome.written {
+            println!("  {}", path.display());
+        }
     }
     Ok(ExitCode::SUCCESS)
 }

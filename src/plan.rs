@@ -3,7 +3,7 @@
 //! the report lists the stages that did.
 
 use crate::knit::YarnKind;
-use crate::scene::{Effect, Output, Scene, SolverMethod};
+use crate::scene::{Effect, Output, RenderMode, Scene, SolverMethod};
 use crate::sim::multilevel::grid_sizes;
 use crate::sim::ForceTerms;
 
@@ -90,9 +90,10 @@ impl Plan {
         if !effects.contains(&Effect::Contact) {
             effects.push(Effect::Contact);
         }
-        // The penetration fix reroutes yarn polylines: without a file that holds them, there
-        // is nothing for it to do.
-        let polylines = scene.wants(Output::Glb) || scene.wants(Output::Ply);
+        // The penetration fix reroutes yarn polylines: without a file (or a yarn picture) that
+        // shows them, there is nothing for it to do.
+        let yarn_preview = scene.wants(Output::Preview) && scene.render.mode == RenderMode::Yarn;
+        let polylines = scene.wants(Output::Glb) || scene.wants(Output::Ply) || yarn_preview;
         if !polylines {
             effects.retain(|&e| e != Effect::PenetrationFix);
         }
@@ -149,11 +150,14 @@ impl Plan {
             "report.json: max_penetration_m against the exact triangles".into(),
         );
         let mut files = Vec::new();
-        if polylines || scene.wants(Output::Picture) {
+        let density_preview =
+            scene.wants(Output::Preview) && scene.render.mode == RenderMode::Density;
+        let leg_files = scene.wants(Output::Glb) || scene.wants(Output::Ply);
+        if leg_files || scene.wants(Output::Picture) || density_preview {
             add(
                 "leg attributes",
                 "stitch density, stretch and coverage per leg vertex, for the leg in the \
-                 files and the density picture"
+                 files and the density pictures"
                     .into(),
             );
         }
@@ -168,14 +172,20 @@ impl Plan {
             (Output::Ply, "stocking.ply"),
             (Output::Ply, "leg.ply"),
             (Output::Picture, "density.png"),
+            (Output::Preview, "preview.png"),
         ] {
-            if scene.wants(output) {
+            if !scene.wants(output) {
+                continue;
+            }
+            if output == Output::Preview {
+                add(PREVIEW_STAGE, preview_reason(scene));
+            } else {
                 add(
                     &format!("encode {file}"),
                     format!("outputs lists \"{}\"", output_name(output)),
                 );
-                files.push((output, file));
             }
+            files.push((output, file));
         }
         add("write files", "every run writes report.json".into());
         Plan {
@@ -184,6 +194,61 @@ impl Plan {
             forces,
             stages,
             files,
+        }
+    }
+}
+
+/// The stage that ray-traces and encodes `preview.png`.
+pub const PREVIEW_STAGE: &str = "render preview";
+
+/// Why the preview is rendered, and how.
+fn preview_reason(scene: &Scene) -> String {
+    let r = &scene.render;
+    let camera = if r.camera.is_some() {
+        "scene camera".to_string()
+    } else {
+        format!("{} view", r.view.name())
+    };
+    format!(
+        "outputs lists \"preview\": {} mode, {}×{}, {} spp, {camera}",
+        r.mode.name(),
+        r.width,
+        r.height,
+        r.spp
+    )
+}
+
+impl Plan {
+    /// The plan of `knitfit render`: read a fit's `stocking.glb`, ray-trace and encode the
+    /// preview, write it. No solver, no forces.
+    pub fn render(scene: &Scene, input: &str) -> Plan {
+        let stages = vec![
+            PlannedStage {
+                name: "read stocking.glb".into(),
+                why: format!("the leg and yarns of {input}"),
+            },
+            PlannedStage {
+                name: PREVIEW_STAGE.into(),
+                why: preview_reason(scene).replacen(
+                    "outputs lists \"preview\"",
+                    "knitfit render",
+                    1,
+                ),
+            },
+            PlannedStage {
+                name: "write files".into(),
+                why: "the picture and report.json".into(),
+            },
+        ];
+        Plan {
+            command: "render",
+            effects: Vec::new(),
+            forces: ForceTerms {
+                stiffness: [0.0; 2],
+                connection_factor: None,
+            },
+            stages,
+            files: vec![(Output::Preview, "preview.png")],
         }
     }
 }
@@ -227,6 +292,7 @@ pub fn output_name(output: Output) -> &'static str {
         Output::Ply => "ply",
         Output::Glb => "glb",
         Output::Picture => "picture",
+        Output::Preview => "preview",
     }
 }
 
@@ -278,6 +344,48 @@ mod tests {
         scene.solver.method = SolverMethod::Paper;
         let fit = Plan::fit(&scene);
         assert!(fit.has_stage("knit tube"));
+    }
+
+    #[test]
+    fn the_preview_is_rendered_only_when_outputs_list_it() {
+        let mut scene = Scene::load(None).unwrap();
+        scene.outputs = vec![Output::Glb, Output::Picture];
+        let plan = Plan::fit(&scene);
+        assert!(!plan.has_stage(PREVIEW_STAGE));
+        assert!(!plan.files.iter().any(|(o, _)| *o == Output::Preview));
+        scene.outputs.push(Output::Preview);
+        let plan = Plan::fit(&scene);
+        let stage = plan
+            .stages
+            .iter()
+            .find(|s| s.name == PREVIEW_STAGE)
+            .unwrap();
+        assert!(
+            stage.why.contains("outputs lists \"preview\""),
+            "{}",
+            stage.why
+        );
+        assert!(stage.why.contains("yarn mode"), "{}", stage.why);
+        assert_eq!(plan.files.last(), Some(&(Output::Preview, "preview.png")));
+    }
+
+    #[test]
+    fn a_yarn_preview_alone_still_gets_the_penetration_fix_but_no_leg_attributes() {
+        let mut scene = Scene::load(None).unwrap();
+        scene.outputs = vec![Output::Preview];
+        let plan = Plan::fit(&scene);
+        assert!(
+            plan.has_stage("penetration fix"),
+            "yarns drawn must follow the skin"
+        );
+        assert!(!plan.has_stage("leg attributes"));
+        scene.render.mode = RenderMode::Density;
+        let plan = Plan::fit(&scene);
+        assert!(!plan.has_stage("penetration fix"));
+        assert!(
+            plan.has_stage("leg attributes"),
+            "the density mode colours by them"
+        );
     }
 
     #[test]

@@ -45,6 +45,8 @@ pub struct Scene {
     pub tube: TubeSettings,
     /// Contact between yarn and leg (`knitfit fit`).
     pub contact: ContactSettings,
+    /// The yarn-level preview still (`preview.png` of `knitfit fit`, and `knitfit render`).
+    pub render: RenderSettings,
 }
 
 /// Length units a leg file can be in.
@@ -448,6 +450,9 @@ pub enum Output {
     /// PNG picture: the relaxed stitches (`patch.png`), or for a fit the leg coloured by
     /// stitch density, front and side, with a colour bar (`density.png`).
     Picture,
+    /// PNG: the ray-traced yarn-level still of the fitted stocking on the leg (`preview.png`,
+    /// `knitfit fit` only; settings in `render`).
+    Preview,
 }
 
 fn default_outputs() -> Vec<Output> {
@@ -516,6 +521,259 @@ impl Default for PatchSettings {
                 },
             ],
         }
+    }
+}
+
+/// Which side the auto-framed camera looks at the leg from. glTF's character faces +Z with +Y
+/// up (as in `density.png`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum View {
+    /// From +Z towards −Z (default).
+    #[default]
+    Front,
+    /// From +X towards −X (the outer side of a left leg).
+    Side,
+    /// From −Z towards +Z.
+    Back,
+    /// From +X+Z, halfway between front and side.
+    #[serde(rename = "three-quarter", alias = "three_quarter")]
+    ThreeQuarter,
+}
+
+impl View {
+    /// Every view, in the order the command line lists them.
+    pub const ALL: [View; 4] = [View::Front, View::Side, View::Back, View::ThreeQuarter];
+
+    /// Name as in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            View::Front => "front",
+            View::Side => "side",
+            View::Back => "back",
+            View::ThreeQuarter => "three-quarter",
+        }
+    }
+
+    /// Parses a name as written by [`View::name`].
+    pub fn parse(text: &str) -> Option<View> {
+        View::ALL.into_iter().find(|v| v.name() == text)
+    }
+}
+
+/// What a preview pixel shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum RenderMode {
+    /// The yarns as cylinders over the skin, shaded (paper §7–8, Fig. 17) (default).
+    #[default]
+    Yarn,
+    /// The leg coloured by stitch density, with a colour bar (paper Fig. 18).
+    Density,
+}
+
+impl RenderMode {
+    /// Name as in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            RenderMode::Yarn => "yarn",
+            RenderMode::Density => "density",
+        }
+    }
+}
+
+/// A camera given by the scene instead of the auto-framed one.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSettings {
+    /// Eye position, metres, world space (the leg's frame after units and up axis: +Y up).
+    pub position: [f64; 3],
+    /// The point looked at, metres, world space.
+    pub target: [f64; 3],
+    /// Vertical field of view, degrees (default: 25).
+    #[serde(default = "default_fov_deg")]
+    pub fov_deg: f64,
+}
+
+fn default_fov_deg() -> f64 {
+    25.0
+}
+
+/// The yarn-level preview (`preview.png`, `knitfit render`). Colours are linear RGB, 0–1.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RenderSettings {
+    /// Image width, pixels (default: 768; 16 to 8192).
+    pub width: u32,
+    /// Image height, pixels (default: 768; 16 to 8192).
+    pub height: u32,
+    /// Side the auto-framed camera looks from (default: `"front"`); ignored with `camera`.
+    pub view: View,
+    /// Samples per pixel, stratified on a grid of ⌈√spp⌉ columns and as many rows as needed,
+    /// so a non-square count is rounded up to fill the grid (default: 16; 1 to 1024).
+    pub spp: u32,
+    /// What the pixels show (default: `"yarn"`).
+    pub mode: RenderMode,
+    /// A fixed camera; absent means auto-framed on the leg from `view` (default: absent).
+    pub camera: Option<CameraSettings>,
+    /// Skin albedo (default: `[0.52, 0.31, 0.22]`, a warm light skin tone).
+    pub skin_colour: [f64; 3],
+    /// Background (default: `[0.78, 0.78, 0.80]`, a light grey).
+    pub background: [f64; 3],
+    /// Direction towards the key light in the camera's frame (right, up, towards the viewer),
+    /// any length (default: `[-0.45, 0.55, 0.70]`: from the upper left, in front).
+    pub light_direction: [f64; 3],
+    /// Radiance of the key light (default: 1.1).
+    pub light_intensity: f64,
+    /// Ambient (environment) light, as a fraction of the key light (default: 0.35).
+    pub ambient: f64,
+    /// Strength of the yarn's anisotropic highlight (Kajiya–Kay), 0 = none (default: 0.5).
+    pub yarn_sheen: f64,
+    /// Exponent of the highlight: higher is narrower (default: 48).
+    pub yarn_sheen_exponent: f64,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 768,
+            height: 768,
+            view: View::Front,
+            spp: 16,
+            mode: RenderMode::Yarn,
+            camera: None,
+            skin_colour: [0.52, 0.31, 0.22],
+            background: [0.78, 0.78, 0.80],
+            light_direction: [-0.45, 0.55, 0.70],
+            light_intensity: 1.1,
+            ambient: 0.35,
+            yarn_sheen: 0.5,
+            yarn_sheen_exponent: 48.0,
+        }
+    }
+}
+
+/// Smallest and largest image side accepted, pixels.
+pub const RENDER_SIDE_PX: (u32, u32) = (16, 8192);
+/// Largest samples per pixel accepted.
+pub const MAX_SPP: u32 = 1024;
+
+/// Checks an image side (`--width`, `render.width`).
+pub fn check_render_side(px: u32) -> std::result::Result<(), String> {
+    let (lo, hi) = RENDER_SIDE_PX;
+    if (lo..=hi).contains(&px) {
+        Ok(())
+    } else {
+        Err(format!("must be {lo} to {hi} pixels, got {px}"))
+    }
+}
+
+/// Most pixels and most samples one preview may take: beyond them a render needs gigabytes
+/// of buffers or hours.
+pub const MAX_RENDER_PIXELS: u64 = 4096 * 4096;
+/// See [`MAX_RENDER_PIXELS`].
+pub const MAX_RENDER_SAMPLES: u64 = 1 << 31;
+
+/// Checks that a picture of `width × height` at `spp` stays within [`MAX_RENDER_PIXELS`] and
+/// [`MAX_RENDER_SAMPLES`].
+pub fn check_render_budget(width: u32, height: u32, spp: u32) -> std::result::Result<(), String> {
+    let pixels = u64::from(width) * u64::from(height);
+    let samples = pixels * u64::from(spp);
+    if pixels > MAX_RENDER_PIXELS {
+        Err(format!(
+            "{width}×{height} is over the limit of {MAX_RENDER_PIXELS} pixels (4096×4096)"
+        ))
+    } else if samples > MAX_RENDER_SAMPLES {
+        Err(format!(
+            "{width}×{height} at {spp} spp is {samples} samples, over the limit of \
+             {MAX_RENDER_SAMPLES}; lower the size or the samples per pixel"
+        ))
+    } else {
+        Ok(())
+    }
+}
+
+/// Checks samples per pixel (`--spp`, `render.spp`).
+pub fn check_spp(spp: u32) -> std::result::Result<(), String> {
+    if (1..=MAX_SPP).contains(&spp) {
+        Ok(())
+    } else {
+        Err(format!(
+            "must be 1 to {MAX_SPP} samples per pixel, got {spp}"
+        ))
+    }
+}
+
+impl RenderSettings {
+    /// Checks every value; the error names the field (`render.…`) and the scene.
+    pub fn validate(&self, name: &str) -> Result<()> {
+        let bad = |field: &str, message: String| Error::InvalidScene {
+            path: name.to_string(),
+            field: format!("render.{field}"),
+            message,
+        };
+        check_render_side(self.width).map_err(|m| bad("width", m))?;
+        check_render_side(self.height).map_err(|m| bad("height", m))?;
+        check_spp(self.spp).map_err(|m| bad("spp", m))?;
+        check_render_budget(self.width, self.height, self.spp).map_err(|m| bad("spp", m))?;
+        for (field, colour) in [
+            ("skin_colour", self.skin_colour),
+            ("background", self.background),
+        ] {
+            if colour
+                .iter()
+                .any(|c| !(c.is_finite() && (0.0..=1.0).contains(c)))
+            {
+                return Err(bad(
+                    field,
+                    format!("each channel must be in [0, 1], got {colour:?}"),
+                ));
+            }
+        }
+        let l = self.light_direction;
+        if !l.iter().all(|c| c.is_finite()) || l.iter().all(|&c| c == 0.0) {
+            return Err(bad(
+                "light_direction",
+                format!("must be a finite, non-zero vector, got {l:?}"),
+            ));
+        }
+        for (field, value) in [
+            ("light_intensity", self.light_intensity),
+            ("ambient", self.ambient),
+            ("yarn_sheen", self.yarn_sheen),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(bad(field, format!("must be zero or positive, got {value}")));
+            }
+        }
+        let e = self.yarn_sheen_exponent;
+        if !(e.is_finite() && e >= 1.0) {
+            return Err(bad(
+                "yarn_sheen_exponent",
+                format!("must be at least 1, got {e}"),
+            ));
+        }
+        if let Some(camera) = &self.camera {
+            let finite = camera
+                .position
+                .iter()
+                .chain(&camera.target)
+                .all(|c| c.is_finite());
+            if !finite || camera.position == camera.target {
+                return Err(bad(
+                    "camera",
+                    "position and target must be finite and different points".into(),
+                ));
+            }
+            let fov = camera.fov_deg;
+            if !(fov.is_finite() && fov > 0.5 && fov < 170.0) {
+                return Err(bad(
+                    "camera.fov_deg",
+                    format!("must be between 0.5 and 170 degrees, got {fov}"),
+                ));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -618,6 +876,7 @@ impl Scene {
             ));
         }
         self.validate_patch(name)?;
+        self.render.validate(name)?;
         self.validate_fit(name)
     }
 
@@ -835,6 +1094,23 @@ mod tests {
         )
         .unwrap_err();
         assert!(err.to_string().contains("alternating_yarns"), "{err}");
+    }
+
+    #[test]
+    fn render_settings_are_checked_by_field() {
+        let err = Scene::from_json(r#"{"render": {"spp": 0}}"#, "s.json").unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("s.json: render.spp: must be 1 to"),
+            "{err}"
+        );
+        let err = Scene::from_json(r#"{"render": {"width": 8192, "height": 8192}}"#, "s.json")
+            .unwrap_err();
+        assert!(err.to_string().contains("over the limit"), "{err}");
+        let err = Scene::from_json(r#"{"render": {"view": "top"}}"#, "s.json").unwrap_err();
+        assert!(err.to_string().contains("unknown variant `top`"), "{err}");
+        let scene = Scene::from_json(r#"{"render": {"view": "three-quarter"}}"#, "s").unwrap();
+        assert_eq!(scene.render.view, View::ThreeQuarter);
     }
 
     #[test]

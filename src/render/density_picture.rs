@@ -252,7 +252,7 @@ fn is_covered(d: f64) -> bool {
 /// Round tick values in [lo, hi]: steps of 1, 2, 2.5 or 5 × 10ᵏ, preferring 4–6 ticks (closest
 /// to 5), then steps without the half digit. Labels carry as many decimals as the step needs, or
 /// use exponent notation for steps below 10⁻⁴ or from 10⁶.
-fn nice_ticks(lo: f64, hi: f64) -> Vec<(f64, String)> {
+pub(crate) fn nice_ticks(lo: f64, hi: f64) -> Vec<(f64, String)> {
     let span = hi - lo;
     if !(span > 0.0 && span.is_finite() && lo.is_finite()) {
         return Vec::new();
@@ -507,7 +507,7 @@ impl Layout {
     }
 }
 
-fn font_for(view_px: usize) -> &'static MonoFont<'static> {
+pub(crate) fn font_for(view_px: usize) -> &'static MonoFont<'static> {
     if view_px >= 560 {
         &iso_8859_1::FONT_10X20
     } else if view_px >= 400 {
@@ -727,7 +727,7 @@ fn draw_text(image: &mut RgbImage, scale: &ColourScale, layout: &Layout) {
 }
 
 /// `embedded-graphics` drawing onto an [`RgbImage`]; pixels outside the image are dropped.
-struct ImageTarget<'a>(&'a mut RgbImage);
+pub(crate) struct ImageTarget<'a>(pub(crate) &'a mut RgbImage);
 
 impl OriginDimensions for ImageTarget<'_> {
     fn size(&self) -> Size {

@@ -1,14 +1,20 @@
-//! Pictures: the flat-patch drawing, the leg's density picture; the yarn-level preview renderer
-//! later.
+//! Pictures: the flat-patch drawing, the leg's density picture, and the yarn-level preview
+//! renderer (`preview`: camera, yarn lookup, shading).
 
 use image::{ImageEncoder, RgbImage};
 
 use crate::error::{Error, Result};
 
 pub mod bench_plot;
+pub mod camera;
 pub mod colormap;
+pub mod density_bar;
 pub mod density_picture;
 pub mod patch_picture;
+pub mod preview;
+pub mod shading;
+pub mod stocking_glb;
+pub mod yarn_lookup;
 
 /// Encodes an image as PNG bytes for the file `file_name`.
 ///

@@ -108,7 +108,11 @@ pub fn run_fit(
     let leg_mesh = leg_surface(&leg, &leg_fields);
     let mut files = Vec::new();
     for &(output, name) in &plan.files {
-        let bytes = clock.time(&format!("encode {name}"), || {
+        let stage = match output {
+            Output::Preview => crate::plan::PREVIEW_STAGE.to_string(),
+            _ => format!("encode {name}"),
+        };
+        let bytes = clock.time(&stage, || {
             encode(output, name, scene, &knit, &knit_fields, &yarns, &leg_mesh)
         })?;
         files.push((name.to_string(), bytes));
@@ -525,6 +529,7 @@ fn encode(
         }
         (Output::Ply, "leg.ply") => export::ply::write_mesh_ply(leg_mesh, &comments),
         (Output::Ply, _) => export::ply::write_ply(std::slice::from_ref(yarns), &comments),
+        (Output::Preview, _) => render::preview::encode_preview(leg_mesh, yarns, scene, name),
         (Output::Picture, _) => {
             let density: Vec<f64> = leg_mesh
                 .point_attributes

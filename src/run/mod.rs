@@ -5,12 +5,14 @@
 pub mod bench;
 pub mod fit;
 pub mod patch;
+pub mod render;
 
 use std::path::PathBuf;
 
 pub use bench::{run_bench, BenchOptions, BenchOutcome};
 pub use fit::{run_fit, FitInputs, FitOutcome};
 pub use patch::{run_patch, PatchOutcome};
+pub use render::{run_render, run_spp_sweep, RenderInputs, RenderOutcome};
 
 /// Receives progress of long stages.
 pub trait Progress {

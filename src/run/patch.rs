@@ -121,6 +121,11 @@ pub fn run_patch(
                 };
                 crate::render::encode_png(&patch_picture::draw_patches(&panels, &style), name)
             }
+            // `Plan::patch` never lists it: a flat patch has no leg to render on.
+            Output::Preview => Err(crate::error::Error::Encode {
+                what: name.into(),
+                message: "a patch has no leg to preview".into(),
+            }),
         })?;
         files.push((name.to_string(), bytes));
     }

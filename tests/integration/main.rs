@@ -4,5 +4,6 @@
 mod cli;
 mod fit;
 mod physics;
+mod render;
 mod skin;
 mod util;

@@ -1,0 +1,207 @@
+//! Reading a fit's `stocking.glb` back for `knitfit render`: the node `leg` (triangles, normals,
+//! `_COVERAGE`, `_STITCH_DENSITY`) and the node `yarns` (`LINES`), each in world space (the node
+//! transforms of the default scene applied).
+//!
+//! A segment's yarn kind is that of its primitive's material (`nylon` / `support`, one primitive
+//! per kind as `export::gltf` writes them); without a known material name, the `_YARN_KIND`
+//! attribute of the segment's first point (the yarn of its course) is used. The GLB does not
+//! say whether a segment runs along the course or the wale; every segment read back is marked
+//! `Course`, which the renderer never looks at.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use nalgebra::{Matrix3, Matrix4, Point3, Vector3};
+
+use crate::error::{Error, Result};
+use crate::export::{vertex_normals, Segment, SurfaceMesh, YarnGeometry};
+use crate::knit::{Direction, YarnKind};
+
+/// The leg and yarns of a `stocking.glb`, world space, metres.
+#[derive(Clone, Debug)]
+pub struct StockingGlb {
+    /// The leg, with the `coverage` and `stitch_density` attributes the file has.
+    pub leg: SurfaceMesh,
+    /// The yarn polylines.
+    pub yarns: YarnGeometry,
+}
+
+/// Reads `path`. Errors ([`Error::Read`], [`Error::RenderInput`]) name the file: missing,
+/// not glTF, no `leg` node with triangles, no `yarns` node with lines.
+pub fn read_stocking_glb(path: &Path) -> Result<StockingGlb> {
+    let bad = |message: String| Error::RenderInput {
+        path: path.to_path_buf(),
+        message,
+    };
+    std::fs::metadata(path).map_err(|source| Error::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let (doc, buffers, _) = gltf::import(path).map_err(|e| {
+        bad(format!(
+            "not a glTF file ({e}); give the stocking.glb a `knitfit fit` wrote, or its directory"
+        ))
+    })?;
+    let scene = doc
+        .default_scene()
+        .or_else(|| doc.scenes().next())
+        .ok_or_else(|| bad("the glTF file has no scene".into()))?;
+    let mut found: BTreeMap<String, (gltf::Node, Matrix4<f64>)> = BTreeMap::new();
+    let mut stack: Vec<(gltf::Node, Matrix4<f64>)> =
+        scene.nodes().map(|n| (n, Matrix4::identity())).collect();
+    while let Some((node, parent)) = stack.pop() {
+        let local = Matrix4::from(node.transform().matrix()).cast::<f64>();
+        let world = parent * local;
+        if let Some(name) = node.name() {
+            found
+                .entry(name.to_string())
+                .or_insert((node.clone(), world));
+        }
+        stack.extend(node.children().map(|c| (c, world)));
+    }
+    let missing = |name: &str| {
+        bad(format!(
+            "no node named {name:?} (a `knitfit fit` stocking.glb has nodes \"leg\" and \"yarns\")"
+        ))
+    };
+    let (leg_node, leg_world) = found.get("leg").ok_or_else(|| missing("leg"))?;
+    let (yarn_node, yarn_world) = found.get("yarns").ok_or_else(|| missing("yarns"))?;
+    let get = |b: gltf::Buffer| buffers.get(b.index()).map(|d| &d.0[..]);
+
+    let normal_from = |m: &Matrix4<f64>| -> Matrix3<f64> {
+        let upper = m.fixed_view::<3, 3>(0, 0).into_owned();
+        upper.try_inverse().map(|i| i.transpose()).unwrap_or(upper)
+    };
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    let mut normals: Vec<[f32; 3]> = Vec::new();
+    let mut has_normals = true;
+    let mut attributes: BTreeMap<String, Vec<f32>> = BTreeMap::new();
+    let names = ["coverage", "stitch_density"];
+    let nm = normal_from(leg_world);
+    for prim in leg_node.mesh().iter().flat_map(|m| m.primitives()) {
+        if prim.mode() != gltf::mesh::Mode::Triangles {
+            continue;
+        }
+        let reader = prim.reader(get);
+        let Some(p) = reader.read_positions() else {
+            continue;
+        };
+        let base = positions.len() as u32;
+        let p: Vec<[f64; 3]> = p
+            .map(|q| {
+                let w = leg_world.transform_point(&Point3::from(q).cast::<f64>());
+                [w.x, w.y, w.z]
+            })
+            .collect();
+        let count = p.len() as u32;
+        match reader.read_indices() {
+            Some(ix) => {
+                let ix: Vec<u32> = ix.into_u32().collect();
+                for t in ix.chunks_exact(3) {
+                    if t.iter().all(|&i| i < count) {
+                        triangles.push([t[0] + base, t[1] + base, t[2] + base]);
+                    }
+                }
+            }
+            None => {
+                for i in (0..count.saturating_sub(2)).step_by(3) {
+                    triangles.push([base + i, base + i + 1, base + i + 2]);
+                }
+            }
+        }
+        match reader.read_normals() {
+            Some(n) => normals.extend(n.map(|v| {
+                let w = nm * Vector3::from(v).cast::<f64>();
+                let w = w.try_normalize(1e-12).unwrap_or(Vector3::y());
+                [w.x as f32, w.y as f32, w.z as f32]
+            })),
+            None => has_normals = false,
+        }
+        for name in names {
+            let semantic = gltf::Semantic::Extras(name.to_uppercase());
+            let values: Vec<f32> = prim
+                .get(&semantic)
+                .and_then(|acc| gltf::accessor::Iter::<f32>::new(acc, get))
+                .map(|it| it.collect())
+                .unwrap_or_default();
+            let column = attributes.entry(name.to_string()).or_default();
+            column.resize(base as usize, 0.0);
+            if values.len() == p.len() {
+                column.extend(values);
+            }
+        }
+        positions.extend(p);
+    }
+    if triangles.is_empty() {
+        return Err(bad("node \"leg\" has no triangles".into()));
+    }
+    let mut leg = SurfaceMesh::new("leg", positions, triangles);
+    if has_normals && normals.len() == leg.positions.len() {
+        leg.normals = normals;
+    } else {
+        leg.normals = vertex_normals(&leg.positions, &leg.triangles);
+    }
+    leg.point_attributes = attributes
+        .into_iter()
+        .filter(|(_, v)| v.len() == leg.positions.len())
+        .collect();
+
+    let mut yarn_positions = Vec::new();
+    let mut segments = Vec::new();
+    for prim in yarn_node.mesh().iter().flat_map(|m| m.primitives()) {
+        if prim.mode() != gltf::mesh::Mode::Lines {
+            continue;
+        }
+        let reader = prim.reader(get);
+        let Some(p) = reader.read_positions() else {
+            continue;
+        };
+        let base = yarn_positions.len() as u32;
+        yarn_positions.extend(p.map(|q| {
+            let w = yarn_world.transform_point(&Point3::from(q).cast::<f64>());
+            [w.x, w.y, w.z]
+        }));
+        let count = yarn_positions.len() as u32 - base;
+        let by_material = prim
+            .material()
+            .name()
+            .and_then(|n| YarnKind::ALL.into_iter().find(|k| k.name() == n));
+        let kinds: Vec<f32> = prim
+            .get(&gltf::Semantic::Extras("YARN_KIND".into()))
+            .and_then(|acc| gltf::accessor::Iter::<f32>::new(acc, get))
+            .map(|it| it.collect())
+            .unwrap_or_default();
+        let kind_of = |i: u32| {
+            by_material.unwrap_or_else(|| match kinds.get(i as usize) {
+                Some(k) if *k >= 0.5 => YarnKind::Support,
+                _ => YarnKind::Nylon,
+            })
+        };
+        let ix: Vec<u32> = match reader.read_indices() {
+            Some(ix) => ix.into_u32().collect(),
+            None => (0..count).collect(),
+        };
+        for pair in ix.chunks_exact(2) {
+            if pair.iter().all(|&i| i < count) {
+                segments.push(Segment {
+                    a: base + pair[0],
+                    b: base + pair[1],
+                    yarn: kind_of(pair[0]),
+                    direction: Direction::Course,
+                });
+            }
+        }
+    }
+    if segments.is_empty() {
+        return Err(bad("node \"yarns\" has no line segments".into()));
+    }
+    let yarns = YarnGeometry {
+        name: "yarns".into(),
+        offset_m: [0.0; 3],
+        positions: yarn_positions,
+        point_attributes: BTreeMap::new(),
+        segments,
+    };
+    Ok(StockingGlb { leg, yarns })
+}
