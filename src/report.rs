@@ -23,8 +23,13 @@ pub struct Metrics {
     pub steps: usize,
     /// Worst final relative residual over the relaxations.
     pub residual: f64,
-    /// Worst final largest move per step, relative to the shortest rest length.
+    /// Worst final largest move per step (iteration), relative to the shortest rest length.
     pub max_move: f64,
+    /// Multilevel fit only: the final force step (largest move the unbalanced force alone would
+    /// make in one iteration, over the shortest rest length), which with the residual decides
+    /// convergence there.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub force_step: Option<f64>,
     /// True when every relaxation converged below the tolerance.
     pub converged: bool,
     /// Fit only: deepest yarn point inside the leg after the fit, measured against the exact

@@ -125,6 +125,7 @@ pub fn run_fit(
         steps: solver.steps(),
         residual: solver.residual(),
         max_move: solver.max_move(),
+        force_step: solver.force_step(),
         converged: solver.converged(),
         max_penetration_m: Some(max_penetration),
         leg_triangles: Some(leg.triangles.len()),
@@ -400,6 +401,14 @@ impl SolverRun {
         match self {
             SolverRun::Paper(s) => s.max_move,
             SolverRun::Multilevel(s) => s.fine().max_move,
+        }
+    }
+
+    /// Multilevel only: the final force step on the grid asked for.
+    pub fn force_step(&self) -> Option<f64> {
+        match self {
+            SolverRun::Paper(_) => None,
+            SolverRun::Multilevel(s) => Some(s.fine().force_step),
         }
     }
 

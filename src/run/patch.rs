@@ -197,6 +197,7 @@ fn metrics(runs: &[Relaxed]) -> Metrics {
         steps: runs.iter().map(|r| r.stats.steps).sum(),
         residual: runs.iter().map(|r| r.stats.residual).fold(0.0, f64::max),
         max_move: runs.iter().map(|r| r.stats.max_move).fold(0.0, f64::max),
+        force_step: None,
         converged: runs.iter().all(|r| r.stats.converged),
         max_penetration_m: None,
         leg_triangles: None,

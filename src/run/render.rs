@@ -120,6 +120,7 @@ pub fn run_render(scene: &Scene, inputs: &RenderInputs) -> Result<RenderOutcome>
             steps: 0,
             residual: 0.0,
             max_move: 0.0,
+            force_step: None,
             converged: true,
             max_penetration_m: None,
             leg_triangles: Some(stocking.leg.triangles.len()),

@@ -316,6 +316,12 @@ impl SlideParams<'_> {
             if len.is_nan() || len <= 0.0 {
                 break;
             }
+            if len < 0.5 * self.offset {
+                // Too short to pass through any part of a leg: no ray needed, the closest-point
+                // check below catches a move that ends inside.
+                p += delta;
+                break;
+            }
             let dir = delta / len;
             match self.collider.first_hit(&p, &dir, len + self.offset) {
                 None => {

@@ -185,10 +185,83 @@ pub(crate) fn shortest_rest(knit: &Knit) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// Sums of the unheld forces of one evaluation (see [`unheld_forces`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct UnheldSums {
+    /// Σ |unheld force|² over free points.
+    pub sum_sq: f64,
+    /// Free points.
+    pub free: usize,
+    /// Σ unheld force · velocity over free points (0 without velocities).
+    pub power: f64,
+    /// Largest `|unheld force| / stiffness bound` over free points, metres: how far one plain
+    /// preconditioned step would move the worst point.
+    pub max_step: f64,
+}
+
 /// Fills `ws.unheld` with the part of each free point's net force the constraints do not hold
-/// (zero on pinned points), and returns the relative residual: RMS unheld force over RMS spring
-/// force. Spring forces below [`rest_force_floor`] count as that floor: such a knit is at rest,
-/// and both sums are rounding noise whose ratio means nothing.
+/// (zero on pinned points), and returns its sums; with `velocity`, also the power.
+pub(crate) fn unheld_forces(
+    knit: &Knit,
+    ws: &mut Workspace,
+    constraints: &dyn Constraints,
+    velocity: Option<&[Vec3]>,
+) -> UnheldSums {
+    let inv_mass = &knit.particles.inv_mass;
+    let (force, bound) = (&ws.force, &ws.stiffness_bound);
+    let partial: Vec<UnheldSums> = ws
+        .unheld
+        .par_chunks_mut(CHUNK)
+        .enumerate()
+        .map(|(chunk, unheld)| {
+            let mut sums = UnheldSums::default();
+            for (k, u) in unheld.iter_mut().enumerate() {
+                let i = chunk * CHUNK + k;
+                if inv_mass[i] == 0.0 {
+                    *u = Vec3::zeros();
+                    continue;
+                }
+                *u = constraints.unheld_force(i, &force[i]);
+                sums.sum_sq += u.norm_squared();
+                sums.free += 1;
+                if let Some(v) = velocity {
+                    sums.power += u.dot(&v[i]);
+                }
+                if bound[i] > 0.0 {
+                    sums.max_step = sums.max_step.max(u.norm() / bound[i]);
+                }
+            }
+            sums
+        })
+        .collect();
+    partial
+        .iter()
+        .fold(UnheldSums::default(), |a, b| UnheldSums {
+            sum_sq: a.sum_sq + b.sum_sq,
+            free: a.free + b.free,
+            power: a.power + b.power,
+            max_step: a.max_step.max(b.max_step),
+        })
+}
+
+/// The relative residual: RMS unheld force over free points over RMS spring force. Spring
+/// forces below [`rest_force_floor`] count as that floor: such a knit is at rest, and both sums
+/// are rounding noise whose ratio means nothing.
+pub(crate) fn residual_of(
+    knit: &Knit,
+    sums: &UnheldSums,
+    spring_force_sq: f64,
+    force_floor: f64,
+) -> f64 {
+    if sums.free == 0 {
+        return 0.0;
+    }
+    let rms_net = (sums.sum_sq / sums.free as f64).sqrt();
+    let rms_spring = (spring_force_sq / knit.springs.len().max(1) as f64).sqrt();
+    rms_net / rms_spring.max(force_floor)
+}
+
+/// [`unheld_forces`] then [`residual_of`].
 pub(crate) fn relative_residual(
     knit: &Knit,
     ws: &mut Workspace,
@@ -196,35 +269,6 @@ pub(crate) fn relative_residual(
     spring_force_sq: f64,
     force_floor: f64,
 ) -> f64 {
-    let inv_mass = &knit.particles.inv_mass;
-    let force = &ws.force;
-    let partial: Vec<(f64, usize)> = ws
-        .unheld
-        .par_chunks_mut(CHUNK)
-        .enumerate()
-        .map(|(chunk, unheld)| {
-            let mut sum = (0.0, 0usize);
-            for (k, u) in unheld.iter_mut().enumerate() {
-                let i = chunk * CHUNK + k;
-                *u = if inv_mass[i] > 0.0 {
-                    let u = constraints.unheld_force(i, &force[i]);
-                    sum.0 += u.norm_squared();
-                    sum.1 += 1;
-                    u
-                } else {
-                    Vec3::zeros()
-                };
-            }
-            sum
-        })
-        .collect();
-    let (sum_sq, free) = partial
-        .iter()
-        .fold((0.0, 0), |(a, n), (b, k)| (a + b, n + k));
-    if free == 0 {
-        return 0.0;
-    }
-    let rms_net = (sum_sq / free as f64).sqrt();
-    let rms_spring = (spring_force_sq / knit.springs.len().max(1) as f64).sqrt();
-    rms_net / rms_spring.max(force_floor)
+    let sums = unheld_forces(knit, ws, constraints, None);
+    residual_of(knit, &sums, spring_force_sq, force_floor)
 }

@@ -6,4 +6,5 @@ mod fit;
 mod physics;
 mod render;
 mod skin;
+mod solvers;
 mod util;

@@ -1,0 +1,139 @@
+//! The two solvers: the multilevel one (the default) reaches the paper's rest state, and the
+//! run says which solver ran and what it did.
+
+use knitfit::leg::AxisSource;
+use knitfit::plan::Plan;
+use knitfit::report::StageClock;
+use knitfit::run::fit::{measure_fields, solve_fit, FitInputs, SolvedFit};
+use knitfit::run::NoProgress;
+use knitfit::scene::{Scene, SolverMethod};
+
+use crate::util::{fit, sample_legs};
+
+fn solve(leg: &std::path::Path, method: SolverMethod, tolerance: f64) -> (SolvedFit, Scene) {
+    let mut scene = Scene::load(None).unwrap();
+    scene.tube.wales = 40;
+    scene.tube.courses = 40;
+    scene.solver.method = method;
+    scene.solver.tolerance = tolerance;
+    let inputs = FitInputs {
+        leg: leg.to_path_buf(),
+        axis_source: AxisSource::Scene,
+    };
+    let fit = solve_fit(
+        &scene,
+        &Plan::fit(&scene),
+        &inputs,
+        "test",
+        &mut StageClock::default(),
+        &mut NoProgress,
+    )
+    .unwrap();
+    (fit, scene)
+}
+
+fn leg_density(fit: &SolvedFit, scene: &Scene) -> Vec<f64> {
+    let radius = [scene.yarns.nylon.radius_m, scene.yarns.support.radius_m];
+    measure_fields(&fit.knit, &fit.leg, radius).1.stitch_density
+}
+
+#[test]
+fn both_solvers_reach_the_same_rest_state_on_every_sample_leg() {
+    for leg in sample_legs() {
+        let (paper, scene) = solve(&leg, SolverMethod::Paper, 1e-4);
+        let (fast, _) = solve(&leg, SolverMethod::Multilevel, 1e-4);
+        assert!(
+            paper.solver.converged() && fast.solver.converged(),
+            "{}: paper {} steps, residual {:.2e}; multilevel {} iterations, residual {:.2e}",
+            leg.display(),
+            paper.solver.steps(),
+            paper.solver.residual(),
+            fast.solver.steps(),
+            fast.solver.residual()
+        );
+        let (a, b) = (leg_density(&paper, &scene), leg_density(&fast, &scene));
+        let (mut diff, mut norm) = (0.0, 0.0);
+        for (a, b) in a.iter().zip(&b) {
+            diff += (a - b) * (a - b);
+            norm += a * a;
+        }
+        let relative = (diff / norm).sqrt();
+        println!(
+            "{}: density fields differ by {:.3}% (L2); paper {} steps, multilevel {} iterations",
+            leg.display(),
+            100.0 * relative,
+            paper.solver.steps(),
+            fast.solver.steps()
+        );
+        assert!(
+            relative < 0.01,
+            "{}: density fields differ by {relative:.4}",
+            leg.display()
+        );
+        assert_eq!(paper.max_penetration_m, 0.0);
+        assert_eq!(fast.max_penetration_m, 0.0);
+    }
+}
+
+#[test]
+fn the_report_says_which_solver_ran_and_how_each_level_went() {
+    let leg = &sample_legs()[0];
+    let (_dir, r) = fit(leg, "60x60", &[]);
+    let solver = &r["details"]["solver"];
+    assert_eq!(solver["method"], "multilevel");
+    let levels = solver["levels"].as_array().unwrap();
+    assert!(levels.len() >= 2, "{solver}");
+    let last = levels.last().unwrap();
+    assert_eq!(
+        (last["wales"].as_u64(), last["courses"].as_u64()),
+        (Some(60), Some(60))
+    );
+    assert!(last["residual"].as_f64().unwrap() < 1e-3);
+    assert!(last["force_step"].as_f64().unwrap() < 1e-3);
+    assert!(r["metrics"]["force_step"].as_f64().unwrap() < 1e-3);
+    assert!(r["metrics"]["max_move"].as_f64().unwrap().is_finite());
+    let stages: Vec<&str> = r["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["name"].as_str().unwrap())
+        .collect();
+    assert!(!stages.contains(&"knit tube"), "{stages:?}");
+
+    let (_dir, r) = fit(leg, "30x30", &["--solver", "paper"]);
+    assert_eq!(r["details"]["solver"]["method"], "paper");
+    assert!(r["details"]["solver"]["time_step_limit"].as_f64().unwrap() > 0.0);
+    assert!(r["metrics"].get("force_step").is_none());
+}
+
+#[test]
+fn a_tighter_tolerance_gives_a_smaller_residual() {
+    let leg = &sample_legs()[0];
+    let (_d, loose) = fit(leg, "50x50", &["--tolerance", "1e-2"]);
+    let (_d, tight) = fit(leg, "50x50", &["--tolerance", "1e-4"]);
+    let residual = |r: &serde_json::Value| r["metrics"]["residual"].as_f64().unwrap();
+    assert!(residual(&loose) < 1e-2 && residual(&tight) < 1e-4);
+    assert!(residual(&tight) < residual(&loose));
+}
+
+#[test]
+fn a_bad_solver_or_tolerance_flag_is_refused_before_any_work() {
+    for (args, expect) in [
+        (
+            &["--solver", "fast"][..],
+            "--solver: must be multilevel or paper",
+        ),
+        (&["--tolerance", "0"][..], "--tolerance: must be in (0, 1)"),
+        (&["--tolerance", "2"][..], "--tolerance: must be in (0, 1)"),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let mut all = vec!["fit", "--resolution", "20x20"];
+        all.extend_from_slice(args);
+        let out = crate::util::knitfit(dir.path(), &all);
+        assert_eq!(out.status.code(), Some(2), "{args:?}");
+        let err = crate::util::stderr(&out);
+        assert!(err.contains(expect), "{args:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+        assert!(crate::util::files_in(&dir.path().join("out")).is_empty());
+    }
+}
