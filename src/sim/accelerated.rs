@@ -3,8 +3,9 @@
 //! schedule for its weight, and O'Donoghue & Candès, "Adaptive restart for accelerated gradient
 //! schemes" (2015), for the restart.
 //!
-//! Each iteration, with `F` the net force (eq. 1 + eq. 2) and `m_i` point `i`'s Gershgorin bound
-//! on the stiffness (`evaluation::Workspace::stiffness_bound`):
+//! Each iteration, with `F` the unheld net force (eq. 1 + eq. 2, less what contact and the held
+//! end rings hold) and `m_i` point `i`'s Gershgorin bound on the stiffness
+//! (`evaluation::Workspace::stiffness_bound`):
 //!
 //! ```text
 //! if Σ F·v < 0:  v ← 0, k ← 0              (moving against the force: restart)
@@ -25,8 +26,11 @@
 //! error fast on a fine grid; [`super::multilevel`] starts it from a coarser grid's rest state so
 //! that little smooth error is left.
 //!
-//! Contact and the held end rings act through [`Constraints`] exactly as for the paper's solver:
-//! the move is limited, and the momentum carries only the move that was allowed.
+//! Contact and the held end rings act through [`Constraints`] as for the paper's solver: the
+//! move is limited, and the momentum carries only the move that was allowed. The step itself
+//! already leaves out the force the skin holds; pushing a resting point into the skin and
+//! letting the contact take it back made it chatter, and the chatter restarted the momentum of
+//! the whole grid every other iteration.
 //!
 //! **Convergence.** The relative residual is the paper solver's (RMS unheld net force over RMS
 //! spring force); with it, the *force step* must be below the tolerance: the largest move the

@@ -12,9 +12,12 @@
 //!   exact query, minus how far it has moved since) and is only queried when its move could use
 //!   up that clearance;
 //! * a point resting on the leg keeps the tangent plane of its last exact query and slides on that
-//!   plane until it has moved [`PLANE_REUSE_M`] from where the plane was taken. Within that
-//!   distance a surface whose radius of curvature is at least 1 cm departs from its tangent plane
-//!   by under 13 µm, less than half the default yarn offset (30 µm), so the point stays outside.
+//!   plane until it has moved a set distance from where the plane was taken: at most
+//!   [`PLANE_REUSE_M`], within which a surface whose radius of curvature is at least 1 cm departs
+//!   from its tangent plane by under 13 µm, less than half the default yarn offset (30 µm), so
+//!   the point stays outside; less where the solver's tolerance asks for it ([`plane_reuse_for`]:
+//!   the departure stays below tolerance × spacing, so the cache cannot hold a fit above its
+//!   tolerance).
 //!   Sharper creases and coarse facets can let it dip a few micrometres: the exact pass after the
 //!   fit ([`LegContact::finish`]) moves such points out.
 
