@@ -79,14 +79,7 @@ impl Camera {
         // For each corner: the eye distance from the centre at which it just fits.
         let mut distance: f64 = 1e-6;
         for corner in 0..8 {
-            let p = Point3::from(std::array::from_fn(|k| {
-                if corner >> k & 1 == 1 {
-                    hi[k]
-                } else {
-                    lo[k]
-                }
-            }));
-            let d = p - centre;
+            let d = box_corner(lo, hi, corner) - centre;
             let (x, y, z) = (d.dot(&cam.right), d.dot(&cam.up), d.dot(&toward_viewer));
             let need_x = x.abs() * (1.0 + MARGIN) / tan_x + z;
             let need_y = y.abs() * (1.0 + MARGIN) / tan_y + z;
@@ -110,6 +103,17 @@ impl Camera {
     }
 }
 
+/// Corner `corner` (0–7: bit `k` picks `hi` on axis `k`) of the box `lo`–`hi`.
+fn box_corner(lo: [f64; 3], hi: [f64; 3], corner: usize) -> Point3<f64> {
+    Point3::from(std::array::from_fn(|k| {
+        if corner >> k & 1 == 1 {
+            hi[k]
+        } else {
+            lo[k]
+        }
+    }))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -120,14 +124,7 @@ mod tests {
         for view in View::ALL {
             let cam = Camera::framing(lo, hi, view, 0.75);
             for corner in 0..8 {
-                let p = Point3::from(std::array::from_fn(|k| {
-                    if corner >> k & 1 == 1 {
-                        hi[k]
-                    } else {
-                        lo[k]
-                    }
-                }));
-                let d = p - cam.eye;
+                let d = box_corner(lo, hi, corner) - cam.eye;
                 let z = d.dot(&cam.forward);
                 assert!(z > 0.0, "{view:?}: corner behind the eye");
                 let x = d.dot(&cam.right) / (z * cam.tan_half_fov * cam.aspect);

@@ -22,9 +22,8 @@
 //! of the spectrum (Chebyshev does) and no energy (FIRE and line searches do). That matters
 //! here, because the connection force of eq. (2) is not the gradient of any energy: the power
 //! `F·v` is defined for any force, so eq. (2) enters like every other force, evaluated at the
-//! current positions (lagged by nothing). What this iteration cannot do alone is remove smooth
-//! error fast on a fine grid; [`super::multilevel`] starts it from a coarser grid's rest state so
-//! that little smooth error is left.
+//! current positions (lagged by nothing). Its iterations still grow with the grid size;
+//! [`super::multilevel`] starts it from a coarser grid's rest state to cut how many it needs.
 //!
 //! Contact and the held end rings act through [`Constraints`] as for the paper's solver: the
 //! move is limited, and the momentum carries only the move that was allowed. The step itself
