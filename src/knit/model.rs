@@ -103,6 +103,10 @@ pub struct Knit {
     pub class: Vec<u8>,
     /// Yarn of the course through each point.
     pub course_yarn: Vec<YarnKind>,
+    /// Factor on the yarn's stiffness c1 for course and wale springs (indexed by
+    /// [`Direction::index`]): 1 when a grid cell is one stitch, as in the paper; see
+    /// [`Knit::with_stitch_shape`] for a grid coarser than the stitches.
+    pub stiffness_scale: [f64; 2],
     incident_start: Vec<u32>,
     incident: Vec<Incident>,
     connection_start: Vec<u32>,
@@ -214,11 +218,39 @@ impl Knit {
             springs,
             class,
             course_yarn,
+            stiffness_scale: [1.0, 1.0],
             incident_start,
             incident,
             connection_start,
             connections,
         }
+    }
+
+    /// The same grid standing for a knit whose stitch is `course_spacing × wale_spacing`
+    /// (metres), whatever its own rest lengths.
+    ///
+    /// A grid of springs is a membrane whose stiffness around (along the courses), per unit
+    /// length along the wales, is `c1 · rest_course / rest_wale`, and the other way
+    /// `c1 · rest_wale / rest_course`. So a grid whose cells have another shape than the stitch
+    /// would be another fabric: a 400×1600 tube of a 0.20 m × 0.29 m stocking has cells 2.7
+    /// times wider than long, its rings 7× stiffer than its wales compared with a square stitch,
+    /// and the rings squeeze the lower leg of the tube into folds. Scaling each direction's
+    /// springs by `α` and `1/α`, with `α = (course_spacing / wale_spacing) · (rest_wale /
+    /// rest_course)`, gives every grid the stitch's membrane, so the grid size only sets how
+    /// finely that fabric is resolved (and the multilevel solver's coarse grids are the same
+    /// fabric as the fine one).
+    pub fn with_stitch_shape(mut self, course_spacing: f64, wale_spacing: f64) -> Knit {
+        let rest = |direction: Direction| {
+            self.springs
+                .iter()
+                .find(|s| s.direction == direction)
+                .map(|s| s.rest)
+        };
+        if let (Some(course), Some(wale)) = (rest(Direction::Course), rest(Direction::Wale)) {
+            let alpha = (course_spacing / wale_spacing) * (wale / course);
+            self.stiffness_scale = [alpha, 1.0 / alpha];
+        }
+        self
     }
 
     /// Number of mass points.

@@ -59,6 +59,16 @@ pub enum Direction {
     Wale,
 }
 
+impl Direction {
+    /// 0 for course, 1 for wale: the index of per-direction arrays.
+    pub fn index(self) -> usize {
+        match self {
+            Direction::Course => 0,
+            Direction::Wale => 1,
+        }
+    }
+}
+
 /// A periodic tile of yarn kinds, `width` wales × `height` courses.
 ///
 /// Cell `(w, c)` holds the kind of the course spring leaving point `(w, c)` towards `w + 1` and the

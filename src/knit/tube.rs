@@ -6,6 +6,10 @@
 //! circumference over the number of wales, a wale spring the relaxed length over the number of
 //! courses minus one. The paper instead scaled one rest length to the leg; ours keeps the
 //! stocking's own size, so a thinner ankle really is covered by more stitches per cm².
+//!
+//! The grid is usually coarser than the stitches (150×150 points for a stocking of some 400
+//! wales), and its cells need not have the stitch's shape: the springs are scaled so that the
+//! tube is the knit's fabric at any grid size ([`Knit::with_stitch_shape`]).
 
 use nalgebra::{Point3, Vector3};
 
@@ -30,6 +34,10 @@ pub struct TubeSpec {
     pub relaxed_circumference_m: f64,
     /// Length of the relaxed stocking between the axis points, metres.
     pub relaxed_length_m: f64,
+    /// The knit's stitch: distance between wales along a course and between courses along a
+    /// wale, metres (`knit.course_spacing_m`, `knit.wale_spacing_m`). Only their ratio matters
+    /// to the fit: it sets how much stiffer the fabric is around than along.
+    pub stitch_m: [f64; 2],
 }
 
 /// A tube ready to fit: the knit and, per point, whether it is on an end ring (held at its
@@ -78,7 +86,8 @@ pub fn build_tube(spec: &TubeSpec, axis: &Axis, leg_vertices: &[Point3<f64>]) ->
             let theta = std::f64::consts::TAU * w as f64 / w_count as f64;
             bottom.coords + a * s + (u * theta.cos() + v * theta.sin()) * radii[c]
         },
-    );
+    )
+    .with_stitch_shape(spec.stitch_m[0], spec.stitch_m[1]);
     Tube {
         end_ring: end_rings(&knit),
         knit,

@@ -81,7 +81,7 @@ pub fn tension(knit: &Knit, terms: &ForceTerms) -> Vec<f64> {
                 .iter()
                 .map(|inc| {
                     let s = &knit.springs[inc.spring as usize];
-                    let c1 = terms.stiffness[s.yarn.index() as usize];
+                    let c1 = terms.c1(knit, inc.spring);
                     c1 * ((x[s.b.index()] - x[s.a.index()]).norm() - s.rest)
                 })
                 .sum();

@@ -145,6 +145,7 @@ pub fn run_fit(
             "rest_wale_spacing_m": spec.relaxed_length_m / (spec.courses - 1) as f64,
             "relaxed_length_m": spec.relaxed_length_m,
             "relaxed_circumference_m": spec.relaxed_circumference_m,
+            "stiffness_scale": { "course": knit.stiffness_scale[0], "wale": knit.stiffness_scale[1] },
             "axial_range_m": axial_range,
         },
         "solver": solver.details(scene),
@@ -238,6 +239,7 @@ pub fn solve_fit(
         pattern: scene.knit.pattern,
         relaxed_circumference_m: scene.tube.relaxed_circumference_m,
         relaxed_length_m: relaxed_length,
+        stitch_m: [scene.knit.course_spacing_m, scene.knit.wale_spacing_m],
     };
     let offset = scene.contact.offset(&scene.yarns);
     let mut levels = TubeLevels {

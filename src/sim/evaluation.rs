@@ -26,9 +26,11 @@ pub struct ForceTerms {
 }
 
 impl ForceTerms {
-    /// c1 of a spring of the knit.
+    /// c1 of a spring of the knit: its yarn's stiffness, times the knit's factor for its
+    /// direction ([`Knit::stiffness_scale`]).
     pub(crate) fn c1(&self, knit: &Knit, spring: u32) -> f64 {
-        self.stiffness[knit.springs[spring as usize].yarn.index() as usize]
+        let s = &knit.springs[spring as usize];
+        self.stiffness[s.yarn.index() as usize] * knit.stiffness_scale[s.direction.index()]
     }
 }
 
@@ -101,8 +103,9 @@ pub(crate) fn evaluate(knit: &Knit, terms: &ForceTerms, ws: &mut Workspace) -> E
         .map(|(chunk, states)| {
             let (mut force_sq, mut energy) = (0.0, 0.0);
             for (k, state) in states.iter_mut().enumerate() {
-                let s = &springs[chunk * CHUNK + k];
-                let c1 = terms.stiffness[s.yarn.index() as usize];
+                let spring = chunk * CHUNK + k;
+                let s = &springs[spring];
+                let c1 = terms.c1(knit, spring as u32);
                 let d = x[s.b.index()] - x[s.a.index()];
                 let len = d.norm();
                 let stretch = len - s.rest;
@@ -169,11 +172,8 @@ fn net_force(knit: &Knit, terms: &ForceTerms, states: &[SpringState], p: PointId
 /// The residual's floor: the spring force of a strain of [`REST_STRAIN`] on the softest, shortest
 /// spring.
 pub(crate) fn rest_force_floor(knit: &Knit, terms: &ForceTerms) -> f64 {
-    let softest = terms
-        .stiffness
-        .iter()
-        .copied()
-        .fold(f64::INFINITY, f64::min);
+    let min = |values: &[f64]| values.iter().copied().fold(f64::INFINITY, f64::min);
+    let softest = min(&terms.stiffness) * min(&knit.stiffness_scale);
     REST_STRAIN * softest * shortest_rest(knit)
 }
 
