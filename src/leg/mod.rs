@@ -7,4 +7,4 @@ pub mod load;
 
 pub use axis::{detect_axis, Axis, AxisSource};
 pub use collider::{Closest, Collider};
-pub use load::{load_leg, Leg};
+pub use load::{decode_leg, load_leg, read_leg_file, Leg, LegFile};

@@ -15,7 +15,8 @@ use crate::export::gltf::GlbNode;
 use crate::export::{self, SurfaceMesh, YarnGeometry};
 use crate::knit::tube::{build_tube, end_rings, TubeSpec};
 use crate::knit::{Direction, Knit, YarnKind};
-use crate::leg::{detect_axis, load_leg, Axis, AxisSource, Collider, Leg};
+use crate::leg::{decode_leg, detect_axis, read_leg_file, Axis, AxisSource, Collider, Leg};
+use crate::limits::{peak_memory, MemoryCheck};
 use crate::plan::Plan;
 use crate::post::fields::{self, KnitFields};
 use crate::post::penetration::fix_penetrations;
@@ -76,6 +77,7 @@ pub fn run_fit(
         counters,
         max_penetration_m: max_penetration,
         axial_range_m: axial_range,
+        memory,
     } = solve_fit(
         scene,
         &plan,
@@ -107,14 +109,20 @@ pub fn run_fit(
     }
     let leg_mesh = leg_surface(&leg, &leg_fields);
     let mut files = Vec::new();
+    // The preview's counters go to the report: they exist only where its structures were built.
+    let mut preview = None;
     for &(output, name) in &plan.files {
-        let stage = match output {
-            Output::Preview => crate::plan::PREVIEW_STAGE.to_string(),
-            _ => format!("encode {name}"),
+        let bytes = if output == Output::Preview {
+            let (bytes, stats) = clock.time(crate::plan::PREVIEW_STAGE, || {
+                render::preview::encode_preview(&leg_mesh, &yarns, scene, name)
+            })?;
+            preview = Some(stats);
+            bytes
+        } else {
+            clock.time(&format!("encode {name}"), || {
+                encode(output, name, scene, &knit, &knit_fields, &yarns, &leg_mesh)
+            })?
         };
-        let bytes = clock.time(&stage, || {
-            encode(output, name, scene, &knit, &knit_fields, &yarns, &leg_mesh)
-        })?;
         files.push((name.to_string(), bytes));
     }
 
@@ -158,6 +166,11 @@ pub fn run_fit(
             "settled_out": counters.settled_out,
         },
         "penetration_fix": penetration_fix,
+        "preview": preview,
+        "memory": {
+            "check": memory,
+            "peak_resident_bytes": peak_memory(),
+        },
         "stitch_density_per_cm2": {
             "leg_vertices_covered": covered.len(),
             "leg_vertices": leg.positions.len(),
@@ -211,6 +224,8 @@ pub struct SolvedFit {
     pub max_penetration_m: f64,
     /// Lowest and highest yarn point along the axis, metres from the bottom point.
     pub axial_range_m: [f64; 2],
+    /// The memory estimate checked before the leg was decoded.
+    pub memory: MemoryCheck,
 }
 
 /// Loads the leg, finds its axis, builds the collider and fits the tube with the scene's solver,
@@ -224,8 +239,15 @@ pub fn solve_fit(
     clock: &mut StageClock,
     progress: &mut dyn Progress,
 ) -> Result<SolvedFit> {
-    let leg = clock.time("load leg", || {
-        load_leg(&inputs.leg, scene.leg.units, scene.leg.up_axis)
+    let (leg, memory) = clock.time("load leg", || -> Result<_> {
+        let file = read_leg_file(&inputs.leg)?;
+        // Refuse a fit too large for memory before the leg is decoded or the knit allocated.
+        let memory = MemoryCheck::fit(scene, plan, file.declared_triangles());
+        memory.enforce(scene, &inputs.leg.display().to_string())?;
+        Ok((
+            decode_leg(file, scene.leg.units, scene.leg.up_axis)?,
+            memory,
+        ))
     })?;
     let axis = clock.time("find axis", || choose_axis(scene, inputs, &leg))?;
     let collider = clock.time("build collider", || {
@@ -309,6 +331,7 @@ pub fn solve_fit(
         counters,
         max_penetration_m,
         axial_range_m,
+        memory,
     })
 }
 
@@ -538,7 +561,11 @@ fn encode(
         }
         (Output::Ply, "leg.ply") => export::ply::write_mesh_ply(leg_mesh, &comments),
         (Output::Ply, _) => export::ply::write_ply(std::slice::from_ref(yarns), &comments),
-        (Output::Preview, _) => render::preview::encode_preview(leg_mesh, yarns, scene, name),
+        // Rendered in its own stage, which reports its counters.
+        (Output::Preview, _) => Err(Error::Encode {
+            what: name.into(),
+            message: "the preview is rendered by its own stage".into(),
+        }),
         (Output::Picture, _) => {
             let density: Vec<f64> = leg_mesh
                 .point_attributes
