@@ -3,7 +3,9 @@
 
 mod cli;
 mod fit;
+mod limits;
 mod physics;
+mod plan;
 mod render;
 mod skin;
 mod solvers;
