@@ -232,6 +232,7 @@ mod tests {
             path: "tube".into(),
             positions,
             triangles,
+            reoriented_triangles: 0,
             units: Units::Metres,
             up_axis: UpAxis::PosY,
         }

@@ -4,6 +4,7 @@
 pub mod axis;
 pub mod collider;
 pub mod load;
+pub mod orient;
 pub mod weld;
 
 pub use axis::{detect_axis, Axis, AxisSource};

@@ -135,6 +135,7 @@ pub fn run_fit(
             "file": leg.path.display().to_string(),
             "units": leg.units.name(),
             "up_axis": leg.up_axis.name(),
+            "reoriented_triangles": leg.reoriented_triangles,
             "bounds_m": { "min": leg.bounds().0.coords.as_slice(), "max": leg.bounds().1.coords.as_slice() },
         },
         "axis": axis,
