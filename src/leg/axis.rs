@@ -21,6 +21,7 @@ use std::collections::{BTreeMap, HashMap};
 use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 use serde::Serialize;
 
+use super::section;
 use super::weld::{welded_ids, welded_triangle};
 use super::Leg;
 use crate::knit::tube::perpendicular_frame;
@@ -147,6 +148,26 @@ pub fn detect_axis(leg: &Leg) -> Option<Axis> {
         top: at(top),
         source: AxisSource::Detected,
     })
+}
+
+/// Where along `axis` (a fraction of its length, of 0.1, 0.5 and 0.9) no loop of the mesh's
+/// cross-section goes around it, if anywhere: a detected axis that leaves the mesh is not a
+/// leg's (it runs between two legs, or across a bent one), and a tube around it would not be a
+/// stocking.
+pub fn leaves_mesh(leg: &Leg, axis: &Axis) -> Option<f64> {
+    let fractions = [0.1, 0.5, 0.9];
+    let heights = fractions.map(|f| f * axis.length());
+    let loops = section::enclosing_radii(
+        &leg.positions,
+        &leg.triangles,
+        &axis.bottom(),
+        &axis.direction(),
+        &heights,
+    );
+    fractions
+        .into_iter()
+        .zip(loops)
+        .find_map(|(f, around)| around.is_none().then_some(f))
 }
 
 /// Vertices of the cuts (see module docs): boundaries that go around the line through

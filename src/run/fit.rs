@@ -15,7 +15,7 @@ use crate::export::gltf::GlbNode;
 use crate::export::{self, SurfaceMesh, YarnGeometry};
 use crate::knit::tube::{build_tube, end_rings, TubeSpec};
 use crate::knit::{Direction, Knit, YarnKind};
-use crate::leg::{detect_axis, load_leg, Axis, AxisSource, Collider, Leg};
+use crate::leg::{detect_axis, leaves_mesh, load_leg, Axis, AxisSource, Collider, Leg};
 use crate::plan::Plan;
 use crate::post::fields::{self, KnitFields};
 use crate::post::penetration::fix_penetrations;
@@ -348,7 +348,7 @@ impl<'a> Levels for TubeLevels<'a> {
             courses,
             ..self.spec
         };
-        build_tube(&spec, self.axis, &self.leg.positions).knit
+        build_tube(&spec, self.axis, &self.leg.positions, &self.leg.triangles).knit
     }
 
     fn constraints(&mut self, knit: &Knit) -> &mut dyn Constraints {
@@ -453,12 +453,26 @@ fn choose_axis(scene: &Scene, inputs: &FitInputs, leg: &Leg) -> Result<Axis> {
                 source: inputs.axis_source,
             })
         }
-        None => detect_axis(leg).ok_or_else(|| Error::Leg {
-            path: leg.path.clone(),
-            message: "cannot find the leg's axis: the mesh has no area, or open edges all along \
-                      it; give leg.axis in the scene or --axis"
-                .into(),
-        }),
+        None => {
+            let axis = detect_axis(leg).ok_or_else(|| Error::Leg {
+                path: leg.path.clone(),
+                message: "cannot find the leg's axis: the mesh has no area, or open edges all \
+                          along it; give leg.axis in the scene or --axis"
+                    .into(),
+            })?;
+            match leaves_mesh(leg, &axis) {
+                None => Ok(axis),
+                Some(at) => Err(Error::Leg {
+                    path: leg.path.clone(),
+                    message: format!(
+                        "the mesh's principal axis runs outside it ({:.0}% of the way up): the \
+                         file holds more than one leg, or a bent one; give the stocking's bottom \
+                         and top as leg.axis in the scene or --axis",
+                        100.0 * at
+                    ),
+                }),
+            }
+        }
     }
 }
 
