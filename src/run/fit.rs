@@ -19,6 +19,7 @@ use crate::leg::{detect_axis, leaves_mesh, load_leg, Axis, AxisSource, Collider,
 use crate::plan::Plan;
 use crate::post::fields::{self, KnitFields};
 use crate::post::penetration::fix_penetrations;
+use crate::post::stitches::course_out_of_order;
 use crate::render::density_picture::{self, DensityPictureStyle};
 use crate::render::{self, colormap};
 use crate::report::{Metrics, Report, StageClock};
@@ -299,6 +300,14 @@ pub fn solve_fit(
     let (max_penetration_m, axial_range_m) = clock.time("check penetration", || {
         (max_penetration(&knit, &collider), axial_range(&knit, &axis))
     });
+    if let Some(course) = course_out_of_order(&knit, &axis.direction()) {
+        return Err(Error::Bunched {
+            course,
+            below: course - 1,
+            ratio: scene.yarns.support.stiffness / scene.yarns.nylon.stiffness,
+            circumference_m: spec.relaxed_circumference_m,
+        });
+    }
     Ok(SolvedFit {
         leg,
         axis,
