@@ -105,6 +105,21 @@ pub enum Error {
         iteration: usize,
         what: String,
     },
+    /// The fit came to rest, but not as a stocking: its courses slid along the leg past each
+    /// other and bunched, as a yarn far too tight for the leg does (support yarn much stiffer
+    /// than nylon, or a relaxed circumference far below the leg's girth).
+    #[error(
+        "the fit is not a stocking: course {course} came to rest below course {below} (the \
+         courses slid down the leg and bunched); nothing was written. The yarn is too tight for \
+         this leg: lower yarns.support.stiffness (now {ratio}× nylon's) or raise \
+         tube.relaxed_circumference_m (now {circumference_m} m)"
+    )]
+    Bunched {
+        course: usize,
+        below: usize,
+        ratio: f64,
+        circumference_m: f64,
+    },
     /// Encoding an output (PNG, glTF) failed.
     #[error("{what}: {message}")]
     Encode { what: String, message: String },
@@ -127,6 +142,7 @@ impl Error {
             Error::Write { .. }
             | Error::Diverged { .. }
             | Error::SolverDiverged { .. }
+            | Error::Bunched { .. }
             | Error::Encode { .. } => 1,
         }
     }

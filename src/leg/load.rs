@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Matrix4, Point3};
 
+use super::orient::orient_outward;
 use crate::error::{Error, Result};
 use crate::scene::{Units, UpAxis};
 
@@ -19,8 +20,11 @@ pub struct Leg {
     pub path: PathBuf,
     /// Vertex positions, metres, Y up.
     pub positions: Vec<Point3<f64>>,
-    /// Triangles as vertex indices, counter-clockwise seen from outside.
+    /// Triangles as vertex indices, counter-clockwise seen from outside (rewound where the file
+    /// had them the other way, see [`orient_outward`]).
     pub triangles: Vec<[u32; 3]>,
+    /// How many of the file's triangles were wound inwards and have been flipped.
+    pub reoriented_triangles: usize,
     /// The units the file was read in.
     pub units: Units,
     /// The up axis the file was read with.
@@ -199,10 +203,13 @@ pub fn decode_leg(file: LegFile, units: Units, up: UpAxis) -> Result<Leg> {
         .iter()
         .map(|p| world_from_file(units, up, p))
         .collect();
+    let mut triangles = mesh.triangles;
+    let reoriented_triangles = orient_outward(&positions, &mut triangles);
     let leg = Leg {
         path: path.to_path_buf(),
         positions,
-        triangles: mesh.triangles,
+        triangles,
+        reoriented_triangles,
         units,
         up_axis: up,
     };

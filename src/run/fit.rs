@@ -15,11 +15,14 @@ use crate::export::gltf::GlbNode;
 use crate::export::{self, SurfaceMesh, YarnGeometry};
 use crate::knit::tube::{build_tube, end_rings, TubeSpec};
 use crate::knit::{Direction, Knit, YarnKind};
-use crate::leg::{decode_leg, detect_axis, read_leg_file, Axis, AxisSource, Collider, Leg};
+use crate::leg::{
+    decode_leg, detect_axis, leaves_mesh, read_leg_file, Axis, AxisSource, Collider, Leg,
+};
 use crate::limits::{peak_memory, MemoryCheck};
 use crate::plan::Plan;
 use crate::post::fields::{self, KnitFields};
 use crate::post::penetration::fix_penetrations;
+use crate::post::stitches::course_out_of_order;
 use crate::render::density_picture::{self, DensityPictureStyle};
 use crate::render::{self, colormap};
 use crate::report::{Metrics, Report, StageClock};
@@ -143,6 +146,7 @@ pub fn run_fit(
             "file": leg.path.display().to_string(),
             "units": leg.units.name(),
             "up_axis": leg.up_axis.name(),
+            "reoriented_triangles": leg.reoriented_triangles,
             "bounds_m": { "min": leg.bounds().0.coords.as_slice(), "max": leg.bounds().1.coords.as_slice() },
         },
         "axis": axis,
@@ -320,6 +324,14 @@ pub fn solve_fit(
     let (max_penetration_m, axial_range_m) = clock.time("check penetration", || {
         (max_penetration(&knit, &collider), axial_range(&knit, &axis))
     });
+    if let Some(course) = course_out_of_order(&knit, &axis.direction()) {
+        return Err(Error::Bunched {
+            course,
+            below: course - 1,
+            ratio: scene.yarns.support.stiffness / scene.yarns.nylon.stiffness,
+            circumference_m: spec.relaxed_circumference_m,
+        });
+    }
     Ok(SolvedFit {
         leg,
         axis,
@@ -370,7 +382,7 @@ impl<'a> Levels for TubeLevels<'a> {
             courses,
             ..self.spec
         };
-        build_tube(&spec, self.axis, &self.leg.positions).knit
+        build_tube(&spec, self.axis, &self.leg.positions, &self.leg.triangles).knit
     }
 
     fn constraints(&mut self, knit: &Knit) -> &mut dyn Constraints {
@@ -475,12 +487,26 @@ fn choose_axis(scene: &Scene, inputs: &FitInputs, leg: &Leg) -> Result<Axis> {
                 source: inputs.axis_source,
             })
         }
-        None => detect_axis(leg).ok_or_else(|| Error::Leg {
-            path: leg.path.clone(),
-            message: "cannot find the leg's axis: the mesh has no area, or open edges all along \
-                      it; give leg.axis in the scene or --axis"
-                .into(),
-        }),
+        None => {
+            let axis = detect_axis(leg).ok_or_else(|| Error::Leg {
+                path: leg.path.clone(),
+                message: "cannot find the leg's axis: the mesh has no area, or open edges all \
+                          along it; give leg.axis in the scene or --axis"
+                    .into(),
+            })?;
+            match leaves_mesh(leg, &axis) {
+                None => Ok(axis),
+                Some(at) => Err(Error::Leg {
+                    path: leg.path.clone(),
+                    message: format!(
+                        "the mesh's principal axis runs outside it ({:.0}% of the way up): the \
+                         file holds more than one leg, or a bent one; give the stocking's bottom \
+                         and top as leg.axis in the scene or --axis",
+                        100.0 * at
+                    ),
+                }),
+            }
+        }
     }
 }
 

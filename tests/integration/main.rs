@@ -3,6 +3,7 @@
 
 mod cli;
 mod fit;
+mod hard_cases;
 mod limits;
 mod physics;
 mod plan;
