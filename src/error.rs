@@ -38,12 +38,21 @@ pub enum Error {
     /// A command-line argument has a value the run cannot use.
     #[error("{flag}: {message}")]
     InvalidArgument { flag: String, message: String },
-    /// The run would need more memory than the configured limit.
-    #[error("{what} needs about {estimate_gib:.1} GiB, over the {limit_gib:.1} GiB limit; {how_to_override}")]
+    /// The run would need more memory than it may use (see `crate::limits`); lower the
+    /// resolution, or pass `--allow-large` (`limits.allow_large`) to run anyway.
+    #[error(
+        "{what} needs about {estimate}, {available} available ({limit_source}); {how_to_override}"
+    )]
     TooLarge {
+        /// The run, by its size (`a fit of 400×40000 points on leg.glb (…)`).
         what: String,
-        estimate_gib: f64,
-        limit_gib: f64,
+        /// The estimate, with its unit (`31.2 GiB`).
+        estimate: String,
+        /// The limit, with its unit.
+        available: String,
+        /// Where the limit came from (`MemAvailable in /proc/meminfo`).
+        limit_source: String,
+        /// What to change, and the override.
         how_to_override: String,
     },
     /// The output directory cannot be created or written to.
@@ -96,6 +105,21 @@ pub enum Error {
         iteration: usize,
         what: String,
     },
+    /// The fit came to rest, but not as a stocking: its courses slid along the leg past each
+    /// other and bunched, as a yarn far too tight for the leg does (support yarn much stiffer
+    /// than nylon, or a relaxed circumference far below the leg's girth).
+    #[error(
+        "the fit is not a stocking: course {course} came to rest below course {below} (the \
+         courses slid down the leg and bunched); nothing was written. The yarn is too tight for \
+         this leg: lower yarns.support.stiffness (now {ratio}× nylon's) or raise \
+         tube.relaxed_circumference_m (now {circumference_m} m)"
+    )]
+    Bunched {
+        course: usize,
+        below: usize,
+        ratio: f64,
+        circumference_m: f64,
+    },
     /// Encoding an output (PNG, glTF) failed.
     #[error("{what}: {message}")]
     Encode { what: String, message: String },
@@ -118,6 +142,7 @@ impl Error {
             Error::Write { .. }
             | Error::Diverged { .. }
             | Error::SolverDiverged { .. }
+            | Error::Bunched { .. }
             | Error::Encode { .. } => 1,
         }
     }

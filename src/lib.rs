@@ -9,6 +9,7 @@ pub mod error;
 pub mod export;
 pub mod knit;
 pub mod leg;
+pub mod limits;
 pub mod plan;
 pub mod post;
 pub mod render;

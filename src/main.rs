@@ -11,13 +11,13 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use knitfit::leg::AxisSource;
 use knitfit::run::fit::scene_dir;
 use knitfit::run::{
-    run_bench, run_fit, run_patch, run_render, run_spp_sweep, BenchOptions, FitInputs, Progress,
-    RenderInputs, RunPaths,
+    plan_fit, plan_patch, run_bench, run_fit, run_patch, run_render, run_spp_sweep, BenchOptions,
+    FitInputs, PlanOutcome, Progress, RenderInputs, RunPaths,
 };
 use knitfit::scene::{
-    check_axis, check_patch_points, check_render_budget, check_render_side, check_spp,
-    check_stretch_factor, check_tolerance, check_tube_points, ContactMethod, LegAxis, RenderMode,
-    SolverMethod, Stretch, StretchAxis, View,
+    check_axis, check_memory_limit, check_patch_points, check_render_budget, check_render_side,
+    check_spp, check_stretch_factor, check_tolerance, check_tube_points, ContactMethod, LegAxis,
+    RenderMode, SolverMethod, Stretch, StretchAxis, View,
 };
 use knitfit::{Error, Scene};
 
@@ -52,6 +52,30 @@ enum Command {
     Bench(BenchArgs),
     /// Ray-trace the yarn-level preview of a fit from its stocking.glb (or its directory).
     Render(RenderArgs),
+    /// Show what a fit (default) or `plan patch` would run: effects, stages and why each is
+    /// there, what is left out, the files, and the fit's memory estimate. Runs nothing and
+    /// writes nothing.
+    Plan(Box<PlanArgs>),
+}
+
+#[derive(clap::Args, Debug)]
+struct PlanArgs {
+    #[command(subcommand)]
+    of: Option<PlanOf>,
+    /// The fit to plan, as `knitfit fit` takes it.
+    #[command(flatten)]
+    fit: FitArgs,
+    /// Print the plan as JSON (for scripts).
+    #[arg(long, global = true)]
+    json: bool,
+}
+
+#[derive(Subcommand, Debug)]
+enum PlanOf {
+    /// The plan of `knitfit fit` (what `knitfit plan` shows without a subcommand).
+    Fit(FitArgs),
+    /// The plan of `knitfit patch`.
+    Patch(PatchArgs),
 }
 
 #[derive(clap::Args, Debug, Default)]
@@ -123,9 +147,44 @@ struct FitArgs {
     /// solver.tolerance.
     #[arg(long, value_name = "TOL")]
     tolerance: Option<f64>,
+    /// Memory the fit may use, GiB; a fit estimated to need more is refused before it starts.
+    /// Overrides limits.memory_gib (default: what the system has available).
+    #[arg(long, value_name = "GIB")]
+    memory_limit: Option<f64>,
+    /// Run even when the memory estimate is over the limit. Sets limits.allow_large.
+    #[arg(long)]
+    allow_large: bool,
     /// Output directory (created if missing).
     #[arg(long, default_value = "out")]
     out: PathBuf,
+}
+
+impl FitArgs {
+    /// True when a scene or any option other than `--out` was given (every field is named, so
+    /// a new option cannot be forgotten here).
+    fn given(&self) -> bool {
+        let FitArgs {
+            scene,
+            leg,
+            resolution,
+            axis,
+            contact,
+            solver,
+            tolerance,
+            memory_limit,
+            allow_large,
+            out: _,
+        } = self;
+        scene.is_some()
+            || leg.is_some()
+            || resolution.is_some()
+            || axis.is_some()
+            || contact.is_some()
+            || solver.is_some()
+            || tolerance.is_some()
+            || memory_limit.is_some()
+            || *allow_large
+    }
 }
 
 #[derive(clap::Args, Debug, Default)]
@@ -152,6 +211,7 @@ fn main() -> ExitCode {
         Some(Command::Fit(args)) => fit(args, quiet),
         Some(Command::Bench(args)) => bench(args, quiet),
         Some(Command::Render(args)) => render(args, quiet),
+        Some(Command::Plan(args)) => plan(*args),
         None => fit(
             FitArgs {
                 out: PathBuf::from("out"),
@@ -170,22 +230,7 @@ fn main() -> ExitCode {
 }
 
 fn patch(args: PatchArgs, quiet: bool) -> Result<ExitCode, Error> {
-    let mut scene = Scene::load(args.scene.as_deref())?;
-    if let Some(size) = &args.size {
-        scene.patch.size = parse_size(size)?;
-    }
-    if !args.stretch.is_empty() {
-        scene.patch.stretch = args
-            .stretch
-            .iter()
-            .map(|s| parse_stretch(s))
-            .collect::<Result<_, _>>()?;
-    }
-    let paths = RunPaths {
-        scene_name: scene_name(&args.scene),
-        inputs: args.scene.iter().cloned().collect(),
-        out_dir: args.out.clone(),
-    };
+    let (scene, paths) = patch_request(&args)?;
     let mut bar = Bar::new(quiet);
     let outcome = run_patch(&scene, &paths, &mut bar)?;
     let m = &outcome.report.metrics;
@@ -216,7 +261,93 @@ fn patch(args: PatchArgs, quiet: bool) -> Result<ExitCode, Error> {
     Ok(finish(m.converged, &scene, hint))
 }
 
+/// The scene of a patch, its flags applied, and where it reads and writes.
+fn patch_request(args: &PatchArgs) -> Result<(Scene, RunPaths), Error> {
+    let mut scene = Scene::load(args.scene.as_deref())?;
+    if let Some(size) = &args.size {
+        scene.patch.size = parse_size(size)?;
+    }
+    if !args.stretch.is_empty() {
+        scene.patch.stretch = args
+            .stretch
+            .iter()
+            .map(|s| parse_stretch(s))
+            .collect::<Result<_, _>>()?;
+    }
+    let paths = RunPaths {
+        scene_name: scene_name(&args.scene),
+        inputs: args.scene.iter().cloned().collect(),
+        out_dir: args.out.clone(),
+    };
+    Ok((scene, paths))
+}
+
 fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
+    let (scene, inputs, paths) = fit_request(&args)?;
+    let mut bar = Bar::new(quiet);
+    let outcome = run_fit(&scene, &inputs, &paths, &mut bar)?;
+    let m = &outcome.report.metrics;
+    if !quiet {
+        println!(
+            "fit {}x{} on {} ({} triangles): {} steps, residual {:.2e}, max penetration {:.4} mm, \
+             {} in {:.2} s",
+            scene.tube.wales,
+            scene.tube.courses,
+            inputs.leg.display(),
+            m.leg_triangles.unwrap_or(0),
+            m.steps,
+            m.residual,
+            m.max_penetration_m.unwrap_or(0.0) * 1000.0,
+            if m.converged {
+                "converged"
+            } else {
+                "NOT converged"
+            },
+            outcome.report.wall_seconds
+        );
+        print_written(&args.out, &outcome.written);
+    }
+    Ok(finish(
+        m.converged,
+        &scene,
+        "raise solver.max_steps, or solver.damping if the residual oscillates",
+    ))
+}
+
+/// Prints the plan of a fit or patch; runs nothing.
+fn plan(args: PlanArgs) -> Result<ExitCode, Error> {
+    if args.of.is_some() && args.fit.given() {
+        return Err(Error::InvalidArgument {
+            flag: "plan".into(),
+            message: "a scene or option before `fit` or `patch` would be ignored; put it after \
+                      the subcommand"
+                .into(),
+        });
+    }
+    let outcome: PlanOutcome = match &args.of {
+        Some(PlanOf::Patch(patch)) => {
+            let (scene, paths) = patch_request(patch)?;
+            plan_patch(&scene, &paths)
+        }
+        Some(PlanOf::Fit(fit)) => {
+            let (scene, inputs, paths) = fit_request(fit)?;
+            plan_fit(&scene, &inputs, &paths)?
+        }
+        None => {
+            let (scene, inputs, paths) = fit_request(&args.fit)?;
+            plan_fit(&scene, &inputs, &paths)?
+        }
+    };
+    if args.json {
+        println!("{:#}", outcome.to_json());
+    } else {
+        print!("{}", outcome.to_text());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The scene of a fit, its flags applied, its leg, and where it reads and writes.
+fn fit_request(args: &FitArgs) -> Result<(Scene, FitInputs, RunPaths), Error> {
     let mut scene = Scene::load(args.scene.as_deref())?;
     if let Some(text) = &args.resolution {
         let [w, c] = parse_grid("--resolution", text, 3, 2)?;
@@ -263,6 +394,16 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
         })?;
         scene.solver.tolerance = tolerance;
     }
+    if let Some(gib) = args.memory_limit {
+        check_memory_limit(gib).map_err(|message| Error::InvalidArgument {
+            flag: "--memory-limit".into(),
+            message,
+        })?;
+        scene.limits.memory_gib = Some(gib);
+    }
+    if args.allow_large {
+        scene.limits.allow_large = true;
+    }
     let leg = match &args.leg {
         Some(path) => path.clone(),
         None => scene_dir(args.scene.as_deref()).join(&scene.leg.file),
@@ -272,35 +413,7 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
         inputs: args.scene.iter().cloned().collect(),
         out_dir: args.out.clone(),
     };
-    let inputs = FitInputs { leg, axis_source };
-    let mut bar = Bar::new(quiet);
-    let outcome = run_fit(&scene, &inputs, &paths, &mut bar)?;
-    let m = &outcome.report.metrics;
-    if !quiet {
-        println!(
-            "fit {}x{} on {} ({} triangles): {} steps, residual {:.2e}, max penetration {:.4} mm, \
-             {} in {:.2} s",
-            scene.tube.wales,
-            scene.tube.courses,
-            inputs.leg.display(),
-            m.leg_triangles.unwrap_or(0),
-            m.steps,
-            m.residual,
-            m.max_penetration_m.unwrap_or(0.0) * 1000.0,
-            if m.converged {
-                "converged"
-            } else {
-                "NOT converged"
-            },
-            outcome.report.wall_seconds
-        );
-        print_written(&args.out, &outcome.written);
-    }
-    Ok(finish(
-        m.converged,
-        &scene,
-        "raise solver.max_steps, or solver.damping if the residual oscillates",
-    ))
+    Ok((scene, FitInputs { leg, axis_source }, paths))
 }
 
 fn bench(args: BenchArgs, quiet: bool) -> Result<ExitCode, Error> {

@@ -27,6 +27,9 @@ pub struct Plan {
     pub forces: ForceTerms,
     /// Stages in execution order.
     pub stages: Vec<PlannedStage>,
+    /// Stages and effects that will not run although a scene could ask for them, each with
+    /// why not (`why`).
+    pub left_out: Vec<PlannedStage>,
     /// Files to write besides `report.json`, in order.
     pub files: Vec<(Output, &'static str)>,
 }
@@ -37,6 +40,19 @@ impl Plan {
     pub fn patch(scene: &Scene) -> Plan {
         // A flat patch has no leg to touch or cut through.
         let mut effects = dedup(&scene.effects);
+        let mut left_out = Vec::new();
+        for effect in [Effect::Contact, Effect::PenetrationFix] {
+            if effects.contains(&effect) {
+                left_out.push(PlannedStage {
+                    name: format!("effect {}", effect.name()),
+                    why: "a flat patch has no leg".into(),
+                });
+            }
+        }
+        left_out.push(PlannedStage {
+            name: "load leg".into(),
+            why: "a flat patch has no leg".into(),
+        });
         effects.retain(|&e| e != Effect::Contact && e != Effect::PenetrationFix);
         let forces = force_terms(scene, &effects);
         let mut stages = Vec::new();
@@ -70,12 +86,19 @@ impl Plan {
                 files.push((output, file));
             }
         }
+        if scene.wants(Output::Preview) {
+            left_out.push(PlannedStage {
+                name: PREVIEW_STAGE.into(),
+                why: "a flat patch has no leg to preview".into(),
+            });
+        }
         add("write files".into(), "every run writes report.json".into());
         Plan {
             command: "patch",
             effects,
             forces,
             stages,
+            left_out,
             files,
         }
     }
@@ -94,8 +117,15 @@ impl Plan {
         // shows them, there is nothing for it to do.
         let yarn_preview = scene.wants(Output::Preview) && scene.render.mode == RenderMode::Yarn;
         let polylines = scene.wants(Output::Glb) || scene.wants(Output::Ply) || yarn_preview;
-        if !polylines {
+        let mut left_out = Vec::new();
+        if !polylines && effects.contains(&Effect::PenetrationFix) {
             effects.retain(|&e| e != Effect::PenetrationFix);
+            left_out.push(PlannedStage {
+                name: "penetration fix".into(),
+                why: "effects lists \"penetration_fix\", but no output draws a yarn polyline \
+                      (glb, ply or a yarn preview)"
+                    .into(),
+            });
         }
         let forces = force_terms(scene, &effects);
         let mut stages = Vec::new();
@@ -105,7 +135,14 @@ impl Plan {
                 why,
             })
         };
-        add("load leg", format!("leg.file = {:?}", scene.leg.file));
+        add(
+            "load leg",
+            format!(
+                "leg.file = {:?}; its declared triangles and the tube are checked against the \
+                 memory limit before anything is decoded",
+                scene.leg.file
+            ),
+        );
         add(
             "find axis",
             match scene.leg.axis {
@@ -146,6 +183,10 @@ impl Plan {
             }
         }
         add(
+            "exact contact pass",
+            "contact: move out any point a cached tangent plane let dip below the offset".into(),
+        );
+        add(
             "check penetration",
             "report.json: max_penetration_m against the exact triangles".into(),
         );
@@ -160,6 +201,11 @@ impl Plan {
                  files and the density pictures"
                     .into(),
             );
+        } else {
+            left_out.push(PlannedStage {
+                name: "leg attributes".into(),
+                why: "no output holds the leg (glb, ply, picture or a density preview)".into(),
+            });
         }
         if effects.contains(&Effect::PenetrationFix) {
             add(
@@ -175,6 +221,14 @@ impl Plan {
             (Output::Preview, "preview.png"),
         ] {
             if !scene.wants(output) {
+                if output == Output::Preview {
+                    left_out.push(PlannedStage {
+                        name: PREVIEW_STAGE.into(),
+                        why: "outputs does not list \"preview\": no BVH, yarn grid or camera \
+                              is built"
+                            .into(),
+                    });
+                }
                 continue;
             }
             if output == Output::Preview {
@@ -193,6 +247,7 @@ impl Plan {
             effects,
             forces,
             stages,
+            left_out,
             files,
         }
     }
@@ -248,6 +303,7 @@ impl Plan {
                 connection_factor: None,
             },
             stages,
+            left_out: Vec::new(),
             files: vec![(Output::Preview, "preview.png")],
         }
     }

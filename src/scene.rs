@@ -47,6 +47,23 @@ pub struct Scene {
     pub contact: ContactSettings,
     /// The yarn-level preview still (`preview.png` of `knitfit fit`, and `knitfit render`).
     pub render: RenderSettings,
+    /// How much memory a fit may use (`knitfit fit`; see [`crate::limits`]).
+    pub limits: Limits,
+}
+
+/// The memory a fit may use. A fit whose estimate is over it is refused before the leg is
+/// decoded or the knit allocated ([`crate::limits`]).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct Limits {
+    /// Memory the fit may use, GiB; absent means what the system has available (`MemAvailable`
+    /// in `/proc/meminfo`, or the cgroup's limit when lower), or
+    /// [`crate::limits::FALLBACK_LIMIT_GIB`] where neither can be read (default: absent).
+    /// `--memory-limit` overrides it.
+    pub memory_gib: Option<f64>,
+    /// Run the fit even when its estimate is over the limit: the check is skipped
+    /// (default: false). `--allow-large` sets it.
+    pub allow_large: bool,
 }
 
 /// Length units a leg file can be in.
@@ -923,6 +940,9 @@ impl Scene {
         if self.leg.file.is_empty() {
             return Err(bad("leg.file", "must name a .glb or .gltf file".into()));
         }
+        if let Some(gib) = self.limits.memory_gib {
+            check_memory_limit(gib).map_err(|m| bad("limits.memory_gib", m))?;
+        }
         Ok(())
     }
 
@@ -971,16 +991,28 @@ pub fn check_patch_points(wales: usize, courses: usize) -> std::result::Result<(
     }
 }
 
-/// Largest tube accepted without an override, in points.
-pub const MAX_TUBE_POINTS: usize = 4_000_000;
+/// Largest tube a knit can hold, in points: its points, springs (two per point) and entries of
+/// its per-point spring lists (four per point) are numbered in 32 bits. Below it, what limits a tube is the memory
+/// it needs ([`crate::limits`]), which can be overridden; this cannot.
+pub const MAX_TUBE_POINTS: usize = (u32::MAX / 4) as usize;
 
 /// Checks a tube size against [`MAX_TUBE_POINTS`].
 pub fn check_tube_points(wales: usize, courses: usize) -> std::result::Result<(), String> {
     match wales.checked_mul(courses) {
         Some(n) if n <= MAX_TUBE_POINTS => Ok(()),
         _ => Err(format!(
-            "{wales}×{courses} points is over the tube limit of {MAX_TUBE_POINTS} points"
+            "{wales}×{courses} points is over the {MAX_TUBE_POINTS} points a knit's 32-bit \
+             indices can number"
         )),
+    }
+}
+
+/// Checks a memory limit in GiB is a positive number.
+pub fn check_memory_limit(gib: f64) -> std::result::Result<(), String> {
+    if gib.is_finite() && gib > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("must be a positive number of GiB, got {gib}"))
     }
 }
 

@@ -10,11 +10,15 @@
 //! The grid is usually coarser than the stitches (150×150 points for a stocking of some 400
 //! wales), and its cells need not have the stitch's shape: the springs are scaled so that the
 //! tube is the knit's fabric at any grid size ([`Knit::with_stitch_shape`]).
+//!
+//! Each ring clears the part of the leg that goes around the axis at its height (the loop of the
+//! cross-section around the axis point, [`crate::leg::section`]), not every vertex at that
+//! height: in a file with both legs, the ring around one leg must not take in the other.
 
 use nalgebra::{Point3, Vector3};
 
 use super::{Knit, Pattern, Tile, Vec3};
-use crate::leg::Axis;
+use crate::leg::{section, Axis};
 
 /// Gap kept between the leg and a ring before the fit, as a fraction of the ring radius.
 const RADIAL_MARGIN: f64 = 0.08;
@@ -63,14 +67,20 @@ pub fn perpendicular_frame(a: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
     (u, v)
 }
 
-/// Builds the tube around `leg_vertices` (world space) between the axis points.
-pub fn build_tube(spec: &TubeSpec, axis: &Axis, leg_vertices: &[Point3<f64>]) -> Tube {
+/// Builds the tube around the leg (world-space `leg_vertices` and the `leg_triangles` that
+/// index them) between the axis points.
+pub fn build_tube(
+    spec: &TubeSpec,
+    axis: &Axis,
+    leg_vertices: &[Point3<f64>],
+    leg_triangles: &[[u32; 3]],
+) -> Tube {
     let (w_count, c_count) = (spec.wales, spec.courses);
     let bottom = axis.bottom();
     let a = axis.direction();
     let length = axis.length();
     let (u, v) = perpendicular_frame(&a);
-    let radii = enclosing_radii(c_count, &bottom.coords, &a, length, leg_vertices);
+    let radii = enclosing_radii(c_count, &bottom, &a, length, leg_vertices, leg_triangles);
     let tile = Tile::of(spec.pattern);
     let rest_course = spec.relaxed_circumference_m / w_count as f64;
     let rest_wale = spec.relaxed_length_m / (c_count - 1).max(1) as f64;
@@ -106,20 +116,27 @@ pub fn end_rings(knit: &Knit) -> Vec<bool> {
         .collect()
 }
 
-/// Per ring, a radius that clears every leg vertex near that ring's height, with margin.
-/// Vertices are binned by height along the axis; each ring takes the largest radius of its own
-/// and the neighbouring bins, so a ring also clears the skin between it and the next.
+/// Per ring, a radius that clears the leg near that ring's height, with margin. Each ring's
+/// height has a bin: the vertices of the triangles whose cross-section loop goes around the
+/// axis there, or, where none does (the axis outside the mesh, a hole in that plane), every
+/// vertex nearest that height. Each ring takes the largest radius of its own and the
+/// neighbouring bins, so a ring also clears the skin between it and the next.
 fn enclosing_radii(
     courses: usize,
-    bottom: &Vec3,
+    bottom: &Point3<f64>,
     a: &Vec3,
     length: f64,
     leg_vertices: &[Point3<f64>],
+    leg_triangles: &[[u32; 3]],
 ) -> Vec<f64> {
     let bins = courses.max(2);
+    let heights: Vec<f64> = (0..bins)
+        .map(|c| length * c as f64 / (bins - 1) as f64)
+        .collect();
+    let around = section::enclosing_radii(leg_vertices, leg_triangles, bottom, a, &heights);
     let mut bin_radius = vec![0.0f64; bins];
     for p in leg_vertices {
-        let d = p.coords - bottom;
+        let d = p - bottom;
         let s = d.dot(a);
         let r = (d - a * s).norm();
         let t = (s / length * (bins - 1) as f64).round();
@@ -127,6 +144,9 @@ fn enclosing_radii(
             let b = t.clamp(0.0, (bins - 1) as f64) as usize;
             bin_radius[b] = bin_radius[b].max(r);
         }
+    }
+    for (r, loop_radius) in bin_radius.iter_mut().zip(around) {
+        *r = loop_radius.unwrap_or(*r);
     }
     let widest = bin_radius.iter().copied().fold(0.0, f64::max);
     (0..courses)

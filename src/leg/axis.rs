@@ -8,16 +8,23 @@
 //!
 //! A leg cut from a body is open at its ends, and the cut need not be square to the axis (a
 //! thigh leans inwards). A ring's plane crossing the cut would put yarn points beside the hole,
-//! where inside and outside are not defined. So where the mesh has open edges near an end
-//! (within [`END_ZONE`] of the length), that end is moved further in, until the ring's plane
-//! clears every open edge there by [`CUT_CLEARANCE`] of the length.
+//! where inside and outside are not defined. So where the mesh has a cut near an end (within
+//! [`END_ZONE`] of the length), that end is moved further in, until the ring's plane clears
+//! every vertex of the cut by [`CUT_CLEARANCE`] of the length. A cut is a boundary (a connected
+//! run of open edges, on welded vertices) that goes around the axis, leaving no gap wider than
+//! [`CUT_MAX_GAP_RAD`]: a small hole in the skin, the free edges of an internal fin or a
+//! degenerate sliver are boundaries too, but they do not go around the leg, and moving a
+//! stocking's end past them would leave a band of skin bare.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 
 use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 use serde::Serialize;
 
+use super::section;
+use super::weld::{welded_ids, welded_triangle};
 use super::Leg;
+use crate::knit::tube::perpendicular_frame;
 
 /// Fraction of the leg's length kept free at each end by a detected axis.
 pub const END_INSET: f64 = 0.03;
@@ -25,6 +32,8 @@ pub const END_INSET: f64 = 0.03;
 pub const END_ZONE: f64 = 0.25;
 /// Fraction of the leg's length kept between an end ring's plane and the cut.
 pub const CUT_CLEARANCE: f64 = 0.01;
+/// Widest gap, in angle around the axis, that a boundary may leave and still count as a cut.
+pub const CUT_MAX_GAP_RAD: f64 = std::f64::consts::FRAC_PI_2;
 
 /// Where an axis came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -122,7 +131,7 @@ pub fn detect_axis(leg: &Leg) -> Option<Axis> {
         });
     let length = hi - lo;
     let (mut bottom, mut top) = (lo + END_INSET * length, hi - END_INSET * length);
-    for v in open_edge_vertices(leg) {
+    for v in cut_vertices(leg, &centroid.into(), &dir) {
         let s = (leg.positions[v as usize].coords - centroid).dot(&dir);
         if s < lo + END_ZONE * length {
             bottom = bottom.max(s + CUT_CLEARANCE * length);
@@ -141,22 +150,78 @@ pub fn detect_axis(leg: &Leg) -> Option<Axis> {
     })
 }
 
-/// Vertices on an open edge (an edge used by exactly one triangle), sorted, without repeats.
-fn open_edge_vertices(leg: &Leg) -> Vec<u32> {
+/// Where along `axis` (a fraction of its length, of 0.1, 0.5 and 0.9) no loop of the mesh's
+/// cross-section goes around it, if anywhere: a detected axis that leaves the mesh is not a
+/// leg's (it runs between two legs, or across a bent one), and a tube around it would not be a
+/// stocking.
+pub fn leaves_mesh(leg: &Leg, axis: &Axis) -> Option<f64> {
+    let fractions = [0.1, 0.5, 0.9];
+    let heights = fractions.map(|f| f * axis.length());
+    let loops = section::enclosing_radii(
+        &leg.positions,
+        &leg.triangles,
+        &axis.bottom(),
+        &axis.direction(),
+        &heights,
+    );
+    fractions
+        .into_iter()
+        .zip(loops)
+        .find_map(|(f, around)| around.is_none().then_some(f))
+}
+
+/// Vertices of the cuts (see module docs): boundaries that go around the line through
+/// `centre` along `dir`. Sorted, without repeats; welded ids.
+fn cut_vertices(leg: &Leg, centre: &Point3<f64>, dir: &Vector3<f64>) -> Vec<u32> {
+    let welded = welded_ids(&leg.positions);
     let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
-    for t in &leg.triangles {
+    for t in leg
+        .triangles
+        .iter()
+        .filter_map(|t| welded_triangle(&welded, t))
+    {
         for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
             *uses.entry((a.min(b), a.max(b))).or_default() += 1;
         }
     }
-    let mut vertices: Vec<u32> = uses
-        .into_iter()
-        .filter(|&(_, n)| n == 1)
-        .flat_map(|((a, b), _)| [a, b])
+    // Boundaries: open edges joined where they share a vertex.
+    let mut root: Vec<u32> = (0..leg.positions.len() as u32).collect();
+    fn find(root: &mut [u32], mut v: u32) -> u32 {
+        while root[v as usize] != v {
+            root[v as usize] = root[root[v as usize] as usize];
+            v = root[v as usize];
+        }
+        v
+    }
+    let mut open: Vec<u32> = Vec::new();
+    for (&(a, b), _) in uses.iter().filter(|&(_, &n)| n == 1) {
+        let (ra, rb) = (find(&mut root, a), find(&mut root, b));
+        root[ra.max(rb) as usize] = ra.min(rb);
+        open.extend([a, b]);
+    }
+    open.sort_unstable();
+    open.dedup();
+    let (u, v) = perpendicular_frame(dir);
+    let mut angles: BTreeMap<u32, Vec<f64>> = BTreeMap::new();
+    for &i in &open {
+        let d = leg.positions[i as usize] - centre;
+        angles
+            .entry(find(&mut root, i))
+            .or_default()
+            .push(d.dot(&v).atan2(d.dot(&u)));
+    }
+    let goes_around = |angles: &mut [f64]| {
+        angles.sort_unstable_by(f64::total_cmp);
+        let wrap = angles[0] + std::f64::consts::TAU - angles[angles.len() - 1];
+        let widest = angles.windows(2).map(|w| w[1] - w[0]).fold(wrap, f64::max);
+        widest <= CUT_MAX_GAP_RAD
+    };
+    let cuts: Vec<u32> = angles
+        .iter_mut()
+        .filter_map(|(&r, a)| goes_around(a).then_some(r))
         .collect();
-    vertices.sort_unstable();
-    vertices.dedup();
-    vertices
+    open.retain(|&i| cuts.contains(&find(&mut root, i)));
+    open
 }
 
 #[cfg(test)]
@@ -188,6 +253,7 @@ mod tests {
             path: "tube".into(),
             positions,
             triangles,
+            reoriented_triangles: 0,
             units: Units::Metres,
             up_axis: UpAxis::PosY,
         }
@@ -200,7 +266,11 @@ mod tests {
         let dir = axis.direction();
         assert!(dir.x > 0.2, "the axis follows the lean: {dir:?}");
         let (bottom, top) = (axis.bottom(), axis.top());
-        let open = open_edge_vertices(&leg);
+        let open = cut_vertices(
+            &leg,
+            &Point3::new(0.075, 0.25, 0.0),
+            &Vector3::new(0.3, 1.0, 0.0).normalize(),
+        );
         assert_eq!(open.len(), 64, "both cuts are open");
         let length = axis.length();
         for v in open {

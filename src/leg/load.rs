@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 
 use nalgebra::{Matrix4, Point3};
 
+use super::orient::orient_outward;
 use crate::error::{Error, Result};
 use crate::scene::{Units, UpAxis};
 
@@ -19,8 +20,11 @@ pub struct Leg {
     pub path: PathBuf,
     /// Vertex positions, metres, Y up.
     pub positions: Vec<Point3<f64>>,
-    /// Triangles as vertex indices, counter-clockwise seen from outside.
+    /// Triangles as vertex indices, counter-clockwise seen from outside (rewound where the file
+    /// had them the other way, see [`orient_outward`]).
     pub triangles: Vec<[u32; 3]>,
+    /// How many of the file's triangles were wound inwards and have been flipped.
+    pub reoriented_triangles: usize,
     /// The units the file was read in.
     pub units: Units,
     /// The up axis the file was read with.
@@ -76,6 +80,18 @@ pub fn world_from_file(units: Units, up: UpAxis, p: &Point3<f64>) -> Point3<f64>
 
 /// Loads the leg in `path`, read in `units` with `up` as its up axis.
 pub fn load_leg(path: &Path, units: Units, up: UpAxis) -> Result<Leg> {
+    decode_leg(read_leg_file(path)?, units, up)
+}
+
+/// A leg file whose glTF document has been read and checked, before any geometry is decoded:
+/// what a fit looks at to estimate the memory the leg will take ([`crate::limits`]).
+pub struct LegFile {
+    path: PathBuf,
+    gltf: gltf::Gltf,
+}
+
+/// Reads the leg file `path` and checks its document: glTF, valid, no compressed geometry.
+pub fn read_leg_file(path: &Path) -> Result<LegFile> {
     let fail = |message: String| Error::Leg {
         path: path.to_path_buf(),
         message,
@@ -104,13 +120,63 @@ pub fn load_leg(path: &Path, units: Units, up: UpAxis) -> Result<Leg> {
         )));
     }
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| fail(format!("invalid glTF: {e}")))?;
+    Ok(LegFile {
+        path: path.to_path_buf(),
+        gltf,
+    })
+}
+
+impl LegFile {
+    /// Triangles the primitives under the default scene declare, from their accessors' counts
+    /// alone (a mesh instanced by two nodes counts twice, as it is loaded twice).
+    pub fn declared_triangles(&self) -> usize {
+        use gltf::mesh::Mode;
+        let document = &self.gltf.document;
+        let Some(scene) = document
+            .default_scene()
+            .or_else(|| document.scenes().next())
+        else {
+            return 0;
+        };
+        let mut stack: Vec<gltf::Node> = scene.nodes().collect();
+        // glTF nodes form a tree, so a well-formed file visits each node at most once; the
+        // bound keeps a malformed one (a node its own ancestor) from looping.
+        let mut visits_left = document.nodes().len();
+        let mut triangles = 0usize;
+        while let Some(node) = stack.pop() {
+            if visits_left == 0 {
+                break;
+            }
+            visits_left -= 1;
+            for prim in node.mesh().iter().flat_map(|m| m.primitives()) {
+                let vertices = prim
+                    .indices()
+                    .or_else(|| prim.get(&gltf::Semantic::Positions))
+                    .map_or(0, |a| a.count());
+                triangles = triangles.saturating_add(match prim.mode() {
+                    Mode::Triangles => vertices / 3,
+                    Mode::TriangleStrip | Mode::TriangleFan => vertices.saturating_sub(2),
+                    _ => 0,
+                });
+            }
+            stack.extend(node.children());
+        }
+        triangles
+    }
+}
+
+/// Decodes the triangles of a leg file into world space, read in `units` with `up` as its up
+/// axis, and checks them.
+pub fn decode_leg(file: LegFile, units: Units, up: UpAxis) -> Result<Leg> {
+    let LegFile { path, gltf } = file;
+    let path = path.as_path();
+    let fail = |message: String| Error::Leg {
+        path: path.to_path_buf(),
+        message,
+    };
     let base = path.parent().filter(|p| !p.as_os_str().is_empty());
-    let buffers = gltf::import_buffers(
-        &gltf.document,
-        base.or(Some(Path::new("."))),
-        gltf.blob.clone(),
-    )
-    .map_err(|e| fail(format!("cannot load buffers: {e}")))?;
+    let buffers = gltf::import_buffers(&gltf.document, base.or(Some(Path::new("."))), gltf.blob)
+        .map_err(|e| fail(format!("cannot load buffers: {e}")))?;
 
     let mut mesh = MeshCollector::default();
     let scene = gltf
@@ -137,10 +203,13 @@ pub fn load_leg(path: &Path, units: Units, up: UpAxis) -> Result<Leg> {
         .iter()
         .map(|p| world_from_file(units, up, p))
         .collect();
+    let mut triangles = mesh.triangles;
+    let reoriented_triangles = orient_outward(&positions, &mut triangles);
     let leg = Leg {
         path: path.to_path_buf(),
         positions,
-        triangles: mesh.triangles,
+        triangles,
+        reoriented_triangles,
         units,
         up_axis: up,
     };

@@ -4,7 +4,10 @@
 pub mod axis;
 pub mod collider;
 pub mod load;
+pub mod orient;
+pub mod section;
+pub mod weld;
 
-pub use axis::{detect_axis, Axis, AxisSource};
+pub use axis::{detect_axis, leaves_mesh, Axis, AxisSource};
 pub use collider::{Closest, Collider};
-pub use load::{load_leg, Leg};
+pub use load::{decode_leg, load_leg, read_leg_file, Leg, LegFile};

@@ -402,6 +402,7 @@ mod tests {
             path: "ridge".into(),
             positions,
             triangles,
+            reoriented_triangles: 0,
             units: Units::Metres,
             up_axis: UpAxis::PosY,
         }

@@ -4,6 +4,7 @@
 //! mean length of its two course edges, its height the mean length of its two wale edges, and its
 //! aspect ratio width / height (1 for a square stitch at equal rest spacing).
 
+use nalgebra::Vector3;
 use serde::Serialize;
 
 use crate::knit::Knit;
@@ -88,4 +89,18 @@ pub fn anisotropy(course_stretched: &StitchStats, wale_stretched: &StitchStats) 
         .map(|(x, y)| (x.ln() + y.ln()).powi(2))
         .sum();
     (sum_sq / n).sqrt()
+}
+
+/// The first course of a fitted tube whose mean position along the unit vector `axis` is not
+/// above the course before it, if any: the courses slid along the leg past each other and the
+/// stocking bunched (a yarn too tight for the leg slides down it towards the ankle, where it is
+/// thinnest). A stocking that fits keeps its courses in order; fits of the sample legs keep
+/// every gap above 0.8 of the mean gap.
+pub fn course_out_of_order(knit: &Knit, axis: &Vector3<f64>) -> Option<usize> {
+    let wales = knit.wales;
+    let mean_height = |c: usize| {
+        let ring = &knit.particles.x[c * wales..(c + 1) * wales];
+        ring.iter().map(|p| p.dot(axis)).sum::<f64>() / wales as f64
+    };
+    (1..knit.courses).find(|&c| mean_height(c) <= mean_height(c - 1))
 }

@@ -73,7 +73,8 @@ impl<'a> PreviewInput<'a> {
     }
 }
 
-/// Renders `preview.png` of a fit as the scene's `render` settings ask, and encodes it.
+/// Renders `preview.png` of a fit as the scene's `render` settings ask, and encodes it; returns
+/// the bytes and the render's counters.
 ///
 /// Errors: [`Error::Encode`] naming `name` when the leg has no triangle or PNG encoding fails.
 pub fn encode_preview(
@@ -81,13 +82,13 @@ pub fn encode_preview(
     yarns: &YarnGeometry,
     scene: &Scene,
     name: &str,
-) -> Result<Vec<u8>> {
+) -> Result<(Vec<u8>, PreviewStats)> {
     let preview = render_preview(
         PreviewInput::from_scene(leg, yarns, scene),
         &scene.render,
         name,
     )?;
-    super::encode_png(&preview.image, name)
+    Ok((super::encode_png(&preview.image, name)?, preview.stats))
 }
 
 /// Per-pixel buffers besides the picture, for measuring what the picture shows. Each is
@@ -123,6 +124,8 @@ pub struct PreviewStats {
     pub spp: u32,
     /// `yarn` or `density`.
     pub mode: String,
+    /// Leg triangles in the ray-casting BVH.
+    pub bvh_triangles: usize,
     /// Yarn segments indexed.
     pub segments: usize,
     /// Side of the yarn grid's cells, metres.
@@ -372,6 +375,7 @@ pub fn render_prepared(scene: &PreparedScene, settings: &RenderSettings) -> Prev
             height: h,
             spp,
             mode: settings.mode.name().into(),
+            bvh_triangles: scene.triangles.len(),
             segments: scene.yarns.len(),
             cell_m: scene.yarns.cell_size(),
             layer_m: scene.layer_m,

@@ -18,6 +18,7 @@ use crate::error::Result;
 use crate::export;
 use crate::knit::YarnKind;
 use crate::leg::AxisSource;
+use crate::limits::{peak_memory, reset_peak_memory};
 use crate::plan::Plan;
 use crate::render::bench_plot::{self, Curve};
 use crate::report::StageClock;
@@ -301,21 +302,6 @@ fn leg_density(fit: &SolvedFit, scene: &Scene) -> Vec<f64> {
     measure_fields(&fit.knit, &fit.leg, radius_m)
         .1
         .stitch_density
-}
-
-/// Starts a new peak-memory measurement (Linux: resets the process's peak resident set).
-fn reset_peak_memory() {
-    // Writing 5 to clear_refs resets VmHWM to the current resident set (Linux ≥ 4.0). Where it
-    // fails, the peak is the process's since it began, which is still an upper bound.
-    let _ = std::fs::write("/proc/self/clear_refs", "5");
-}
-
-/// Peak resident memory since the last reset, bytes (Linux `VmHWM`).
-fn peak_memory() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
 }
 
 /// One curve per leg, solver and resolution: error against time over the tolerances.

@@ -15,10 +15,14 @@ use crate::export::gltf::GlbNode;
 use crate::export::{self, SurfaceMesh, YarnGeometry};
 use crate::knit::tube::{build_tube, end_rings, TubeSpec};
 use crate::knit::{Direction, Knit, YarnKind};
-use crate::leg::{detect_axis, load_leg, Axis, AxisSource, Collider, Leg};
+use crate::leg::{
+    decode_leg, detect_axis, leaves_mesh, read_leg_file, Axis, AxisSource, Collider, Leg,
+};
+use crate::limits::{peak_memory, MemoryCheck};
 use crate::plan::Plan;
 use crate::post::fields::{self, KnitFields};
 use crate::post::penetration::fix_penetrations;
+use crate::post::stitches::course_out_of_order;
 use crate::render::density_picture::{self, DensityPictureStyle};
 use crate::render::{self, colormap};
 use crate::report::{Metrics, Report, StageClock};
@@ -76,6 +80,7 @@ pub fn run_fit(
         counters,
         max_penetration_m: max_penetration,
         axial_range_m: axial_range,
+        memory,
     } = solve_fit(
         scene,
         &plan,
@@ -107,14 +112,20 @@ pub fn run_fit(
     }
     let leg_mesh = leg_surface(&leg, &leg_fields);
     let mut files = Vec::new();
+    // The preview's counters go to the report: they exist only where its structures were built.
+    let mut preview = None;
     for &(output, name) in &plan.files {
-        let stage = match output {
-            Output::Preview => crate::plan::PREVIEW_STAGE.to_string(),
-            _ => format!("encode {name}"),
+        let bytes = if output == Output::Preview {
+            let (bytes, stats) = clock.time(crate::plan::PREVIEW_STAGE, || {
+                render::preview::encode_preview(&leg_mesh, &yarns, scene, name)
+            })?;
+            preview = Some(stats);
+            bytes
+        } else {
+            clock.time(&format!("encode {name}"), || {
+                encode(output, name, scene, &knit, &knit_fields, &yarns, &leg_mesh)
+            })?
         };
-        let bytes = clock.time(&stage, || {
-            encode(output, name, scene, &knit, &knit_fields, &yarns, &leg_mesh)
-        })?;
         files.push((name.to_string(), bytes));
     }
 
@@ -135,6 +146,7 @@ pub fn run_fit(
             "file": leg.path.display().to_string(),
             "units": leg.units.name(),
             "up_axis": leg.up_axis.name(),
+            "reoriented_triangles": leg.reoriented_triangles,
             "bounds_m": { "min": leg.bounds().0.coords.as_slice(), "max": leg.bounds().1.coords.as_slice() },
         },
         "axis": axis,
@@ -159,6 +171,11 @@ pub fn run_fit(
             "settled_out": counters.settled_out,
         },
         "penetration_fix": penetration_fix,
+        "preview": preview,
+        "memory": {
+            "check": memory,
+            "peak_resident_bytes": peak_memory(),
+        },
         "stitch_density_per_cm2": {
             "leg_vertices_covered": covered.len(),
             "leg_vertices": leg.positions.len(),
@@ -212,6 +229,8 @@ pub struct SolvedFit {
     pub max_penetration_m: f64,
     /// Lowest and highest yarn point along the axis, metres from the bottom point.
     pub axial_range_m: [f64; 2],
+    /// The memory estimate checked before the leg was decoded.
+    pub memory: MemoryCheck,
 }
 
 /// Loads the leg, finds its axis, builds the collider and fits the tube with the scene's solver,
@@ -225,8 +244,15 @@ pub fn solve_fit(
     clock: &mut StageClock,
     progress: &mut dyn Progress,
 ) -> Result<SolvedFit> {
-    let leg = clock.time("load leg", || {
-        load_leg(&inputs.leg, scene.leg.units, scene.leg.up_axis)
+    let (leg, memory) = clock.time("load leg", || -> Result<_> {
+        let file = read_leg_file(&inputs.leg)?;
+        // Refuse a fit too large for memory before the leg is decoded or the knit allocated.
+        let memory = MemoryCheck::fit(scene, plan, file.declared_triangles());
+        memory.enforce(scene, &inputs.leg.display().to_string())?;
+        Ok((
+            decode_leg(file, scene.leg.units, scene.leg.up_axis)?,
+            memory,
+        ))
     })?;
     let axis = clock.time("find axis", || choose_axis(scene, inputs, &leg))?;
     let collider = clock.time("build collider", || {
@@ -300,6 +326,14 @@ pub fn solve_fit(
     let (max_penetration_m, axial_range_m) = clock.time("check penetration", || {
         (max_penetration(&knit, &collider), axial_range(&knit, &axis))
     });
+    if let Some(course) = course_out_of_order(&knit, &axis.direction()) {
+        return Err(Error::Bunched {
+            course,
+            below: course - 1,
+            ratio: scene.yarns.support.stiffness / scene.yarns.nylon.stiffness,
+            circumference_m: spec.relaxed_circumference_m,
+        });
+    }
     Ok(SolvedFit {
         leg,
         axis,
@@ -311,6 +345,7 @@ pub fn solve_fit(
         counters,
         max_penetration_m,
         axial_range_m,
+        memory,
     })
 }
 
@@ -349,7 +384,7 @@ impl<'a> Levels for TubeLevels<'a> {
             courses,
             ..self.spec
         };
-        build_tube(&spec, self.axis, &self.leg.positions).knit
+        build_tube(&spec, self.axis, &self.leg.positions, &self.leg.triangles).knit
     }
 
     fn constraints(&mut self, knit: &Knit) -> &mut dyn Constraints {
@@ -454,12 +489,26 @@ fn choose_axis(scene: &Scene, inputs: &FitInputs, leg: &Leg) -> Result<Axis> {
                 source: inputs.axis_source,
             })
         }
-        None => detect_axis(leg).ok_or_else(|| Error::Leg {
-            path: leg.path.clone(),
-            message: "cannot find the leg's axis: the mesh has no area, or open edges all along \
-                      it; give leg.axis in the scene or --axis"
-                .into(),
-        }),
+        None => {
+            let axis = detect_axis(leg).ok_or_else(|| Error::Leg {
+                path: leg.path.clone(),
+                message: "cannot find the leg's axis: the mesh has no area, or open edges all \
+                          along it; give leg.axis in the scene or --axis"
+                    .into(),
+            })?;
+            match leaves_mesh(leg, &axis) {
+                None => Ok(axis),
+                Some(at) => Err(Error::Leg {
+                    path: leg.path.clone(),
+                    message: format!(
+                        "the mesh's principal axis runs outside it ({:.0}% of the way up): the \
+                         file holds more than one leg, or a bent one; give the stocking's bottom \
+                         and top as leg.axis in the scene or --axis",
+                        100.0 * at
+                    ),
+                }),
+            }
+        }
     }
 }
 
@@ -540,7 +589,11 @@ fn encode(
         }
         (Output::Ply, "leg.ply") => export::ply::write_mesh_ply(leg_mesh, &comments),
         (Output::Ply, _) => export::ply::write_ply(std::slice::from_ref(yarns), &comments),
-        (Output::Preview, _) => render::preview::encode_preview(leg_mesh, yarns, scene, name),
+        // Rendered in its own stage, which reports its counters.
+        (Output::Preview, _) => Err(Error::Encode {
+            what: name.into(),
+            message: "the preview is rendered by its own stage".into(),
+        }),
         (Output::Picture, _) => {
             let density: Vec<f64> = leg_mesh
                 .point_attributes

@@ -5,6 +5,7 @@
 pub mod bench;
 pub mod fit;
 pub mod patch;
+pub mod plan;
 pub mod render;
 
 use std::path::PathBuf;
@@ -12,6 +13,7 @@ use std::path::PathBuf;
 pub use bench::{run_bench, BenchOptions, BenchOutcome};
 pub use fit::{run_fit, FitInputs, FitOutcome};
 pub use patch::{run_patch, PatchOutcome};
+pub use plan::{plan_fit, plan_patch, PlanOutcome};
 pub use render::{run_render, run_spp_sweep, RenderInputs, RenderOutcome};
 
 /// Receives progress of long stages.

@@ -504,6 +504,7 @@ mod tests {
             path: "rod".into(),
             positions,
             triangles,
+            reoriented_triangles: 0,
             units: Units::Metres,
             up_axis: UpAxis::PosY,
         }

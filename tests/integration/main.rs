@@ -3,7 +3,10 @@
 
 mod cli;
 mod fit;
+mod hard_cases;
+mod limits;
 mod physics;
+mod plan;
 mod render;
 mod skin;
 mod solvers;

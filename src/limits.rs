@@ -1,0 +1,387 @@
+//! Resource limits: a fit too large for the memory it may use is refused before its leg is
+//! decoded or its knit allocated, with the estimate and how to override it.
+//!
+//! The estimate is linear in the tube's points, the leg's triangles and the preview's pixels,
+//! with per-unit costs measured as the peak resident memory (`/usr/bin/time -v`) of real fits;
+//! the figures are beside each constant. The limit is the scene's `limits.memory_gib`, else what
+//! the system says is available, else [`FALLBACK_LIMIT_GIB`].
+
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::plan::Plan;
+use crate::scene::{Output, Scene};
+
+const MIB: f64 = 1024.0 * 1024.0;
+const GIB: f64 = 1024.0 * MIB;
+
+// Measured on the release build (2 threads), `knitfit fit` with `solver.max_steps` 40 (the peak
+// does not depend on how long the solver runs): peak resident set (`/usr/bin/time -v`), MiB.
+//
+//   tube on the procedural leg (41k triangles)   []      ["glb"]  ["ply"]  all three  preview 512²
+//   200×200 (40k points)                          39.2    55.6     149.5    157.7      58.4
+//   400×800 (320k points)                         192.1   299.1    1,039.4  1,083.8    271.7
+//   400×1600 (640k points)                        —       —        —        2,155.0    —
+//   400×800, solver.method "paper"                162.0
+//   200×200, preview 4096², 1 spp                                                      801.6
+//
+//   leg (a cylinder), tube 20×12                  []      ["glb"]  ["ply"]  all three  ["picture"]
+//   41k triangles                                 21.9    —        —        68.9       —
+//   205k triangles                                80.9    —        —        317.0      —
+//   819k triangles                                264.6   347.8    1,236.2  1,266.1    310.0
+//   819k triangles, preview 512², 1 spp           418.2
+//   3.28M triangles                               988.1   —        —        4,989.8    —
+//
+// Each constant is the slope between two sizes above (given in its doc), rounded up by about
+// 10%; the parts add, which overestimates a fit writing everything by about 5% (the encoders'
+// scratch is freed between files). The PLY writer dominates every large fit: it builds a
+// property map per element before encoding.
+
+/// What a fit needs whatever its size: the binary, thread stacks, the scene (measured: 22 MiB
+/// for the smallest fit above).
+const BASE_BYTES: f64 = 24.0 * MIB;
+/// Knit, solver workspaces (every multilevel level included), contact caches, the exact pass
+/// and the penetration check, per tube point (measured: 572 B with the multilevel solver, 477 B
+/// with the paper's).
+const SOLVE_BYTES_PER_POINT: f64 = 640.0;
+/// The yarns and stocking surface of `stocking.glb`, with the penetration fix, per tube point
+/// (measured: 340 B).
+const GLB_BYTES_PER_POINT: f64 = 380.0;
+/// `stocking.ply`, with the penetration fix, per tube point (measured: 2,760 B).
+const PLY_BYTES_PER_POINT: f64 = 3_000.0;
+/// Leg vertices and triangles, the contact BVH and the penetration check, per triangle
+/// (measured: 309 B on legs of two triangles per vertex, from 819k to 3.28M triangles).
+const LEG_BYTES_PER_TRIANGLE: f64 = 340.0;
+/// The leg's node in `stocking.glb` and its attributes, per triangle (measured: 106 B at 819k).
+const LEG_GLB_BYTES_PER_TRIANGLE: f64 = 120.0;
+/// `leg.ply` and the leg's attributes, per triangle (measured: 1,243 B at 819k).
+const LEG_PLY_BYTES_PER_TRIANGLE: f64 = 1_350.0;
+/// `density.png` and the leg's attributes, per triangle (measured: 58 B at 819k).
+const LEG_PICTURE_BYTES_PER_TRIANGLE: f64 = 70.0;
+/// The preview's yarn grid and the penetration fix it needs, per tube point (measured: 226 B).
+const PREVIEW_BYTES_PER_POINT: f64 = 250.0;
+/// The preview's picture and measurement buffers, per pixel (measured: 47 B, 512² against
+/// 4096²).
+const PREVIEW_BYTES_PER_PIXEL: f64 = 52.0;
+/// The preview's BVH of the leg, per triangle (measured: 181 B at 819k).
+const PREVIEW_BYTES_PER_TRIANGLE: f64 = 200.0;
+
+/// Memory assumed available where the system does not say (not Linux, or `/proc` unreadable),
+/// GiB: a laptop's.
+pub const FALLBACK_LIMIT_GIB: f64 = 8.0;
+
+/// The peak memory a fit is estimated to need, by part, in bytes.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MemoryEstimate {
+    /// Tube points (wales × courses).
+    pub tube_points: u64,
+    /// Triangles the leg file declares.
+    pub leg_triangles: u64,
+    /// What does not grow with the fit.
+    pub base_bytes: u64,
+    /// What grows with the tube: knit, solver, yarn outputs.
+    pub tube_bytes: u64,
+    /// What grows with the leg: mesh, collider, leg outputs.
+    pub leg_bytes: u64,
+    /// The preview (0 without it).
+    pub preview_bytes: u64,
+    /// All parts together.
+    pub total_bytes: u64,
+}
+
+impl MemoryEstimate {
+    /// The estimate for the fit `plan` of `scene` on a leg of `leg_triangles` triangles.
+    pub fn fit(scene: &Scene, plan: &Plan, leg_triangles: usize) -> MemoryEstimate {
+        let points = scene.tube.wales as f64 * scene.tube.courses as f64;
+        let triangles = leg_triangles as f64;
+        let writes = |output| plan.files.iter().any(|(o, _)| *o == output);
+        let mut tube = SOLVE_BYTES_PER_POINT;
+        let mut leg = LEG_BYTES_PER_TRIANGLE;
+        if writes(Output::Glb) {
+            tube += GLB_BYTES_PER_POINT;
+            leg += LEG_GLB_BYTES_PER_TRIANGLE;
+        }
+        if writes(Output::Ply) {
+            tube += PLY_BYTES_PER_POINT;
+            leg += LEG_PLY_BYTES_PER_TRIANGLE;
+        }
+        if writes(Output::Picture) {
+            leg += LEG_PICTURE_BYTES_PER_TRIANGLE;
+        }
+        let preview = if writes(Output::Preview) {
+            let pixels = scene.render.width as f64 * scene.render.height as f64;
+            pixels * PREVIEW_BYTES_PER_PIXEL
+                + points * PREVIEW_BYTES_PER_POINT
+                + triangles * PREVIEW_BYTES_PER_TRIANGLE
+        } else {
+            0.0
+        };
+        // f64 → u64 saturates, so an absurd size reads as "more than any machine has".
+        let (base_bytes, tube_bytes) = (BASE_BYTES as u64, (points * tube) as u64);
+        let (leg_bytes, preview_bytes) = ((triangles * leg) as u64, preview as u64);
+        MemoryEstimate {
+            tube_points: points as u64,
+            leg_triangles: leg_triangles as u64,
+            base_bytes,
+            tube_bytes,
+            leg_bytes,
+            preview_bytes,
+            total_bytes: base_bytes
+                .saturating_add(tube_bytes)
+                .saturating_add(leg_bytes)
+                .saturating_add(preview_bytes),
+        }
+    }
+}
+
+/// Where the memory limit came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LimitSource {
+    /// The scene's `limits.memory_gib` (or `--memory-limit`).
+    Scene,
+    /// `MemAvailable` in `/proc/meminfo`.
+    MemAvailable,
+    /// The process's cgroup memory limit less what the cgroup uses, when below `MemAvailable`
+    /// (a container sees the host's `/proc/meminfo`).
+    Cgroup,
+    /// [`FALLBACK_LIMIT_GIB`]: the system did not say.
+    Fallback,
+}
+
+impl LimitSource {
+    /// How the source is named in messages.
+    pub fn describe(self) -> &'static str {
+        match self {
+            LimitSource::Scene => "limits.memory_gib",
+            LimitSource::MemAvailable => "MemAvailable in /proc/meminfo",
+            LimitSource::Cgroup => "the cgroup's memory limit",
+            LimitSource::Fallback => "fallback: the system does not say",
+        }
+    }
+}
+
+/// The memory a run may use.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct MemoryLimit {
+    /// Bytes.
+    pub bytes: u64,
+    /// Where the figure came from.
+    pub source: LimitSource,
+}
+
+impl MemoryLimit {
+    /// The scene's limit, else the system's available memory, else the fallback.
+    pub fn of(scene: &Scene) -> MemoryLimit {
+        if let Some(gib) = scene.limits.memory_gib {
+            return MemoryLimit {
+                bytes: (gib * GIB) as u64,
+                source: LimitSource::Scene,
+            };
+        }
+        let meminfo = std::fs::read_to_string("/proc/meminfo")
+            .ok()
+            .and_then(|text| mem_available(&text));
+        let cgroup = cgroup_available();
+        match (meminfo, cgroup) {
+            (Some(m), Some(c)) if c < m => MemoryLimit {
+                bytes: c,
+                source: LimitSource::Cgroup,
+            },
+            (Some(m), _) => MemoryLimit {
+                bytes: m,
+                source: LimitSource::MemAvailable,
+            },
+            (None, Some(c)) => MemoryLimit {
+                bytes: c,
+                source: LimitSource::Cgroup,
+            },
+            (None, None) => MemoryLimit {
+                bytes: (FALLBACK_LIMIT_GIB * GIB) as u64,
+                source: LimitSource::Fallback,
+            },
+        }
+    }
+}
+
+/// `MemAvailable` of a `/proc/meminfo` text, bytes.
+fn mem_available(meminfo: &str) -> Option<u64> {
+    let line = meminfo.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib.saturating_mul(1024))
+}
+
+/// The cgroup's memory limit less its usage, bytes (cgroup v2, then v1); `None` without a
+/// limit. An unlimited v1 cgroup reports a limit near 2^63, which is never below `MemAvailable`.
+fn cgroup_available() -> Option<u64> {
+    let read =
+        |path: &str| -> Option<u64> { std::fs::read_to_string(path).ok()?.trim().parse().ok() };
+    let (limit, usage) = match read("/sys/fs/cgroup/memory.max") {
+        Some(limit) => (limit, read("/sys/fs/cgroup/memory.current")?),
+        None => (
+            read("/sys/fs/cgroup/memory/memory.limit_in_bytes")?,
+            read("/sys/fs/cgroup/memory/memory.usage_in_bytes")?,
+        ),
+    };
+    Some(limit.saturating_sub(usage))
+}
+
+/// A fit's estimate against its limit: the `memory` of the plan and of `report.json`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MemoryCheck {
+    /// What the fit is estimated to need.
+    pub estimate: MemoryEstimate,
+    /// What it may use.
+    pub limit: MemoryLimit,
+    /// `limits.allow_large`: run even when over the limit.
+    pub allow_large: bool,
+}
+
+impl MemoryCheck {
+    /// The check of the fit `plan` of `scene` on a leg of `leg_triangles` triangles.
+    pub fn fit(scene: &Scene, plan: &Plan, leg_triangles: usize) -> MemoryCheck {
+        MemoryCheck {
+            estimate: MemoryEstimate::fit(scene, plan, leg_triangles),
+            limit: MemoryLimit::of(scene),
+            allow_large: scene.limits.allow_large,
+        }
+    }
+
+    /// True when the estimate is within the limit.
+    pub fn fits(&self) -> bool {
+        self.estimate.total_bytes <= self.limit.bytes
+    }
+
+    /// One line: the estimate, the limit, and what a run does with them.
+    pub fn summary(&self) -> String {
+        let verdict = if self.fits() {
+            "fits"
+        } else if self.allow_large {
+            "over the limit, run anyway (allow_large)"
+        } else {
+            "over the limit: the run would be refused"
+        };
+        format!(
+            "about {} (tube {}, leg {}, preview {}, base {}), {} available ({}): {verdict}",
+            human_bytes(self.estimate.total_bytes),
+            human_bytes(self.estimate.tube_bytes),
+            human_bytes(self.estimate.leg_bytes),
+            human_bytes(self.estimate.preview_bytes),
+            human_bytes(self.estimate.base_bytes),
+            human_bytes(self.limit.bytes),
+            self.limit.source.describe(),
+        )
+    }
+
+    /// Refuses a fit over its limit, unless `allow_large`: [`Error::TooLarge`] naming the tube
+    /// and the leg (`leg_name`) and saying how to go on.
+    pub fn enforce(&self, scene: &Scene, leg_name: &str) -> Result<()> {
+        if self.allow_large || self.fits() {
+            return Ok(());
+        }
+        let e = &self.estimate;
+        let how_to_override = if e.leg_bytes > e.tube_bytes {
+            "use a leg with fewer triangles"
+        } else {
+            "lower --resolution (tube.wales, tube.courses)"
+        };
+        Err(Error::TooLarge {
+            what: format!(
+                "a fit of {}×{} points on {leg_name} ({} triangles)",
+                scene.tube.wales, scene.tube.courses, e.leg_triangles
+            ),
+            estimate: human_bytes(e.total_bytes),
+            available: human_bytes(self.limit.bytes),
+            limit_source: self.limit.source.describe().into(),
+            how_to_override: format!(
+                "{how_to_override}, or pass --allow-large (limits.allow_large) to run anyway"
+            ),
+        })
+    }
+}
+
+/// Bytes as GiB (one decimal) from 1 GiB up, else MiB.
+pub fn human_bytes(bytes: u64) -> String {
+    let b = bytes as f64;
+    if b >= GIB {
+        format!("{:.1} GiB", b / GIB)
+    } else {
+        format!("{:.0} MiB", b / MIB)
+    }
+}
+
+/// Starts a new peak-memory measurement (Linux: resets the process's peak resident set).
+pub fn reset_peak_memory() {
+    // Writing 5 to clear_refs resets VmHWM to the current resident set (Linux ≥ 4.0). Where it
+    // fails, the peak is the process's since it began, which is still an upper bound.
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
+/// Peak resident memory since the process began or the last [`reset_peak_memory`], bytes
+/// (Linux `VmHWM`).
+pub fn peak_memory() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene(outputs: Vec<Output>) -> Scene {
+        let mut scene = Scene::load(None).unwrap();
+        scene.outputs = outputs;
+        scene
+    }
+
+    #[test]
+    fn the_estimate_grows_with_the_tube_the_leg_and_the_outputs() {
+        let bare = scene(vec![]);
+        let small = MemoryEstimate::fit(&bare, &Plan::fit(&bare), 10_000);
+        let mut big = bare.clone();
+        big.tube.wales *= 2;
+        let larger_tube = MemoryEstimate::fit(&big, &Plan::fit(&big), 10_000);
+        assert_eq!(larger_tube.tube_bytes, 2 * small.tube_bytes);
+        let larger_leg = MemoryEstimate::fit(&bare, &Plan::fit(&bare), 20_000);
+        assert_eq!(larger_leg.leg_bytes, 2 * small.leg_bytes);
+        let ply = scene(vec![Output::Ply]);
+        assert!(MemoryEstimate::fit(&ply, &Plan::fit(&ply), 10_000).tube_bytes > small.tube_bytes);
+        assert_eq!(small.preview_bytes, 0);
+        let preview = scene(vec![Output::Preview]);
+        assert!(MemoryEstimate::fit(&preview, &Plan::fit(&preview), 10_000).preview_bytes > 0);
+    }
+
+    #[test]
+    fn an_absurd_tube_saturates_instead_of_overflowing() {
+        let mut s = scene(vec![Output::Ply]);
+        s.tube.wales = usize::MAX / 2;
+        s.tube.courses = usize::MAX / 2;
+        let e = MemoryEstimate::fit(&s, &Plan::fit(&s), usize::MAX);
+        assert_eq!(e.total_bytes, u64::MAX);
+    }
+
+    #[test]
+    fn the_scene_limit_wins_and_allow_large_skips_the_refusal() {
+        let mut s = scene(vec![]);
+        s.limits.memory_gib = Some(0.001);
+        let check = MemoryCheck::fit(&s, &Plan::fit(&s), 41_000);
+        assert_eq!(check.limit.source, LimitSource::Scene);
+        assert!(!check.fits());
+        let err = check.enforce(&s, "leg.glb").unwrap_err().to_string();
+        assert!(err.contains("--allow-large"), "{err}");
+        assert!(err.contains("1 MiB available"), "{err}");
+        s.limits.allow_large = true;
+        assert!(MemoryCheck::fit(&s, &Plan::fit(&s), 41_000)
+            .enforce(&s, "leg.glb")
+            .is_ok());
+    }
+
+    #[test]
+    fn mem_available_is_read_in_kib() {
+        let text = "MemTotal:       24683584 kB\nMemAvailable:   23680008 kB\n";
+        assert_eq!(mem_available(text), Some(23_680_008 * 1024));
+        assert_eq!(mem_available("MemTotal: 1 kB\n"), None);
+    }
+}

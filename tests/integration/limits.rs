@@ -1,0 +1,140 @@
+//! Resource limits: a fit too large for memory is refused up front, with its estimate and the
+//! override; the override skips the check.
+
+use crate::util::{files_in, knitfit, procedural_leg, report, stderr, stdout, write};
+
+/// A .gltf whose one primitive declares a billion triangles over a buffer file that does not
+/// exist: decoding it would fail on the buffer, so a refusal by size proves the check came first.
+const HUGE_GLTF: &str = r#"{"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+  "nodes": [{"mesh": 0}], "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+  "buffers": [{"byteLength": 36, "uri": "missing.bin"}],
+  "bufferViews": [{"buffer": 0, "byteLength": 36}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3000000000, "type": "VEC3",
+                 "min": [0, 0, 0], "max": [1, 1, 1]}]}"#;
+
+/// Asserts a one-line refusal with exit code 2 that contains every `expect`, and no file written.
+fn assert_refused(dir: &std::path::Path, out: &std::process::Output, expect: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    for e in expect {
+        assert!(err.contains(e), "{e:?} in {err}");
+    }
+    assert!(files_in(&dir.join("out")).is_empty());
+}
+
+#[test]
+fn a_huge_resolution_is_refused_before_any_work_with_its_estimate_and_the_override() {
+    // 9·10^8 points need terabytes: more than any machine this runs on has available.
+    let dir = tempfile::tempdir().unwrap();
+    let out = knitfit(dir.path(), &["fit", "--resolution", "30000x30000"]);
+    assert_refused(
+        dir.path(),
+        &out,
+        &[
+            "30000×30000 points",
+            "needs about",
+            "GiB",
+            "available",
+            "lower --resolution",
+            "--allow-large",
+        ],
+    );
+}
+
+#[test]
+fn a_leg_declaring_too_many_triangles_is_refused_before_it_is_decoded() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "huge.gltf", HUGE_GLTF);
+    let args = ["fit", "--leg", "huge.gltf", "--resolution", "20x12"];
+    let out = knitfit(dir.path(), &args);
+    assert_refused(
+        dir.path(),
+        &out,
+        &[
+            "huge.gltf",
+            "1000000000 triangles",
+            "fewer triangles",
+            "--allow-large",
+        ],
+    );
+    // The override skips the check: the run goes on to decode the leg, and only then meets
+    // the missing buffer.
+    let out = knitfit(dir.path(), &[&args[..], &["--allow-large"]].concat());
+    assert_refused(dir.path(), &out, &["huge.gltf", "cannot load buffers"]);
+}
+
+#[test]
+fn the_override_runs_a_fit_that_a_low_limit_refuses() {
+    let dir = tempfile::tempdir().unwrap();
+    let leg = procedural_leg();
+    let base = [
+        "fit",
+        "--leg",
+        leg.to_str().unwrap(),
+        "--resolution",
+        "20x12",
+        "--memory-limit",
+        "0.01",
+        "-q",
+    ];
+    let out = knitfit(dir.path(), &base);
+    assert_refused(
+        dir.path(),
+        &out,
+        &["needs about", "10 MiB available", "limits.memory_gib"],
+    );
+
+    let out = knitfit(dir.path(), &[&base[..], &["--allow-large"]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let memory = &report(&dir.path().join("out"))["details"]["memory"];
+    assert_eq!(memory["check"]["allow_large"], true);
+    assert!(memory["check"]["estimate"]["total_bytes"].as_u64().unwrap() > 10 << 20);
+
+    // The same from the scene file.
+    let scene = write(
+        dir.path(),
+        "s.json",
+        r#"{"limits": {"memory_gib": 0.01, "allow_large": true}, "outputs": []}"#,
+    );
+    let (_, fitted) = crate::util::fit(&leg, "20x12", &[scene.to_str().unwrap()]);
+    assert_eq!(
+        fitted["details"]["memory"]["check"]["limit"]["source"],
+        "scene"
+    );
+}
+
+#[test]
+fn plan_shows_the_estimate_and_whether_the_run_would_be_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let plan = |extra: &[&str]| {
+        let out = knitfit(
+            dir.path(),
+            &[&["plan", "--resolution", "30000x30000"][..], extra].concat(),
+        );
+        assert!(out.status.success(), "{}", stderr(&out));
+        stdout(&out)
+    };
+    let text = plan(&[]);
+    assert!(text.contains("the run would be refused"), "{text}");
+    assert!(plan(&["--allow-large"]).contains("run anyway"));
+    let json: serde_json::Value = serde_json::from_str(&plan(&["--json"])).unwrap();
+    let memory = &json["memory"];
+    assert_eq!(memory["fits"], false);
+    assert!(
+        memory["estimate"]["tube_bytes"].as_u64().unwrap() > 1 << 40,
+        "{memory}"
+    );
+    assert_eq!(memory["estimate"]["tube_points"], 900_000_000u64);
+    assert!(files_in(dir.path()).is_empty());
+}
+
+#[test]
+fn a_bad_memory_limit_is_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = knitfit(dir.path(), &["fit", "--memory-limit", "0"]);
+    assert_refused(dir.path(), &out, &["--memory-limit", "positive"]);
+    write(dir.path(), "s.json", r#"{"limits": {"memory_gib": 0}}"#);
+    let out = knitfit(dir.path(), &["fit", "s.json"]);
+    assert_refused(dir.path(), &out, &["limits.memory_gib", "positive"]);
+}
