@@ -109,14 +109,15 @@ pub enum Error {
     /// other and bunched, as a yarn far too tight for the leg does (support yarn much stiffer
     /// than nylon, or a relaxed circumference far below the leg's girth).
     #[error(
-        "the fit is not a stocking: course {course} came to rest below course {below} (the \
-         courses slid down the leg and bunched); nothing was written. The yarn is too tight for \
-         this leg: lower yarns.support.stiffness (now {ratio}× nylon's) or raise \
-         tube.relaxed_circumference_m (now {circumference_m} m)"
+        "the fit is not a stocking: {bunched} of its {courses} courses came to rest below courses \
+         before them, from course {course} on (the courses slid down the leg and bunched); \
+         nothing was written. The yarn is too tight for this leg: lower yarns.support.stiffness \
+         (now {ratio}× nylon's) or raise tube.relaxed_circumference_m (now {circumference_m} m)"
     )]
     Bunched {
         course: usize,
-        below: usize,
+        bunched: usize,
+        courses: usize,
         ratio: f64,
         circumference_m: f64,
     },

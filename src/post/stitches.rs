@@ -91,16 +91,34 @@ pub fn anisotropy(course_stretched: &StitchStats, wale_stretched: &StitchStats) 
     (sum_sq / n).sqrt()
 }
 
-/// The first course of a fitted tube whose mean position along the unit vector `axis` is not
-/// above the course before it, if any: the courses slid along the leg past each other and the
-/// stocking bunched (a yarn too tight for the leg slides down it towards the ankle, where it is
-/// thinnest). A stocking that fits keeps its courses in order; fits of the sample legs keep
-/// every gap above 0.8 of the mean gap.
-pub fn course_out_of_order(knit: &Knit, axis: &Vector3<f64>) -> Option<usize> {
+/// Courses of a fitted tube that bunched: those whose mean position along the unit vector
+/// `axis` is not above every course before them (the courses slid along the leg past each
+/// other). Returns how many, and the first.
+///
+/// A yarn too tight for the leg slides down it towards the ankle, where it is thinnest, and
+/// most of the stocking piles up there. A stocking that fits keeps its courses in order, except
+/// at most a small fold just above a slack ankle: on a frictionless leg, the rings' own tension
+/// pushes the lower courses down onto the held bottom ring, and where the wales are slack they
+/// fold (at 400×1600 on the MakeHuman leg, 3% of the courses; see [`MAX_BUNCHED_FRACTION`]).
+pub fn bunched_courses(knit: &Knit, axis: &Vector3<f64>) -> (usize, Option<usize>) {
     let wales = knit.wales;
     let mean_height = |c: usize| {
         let ring = &knit.particles.x[c * wales..(c + 1) * wales];
         ring.iter().map(|p| p.dot(axis)).sum::<f64>() / wales as f64
     };
-    (1..knit.courses).find(|&c| mean_height(c) <= mean_height(c - 1))
+    let mut highest = f64::NEG_INFINITY;
+    let (mut count, mut first) = (0, None);
+    for c in 0..knit.courses {
+        let h = mean_height(c);
+        if h <= highest {
+            count += 1;
+            first.get_or_insert(c);
+        }
+        highest = highest.max(h);
+    }
+    (count, first)
 }
+
+/// The largest fraction of a fit's courses that may be out of order ([`bunched_courses`])
+/// before the fit is refused as bunched.
+pub const MAX_BUNCHED_FRACTION: f64 = 0.1;

@@ -22,7 +22,7 @@ use crate::limits::{peak_memory, MemoryCheck};
 use crate::plan::Plan;
 use crate::post::fields::{self, KnitFields};
 use crate::post::penetration::fix_penetrations;
-use crate::post::stitches::course_out_of_order;
+use crate::post::stitches::{bunched_courses, MAX_BUNCHED_FRACTION};
 use crate::render::density_picture::{self, DensityPictureStyle};
 use crate::render::{self, colormap};
 use crate::report::{Metrics, Report, StageClock};
@@ -80,6 +80,7 @@ pub fn run_fit(
         counters,
         max_penetration_m: max_penetration,
         axial_range_m: axial_range,
+        bunched_courses,
         memory,
     } = solve_fit(
         scene,
@@ -159,6 +160,7 @@ pub fn run_fit(
             "relaxed_circumference_m": spec.relaxed_circumference_m,
             "stiffness_scale": { "course": knit.stiffness_scale[0], "wale": knit.stiffness_scale[1] },
             "axial_range_m": axial_range,
+            "bunched_courses": bunched_courses,
         },
         "solver": solver.details(scene),
         "contact": {
@@ -229,6 +231,9 @@ pub struct SolvedFit {
     pub max_penetration_m: f64,
     /// Lowest and highest yarn point along the axis, metres from the bottom point.
     pub axial_range_m: [f64; 2],
+    /// Courses that came to rest below a course before them (a small fold above a slack ankle;
+    /// more than [`MAX_BUNCHED_FRACTION`] of them is refused as bunched).
+    pub bunched_courses: usize,
     /// The memory estimate checked before the leg was decoded.
     pub memory: MemoryCheck,
 }
@@ -326,10 +331,14 @@ pub fn solve_fit(
     let (max_penetration_m, axial_range_m) = clock.time("check penetration", || {
         (max_penetration(&knit, &collider), axial_range(&knit, &axis))
     });
-    if let Some(course) = course_out_of_order(&knit, &axis.direction()) {
+    let (bunched, first) = bunched_courses(&knit, &axis.direction());
+    if let Some(course) =
+        first.filter(|_| bunched as f64 > MAX_BUNCHED_FRACTION * knit.courses as f64)
+    {
         return Err(Error::Bunched {
             course,
-            below: course - 1,
+            bunched,
+            courses: knit.courses,
             ratio: scene.yarns.support.stiffness / scene.yarns.nylon.stiffness,
             circumference_m: spec.relaxed_circumference_m,
         });
@@ -345,6 +354,7 @@ pub fn solve_fit(
         counters,
         max_penetration_m,
         axial_range_m,
+        bunched_courses: bunched,
         memory,
     })
 }
