@@ -4,6 +4,8 @@
 mod cli;
 mod fit;
 mod physics;
+mod prop_config;
+mod properties;
 mod render;
 mod skin;
 mod solvers;
