@@ -118,10 +118,8 @@ pub fn load_leg(path: &Path, units: Units, up: UpAxis) -> Result<Leg> {
         .default_scene()
         .or_else(|| gltf.document.scenes().next())
         .ok_or_else(|| fail("has no scene".into()))?;
-    for node in scene.nodes() {
-        mesh.node(&node, &Matrix4::identity(), &buffers)
-            .map_err(fail)?;
-    }
+    mesh.scene(&scene, gltf.document.nodes().len(), &buffers)
+        .map_err(fail)?;
     if mesh.triangles.is_empty() {
         return Err(fail(if mesh.other_primitives > 0 {
             format!(
@@ -197,24 +195,43 @@ struct MeshCollector {
 }
 
 impl MeshCollector {
-    fn node(
+    /// Every node of `scene`, depth first in document order, with its mesh's triangles in the
+    /// file's coordinates. Walked with a stack of its own, not recursion, and each node taken
+    /// once: a hierarchy with a cycle (which glTF forbids, and a damaged file can have) is
+    /// refused instead of overflowing the stack.
+    fn scene(
         &mut self,
-        node: &gltf::Node,
-        parent: &Matrix4<f64>,
+        scene: &gltf::Scene,
+        node_count: usize,
         buffers: &[gltf::buffer::Data],
     ) -> std::result::Result<(), String> {
-        let local = Matrix4::from(node.transform().matrix()).cast::<f64>();
-        let file_from_node = parent * local;
-        if let Some(mesh) = node.mesh() {
-            for prim in mesh.primitives() {
-                self.primitive(&prim, &file_from_node, buffers)
-                    .map_err(|e| {
-                        format!("mesh {} primitive {}: {e}", mesh.index(), prim.index())
-                    })?;
+        let mut seen = vec![false; node_count];
+        let mut stack: Vec<(gltf::Node, Matrix4<f64>)> = scene
+            .nodes()
+            .map(|root| (root, Matrix4::identity()))
+            .collect();
+        stack.reverse();
+        while let Some((node, file_from_parent)) = stack.pop() {
+            if std::mem::replace(&mut seen[node.index()], true) {
+                return Err(format!(
+                    "node {} is reached twice: its node hierarchy has a cycle or a node with two \
+                     parents, which glTF does not allow",
+                    node.index()
+                ));
             }
-        }
-        for child in node.children() {
-            self.node(&child, &file_from_node, buffers)?;
+            let local = Matrix4::from(node.transform().matrix()).cast::<f64>();
+            let file_from_node = file_from_parent * local;
+            if let Some(mesh) = node.mesh() {
+                for prim in mesh.primitives() {
+                    self.primitive(&prim, &file_from_node, buffers)
+                        .map_err(|e| {
+                            format!("mesh {} primitive {}: {e}", mesh.index(), prim.index())
+                        })?;
+                }
+            }
+            let first_child = stack.len();
+            stack.extend(node.children().map(|child| (child, file_from_node)));
+            stack[first_child..].reverse();
         }
         Ok(())
     }

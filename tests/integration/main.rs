@@ -3,6 +3,7 @@
 
 mod cli;
 mod fit;
+mod fuzz;
 mod physics;
 mod prop_config;
 mod properties;
