@@ -103,6 +103,7 @@ pub fn load_leg(path: &Path, units: Units, up: UpAxis) -> Result<Leg> {
              without mesh compression"
         )));
     }
+    check_position_accessors(unchecked.document.as_json()).map_err(fail)?;
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| fail(format!("invalid glTF: {e}")))?;
     let base = path.parent().filter(|p| !p.as_os_str().is_empty());
     let buffers = gltf::import_buffers(
@@ -144,6 +145,27 @@ pub fn load_leg(path: &Path, units: Units, up: UpAxis) -> Result<Leg> {
     };
     check_height(&leg)?;
     Ok(leg)
+}
+
+/// Refuses a primitive whose `POSITION` names an accessor the file does not have. The glTF
+/// validator would report it, but gltf-json 1.4's check of the accessor's bounds indexes it
+/// first and panics; so it is checked here, before validating.
+fn check_position_accessors(root: &gltf::json::Root) -> std::result::Result<(), String> {
+    let positions = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some(accessor) = prim.attributes.get(&positions) {
+                if accessor.value() >= root.accessors.len() {
+                    return Err(format!(
+                        "mesh {m} primitive {p}: POSITION names accessor {}, but the file has {}",
+                        accessor.value(),
+                        root.accessors.len()
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Refuses a leg whose height is implausible in the assumed units, and says which units would fit.

@@ -711,6 +711,20 @@ fn regression_a_position_beyond_f32_range_is_refused_not_written_as_infinity() {
     assert!(result.is_err(), "{result:?}");
 }
 
+/// Found by `a_damaged_leg_file_loads_or_is_refused_cleanly` (at 5000 cases): a POSITION
+/// attribute naming an accessor past the last one panicked inside the glTF validator.
+#[test]
+fn regression_a_position_accessor_past_the_last_is_refused_not_a_panic() {
+    let mut glb = Glb::parse(&originals()[0]);
+    let accessors = glb.json["accessors"].as_array().unwrap().len();
+    glb.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(accessors);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("leg.glb");
+    std::fs::write(&path, glb.bytes()).unwrap();
+    let err = load_leg(&path, Units::Metres, UpAxis::PosY).unwrap_err();
+    assert!(err.to_string().contains("POSITION names accessor"), "{err}");
+}
+
 /// Found while fuzzing the loader: a node listed among its own children sent the loader's
 /// recursion round for ever, and the process died of a stack overflow with no message.
 #[test]
