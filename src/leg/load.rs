@@ -168,6 +168,35 @@ fn check_position_accessors(root: &gltf::json::Root) -> std::result::Result<(), 
     Ok(())
 }
 
+/// Refuses a primitive whose positions are not float 3-vectors or whose indices are not
+/// unsigned integer scalars, as glTF requires. Validation lets such types through, and the
+/// reader then misreads the positions or, for indices, panics (`unreachable!`).
+fn check_accessor_types(prim: &gltf::Primitive) -> std::result::Result<(), String> {
+    use gltf::accessor::{DataType, Dimensions};
+    if let Some(a) = prim.get(&gltf::Semantic::Positions) {
+        if (a.data_type(), a.dimensions()) != (DataType::F32, Dimensions::Vec3) {
+            return Err(format!(
+                "its POSITION (accessor {}) is {:?} {:?}, not float VEC3",
+                a.index(),
+                a.data_type(),
+                a.dimensions()
+            ));
+        }
+    }
+    if let Some(a) = prim.indices() {
+        let unsigned = matches!(a.data_type(), DataType::U8 | DataType::U16 | DataType::U32);
+        if !unsigned || a.dimensions() != Dimensions::Scalar {
+            return Err(format!(
+                "its indices (accessor {}) are {:?} {:?}, not unsigned integer SCALAR",
+                a.index(),
+                a.data_type(),
+                a.dimensions()
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Refuses a leg whose height is implausible in the assumed units, and says which units would fit.
 fn check_height(leg: &Leg) -> Result<()> {
     let (lo, hi) = leg.bounds();
@@ -273,6 +302,7 @@ impl MeshCollector {
             self.other_primitives += 1;
             return Ok(());
         }
+        check_accessor_types(prim)?;
         let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
         let positions: Vec<[f32; 3]> = reader
             .read_positions()

@@ -725,6 +725,24 @@ fn regression_a_position_accessor_past_the_last_is_refused_not_a_panic() {
     assert!(err.to_string().contains("POSITION names accessor"), "{err}");
 }
 
+/// Found by `a_damaged_leg_file_loads_or_is_refused_cleanly` (at 20000 cases): a primitive
+/// whose indices named a float accessor (its positions) passed validation and the glTF reader
+/// hit `unreachable!`.
+#[test]
+fn regression_float_indices_are_refused_not_a_panic() {
+    let mut glb = Glb::parse(&originals()[0]);
+    let positions = glb.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"].clone();
+    glb.json["meshes"][0]["primitives"][0]["indices"] = positions;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("leg.glb");
+    std::fs::write(&path, glb.bytes()).unwrap();
+    let err = load_leg(&path, Units::Metres, UpAxis::PosY).unwrap_err();
+    assert!(
+        err.to_string().contains("not unsigned integer SCALAR"),
+        "{err}"
+    );
+}
+
 /// Found while fuzzing the loader: a node listed among its own children sent the loader's
 /// recursion round for ever, and the process died of a stack overflow with no message.
 #[test]
