@@ -357,7 +357,7 @@ fn check_refusal(e: &Error, path: &Path) -> Result<(), TestCaseError> {
 }
 
 proptest! {
-    #![proptest_config(config(384))]
+    #![proptest_config(config(2500))]
 
     /// Whatever is done to a leg file, loading it either gives a usable leg or refuses it with
     /// one line naming the file; it never panics.
@@ -365,7 +365,7 @@ proptest! {
     fn a_damaged_leg_file_loads_or_is_refused_cleanly(
         original in 0..originals().len(),
         // The small tube most of the time: the bundled legs are larger, so slower to load.
-        small in prop::bool::weighted(0.75),
+        small in prop::bool::weighted(0.9),
         m in mutation(),
     ) {
         let bytes = &originals()[if small { 0 } else { original }];
