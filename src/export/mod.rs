@@ -71,11 +71,15 @@ impl SurfaceMesh {
 }
 
 /// Area-weighted vertex normals; a vertex on no triangle (or on only degenerate ones) gets +Y, so
-/// every normal is a unit vector as glTF requires.
+/// every normal is a unit vector as glTF requires. A triangle with an index past the last
+/// position is skipped: the writers refuse such a mesh with a message, rather than panic here.
 pub fn vertex_normals(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f32; 3]> {
     use nalgebra::Vector3;
     let mut sum = vec![Vector3::<f64>::zeros(); positions.len()];
     for t in triangles {
+        if t.iter().any(|&i| i as usize >= positions.len()) {
+            continue;
+        }
         let [a, b, c] = t.map(|i| Vector3::from(positions[i as usize]));
         let n = (b - a).cross(&(c - a));
         for &i in t {

@@ -253,8 +253,9 @@ pub fn write_mesh_ply(mesh: &SurfaceMesh, comments: &[String]) -> Result<Vec<u8>
 
 /// Checks what every writer relies on in a yarn geometry: attribute names of the form
 /// `[a-z][a-z0-9_]*` (valid PLY identifiers, distinct once upper-cased for glTF), one value per
-/// point in every attribute, segments between existing points, and finite positions, offset and
-/// attribute values. The message names the part and what is wrong.
+/// point in every attribute, segments between existing points, and positions (also with the
+/// offset added), offset and attribute values finite in single precision, as the files store
+/// them. The message names the part and what is wrong.
 pub(super) fn check_yarn_geometry(part: &YarnGeometry) -> std::result::Result<(), String> {
     let n = part.positions.len();
     let fail = |what: String| Err(format!("part {:?}: {what}", part.name));
@@ -271,18 +272,24 @@ pub(super) fn check_yarn_geometry(part: &YarnGeometry) -> std::result::Result<()
             s.a, s.b
         ));
     }
-    if let Some(i) = part.positions.iter().position(|p| !all_finite(p)) {
-        return fail(format!("point {i} is not finite: {:?}", part.positions[i]));
-    }
-    if !all_finite(&part.offset_m) {
+    if !fits_f32(&part.offset_m) {
         return fail(format!("offset {:?} m is not finite", part.offset_m));
+    }
+    // PLY holds each point with the offset added.
+    let with_offset = |p: &[f64; 3]| [0, 1, 2].map(|k| p[k] + part.offset_m[k]);
+    if let Some(i) = part
+        .positions
+        .iter()
+        .position(|p| !fits_f32(p) || !fits_f32(&with_offset(p)))
+    {
+        return fail(format!("point {i} is not finite: {:?}", part.positions[i]));
     }
     Ok(())
 }
 
 /// Checks what every writer relies on in a surface: one normal (and texture coordinate and
-/// colour, where present) per vertex, triangles between existing vertices, finite positions, and
-/// attributes as in [`check_yarn_geometry`].
+/// colour, where present) per vertex, triangles between existing vertices, positions finite in
+/// single precision, and attributes as in [`check_yarn_geometry`].
 pub(super) fn check_surface_mesh(mesh: &SurfaceMesh) -> std::result::Result<(), String> {
     let n = mesh.positions.len();
     let fail = |what: String| Err(format!("mesh {:?}: {what}", mesh.name));
@@ -306,7 +313,7 @@ pub(super) fn check_surface_mesh(mesh: &SurfaceMesh) -> std::result::Result<(), 
     {
         return fail(format!("triangle {t:?} past the last of {n} vertices"));
     }
-    if let Some(i) = mesh.positions.iter().position(|p| !all_finite(p)) {
+    if let Some(i) = mesh.positions.iter().position(|p| !fits_f32(p)) {
         return fail(format!("vertex {i} is not finite: {:?}", mesh.positions[i]));
     }
     let finite = |v: &[f32]| v.iter().all(|c| c.is_finite());
@@ -354,8 +361,10 @@ fn check_attributes(
     Ok(())
 }
 
-fn all_finite(p: &[f64; 3]) -> bool {
-    p.iter().all(|c| c.is_finite())
+/// True when every coordinate is finite once stored as `f32`, as both formats store them (a
+/// finite `f64` beyond `f32::MAX` would be written as an infinity).
+fn fits_f32(p: &[f64; 3]) -> bool {
+    p.iter().all(|&c| (c as f32).is_finite())
 }
 
 #[cfg(test)]

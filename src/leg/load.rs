@@ -119,6 +119,7 @@ pub fn read_leg_file(path: &Path) -> Result<LegFile> {
              without mesh compression"
         )));
     }
+    check_position_accessors(unchecked.document.as_json()).map_err(fail)?;
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| fail(format!("invalid glTF: {e}")))?;
     Ok(LegFile {
         path: path.to_path_buf(),
@@ -184,10 +185,8 @@ pub fn decode_leg(file: LegFile, units: Units, up: UpAxis) -> Result<Leg> {
         .default_scene()
         .or_else(|| gltf.document.scenes().next())
         .ok_or_else(|| fail("has no scene".into()))?;
-    for node in scene.nodes() {
-        mesh.node(&node, &Matrix4::identity(), &buffers)
-            .map_err(fail)?;
-    }
+    mesh.scene(&scene, gltf.document.nodes().len(), &buffers)
+        .map_err(fail)?;
     if mesh.triangles.is_empty() {
         return Err(fail(if mesh.other_primitives > 0 {
             format!(
@@ -215,6 +214,56 @@ pub fn decode_leg(file: LegFile, units: Units, up: UpAxis) -> Result<Leg> {
     };
     check_height(&leg)?;
     Ok(leg)
+}
+
+/// Refuses a primitive whose `POSITION` names an accessor the file does not have. The glTF
+/// validator would report it, but gltf-json 1.4's check of the accessor's bounds indexes it
+/// first and panics; so it is checked here, before validating.
+fn check_position_accessors(root: &gltf::json::Root) -> std::result::Result<(), String> {
+    let positions = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            if let Some(accessor) = prim.attributes.get(&positions) {
+                if accessor.value() >= root.accessors.len() {
+                    return Err(format!(
+                        "mesh {m} primitive {p}: POSITION names accessor {}, but the file has {}",
+                        accessor.value(),
+                        root.accessors.len()
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a primitive whose positions are not float 3-vectors or whose indices are not
+/// unsigned integer scalars, as glTF requires. Validation lets such types through, and the
+/// reader then misreads the positions or, for indices, panics (`unreachable!`).
+fn check_accessor_types(prim: &gltf::Primitive) -> std::result::Result<(), String> {
+    use gltf::accessor::{DataType, Dimensions};
+    if let Some(a) = prim.get(&gltf::Semantic::Positions) {
+        if (a.data_type(), a.dimensions()) != (DataType::F32, Dimensions::Vec3) {
+            return Err(format!(
+                "its POSITION (accessor {}) is {:?} {:?}, not float VEC3",
+                a.index(),
+                a.data_type(),
+                a.dimensions()
+            ));
+        }
+    }
+    if let Some(a) = prim.indices() {
+        let unsigned = matches!(a.data_type(), DataType::U8 | DataType::U16 | DataType::U32);
+        if !unsigned || a.dimensions() != Dimensions::Scalar {
+            return Err(format!(
+                "its indices (accessor {}) are {:?} {:?}, not unsigned integer SCALAR",
+                a.index(),
+                a.data_type(),
+                a.dimensions()
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Refuses a leg whose height is implausible in the assumed units, and says which units would fit.
@@ -266,24 +315,43 @@ struct MeshCollector {
 }
 
 impl MeshCollector {
-    fn node(
+    /// Every node of `scene`, depth first in document order, with its mesh's triangles in the
+    /// file's coordinates. Walked with a stack of its own, not recursion, and each node taken
+    /// once: a hierarchy with a cycle (which glTF forbids, and a damaged file can have) is
+    /// refused instead of overflowing the stack.
+    fn scene(
         &mut self,
-        node: &gltf::Node,
-        parent: &Matrix4<f64>,
+        scene: &gltf::Scene,
+        node_count: usize,
         buffers: &[gltf::buffer::Data],
     ) -> std::result::Result<(), String> {
-        let local = Matrix4::from(node.transform().matrix()).cast::<f64>();
-        let file_from_node = parent * local;
-        if let Some(mesh) = node.mesh() {
-            for prim in mesh.primitives() {
-                self.primitive(&prim, &file_from_node, buffers)
-                    .map_err(|e| {
-                        format!("mesh {} primitive {}: {e}", mesh.index(), prim.index())
-                    })?;
+        let mut seen = vec![false; node_count];
+        let mut stack: Vec<(gltf::Node, Matrix4<f64>)> = scene
+            .nodes()
+            .map(|root| (root, Matrix4::identity()))
+            .collect();
+        stack.reverse();
+        while let Some((node, file_from_parent)) = stack.pop() {
+            if std::mem::replace(&mut seen[node.index()], true) {
+                return Err(format!(
+                    "node {} is reached twice: its node hierarchy has a cycle or a node with two \
+                     parents, which glTF does not allow",
+                    node.index()
+                ));
             }
-        }
-        for child in node.children() {
-            self.node(&child, &file_from_node, buffers)?;
+            let local = Matrix4::from(node.transform().matrix()).cast::<f64>();
+            let file_from_node = file_from_parent * local;
+            if let Some(mesh) = node.mesh() {
+                for prim in mesh.primitives() {
+                    self.primitive(&prim, &file_from_node, buffers)
+                        .map_err(|e| {
+                            format!("mesh {} primitive {}: {e}", mesh.index(), prim.index())
+                        })?;
+                }
+            }
+            let first_child = stack.len();
+            stack.extend(node.children().map(|child| (child, file_from_node)));
+            stack[first_child..].reverse();
         }
         Ok(())
     }
@@ -303,6 +371,7 @@ impl MeshCollector {
             self.other_primitives += 1;
             return Ok(());
         }
+        check_accessor_types(prim)?;
         let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
         let positions: Vec<[f32; 3]> = reader
             .read_positions()

@@ -248,6 +248,23 @@ impl SlideParams<'_> {
         (along_normal(&c), c)
     }
 
+    /// The closest point of the leg for the check that ends a move: within the query radius,
+    /// or, where nothing is that close, at any distance if `p` is inside, since a point that
+    /// started a little inside and moved deeper than the radius must still be brought out.
+    /// `None`: `p` is outside and further than the radius.
+    fn closest_for_check(
+        &self,
+        p: &Point3<f64>,
+        counters: &mut ContactCounters,
+    ) -> Option<Closest> {
+        self.collider
+            .closest_within(p, self.query_radius)
+            .or_else(|| {
+                counters.closest_queries += 1;
+                Some(self.collider.closest(p)).filter(|c| c.signed_distance < 0.0)
+            })
+    }
+
     /// Where a free point moving from `from` towards `to` may go, updating its contact state.
     fn constrain_point(
         &self,
@@ -356,7 +373,7 @@ impl SlideParams<'_> {
         }
         // Final check against the closest point: never end inside, never closer than offset.
         counters.closest_queries += 1;
-        let state = match self.collider.closest_within(&p, self.query_radius) {
+        let state = match self.closest_for_check(&p, counters) {
             Some(mut c) => {
                 if c.signed_distance < self.offset * (1.0 - 1e-6) {
                     if c.signed_distance < 0.0 {

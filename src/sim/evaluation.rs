@@ -46,6 +46,16 @@ pub(crate) fn spring_stiffness_bound(c1: f64, rest: f64, len: f64) -> f64 {
     2.0 * c1 * geometric.max(1.0)
 }
 
+/// Gershgorin contribution of one connection term (eq. 2) to the bound of the point `i` it acts
+/// on: `2 c2 c1` from the tension of `j–k` changing as `j` and `k` move, plus `2 c2 T / |x_i −
+/// x_j|` from its direction `i → j` turning as `i` and `j` move (none when they coincide: the
+/// force is zero there). Without the turning part a strained knit with a large c2 can have
+/// steps divided by the bound overshoot (`sim::properties`).
+pub(crate) fn connection_stiffness_bound(c2: f64, c1: f64, tension: f64, len_ij: f64) -> f64 {
+    let turning = if len_ij > 0.0 { tension / len_ij } else { 0.0 };
+    2.0 * c2 * (c1 + turning)
+}
+
 /// Per-spring state of one force evaluation.
 #[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct SpringState {
@@ -53,6 +63,8 @@ pub(crate) struct SpringState {
     pub tension: f64,
     /// Unit vector from end `a` to end `b` (zero when they coincide).
     pub unit_ab: Vec3,
+    /// Length `|x_b − x_a|`, metres.
+    pub len: f64,
     /// [`spring_stiffness_bound`] of this spring.
     pub stiffness_bound: f64,
 }
@@ -64,7 +76,7 @@ pub(crate) struct Workspace {
     /// Net force per point.
     pub force: Vec<Vec3>,
     /// Per point, a bound on the largest eigenvalue of the stiffness seen from that point
-    /// (Gershgorin row sum): the sum of its springs' bounds and of `2 c2 c1` per connection term.
+    /// (Gershgorin row sum): the sum of its springs' and connection terms' bounds.
     pub stiffness_bound: Vec<f64>,
     /// Per point, the part of the net force the constraints do not hold (contact reactions and
     /// locked directions removed; zero on pinned points): what can still move it.
@@ -111,6 +123,7 @@ pub(crate) fn evaluate(knit: &Knit, terms: &ForceTerms, ws: &mut Workspace) -> E
                 let stretch = len - s.rest;
                 state.tension = c1 * stretch;
                 state.unit_ab = if len > 0.0 { d / len } else { Vec3::zeros() };
+                state.len = len;
                 state.stiffness_bound = spring_stiffness_bound(c1, s.rest, len);
                 force_sq += state.tension * state.tension;
                 energy += 0.5 * c1 * stretch * stretch;
@@ -163,7 +176,8 @@ fn net_force(knit: &Knit, terms: &ForceTerms, states: &[SpringState], p: PointId
             let tension = states[conn.spring as usize].tension.max(0.0);
             // Drawn towards the middle point j, along spring i–j (sign: see forces.rs).
             f += away(conn.from, conn.from_at_a) * (c2 * tension);
-            bound += 2.0 * c2 * terms.c1(knit, conn.spring);
+            let len_ij = states[conn.from as usize].len;
+            bound += connection_stiffness_bound(c2, terms.c1(knit, conn.spring), tension, len_ij);
         }
     }
     (f, bound)

@@ -7,6 +7,8 @@ pub mod contact;
 pub mod evaluation;
 pub mod forces;
 pub mod multilevel;
+#[cfg(test)]
+mod properties;
 pub mod relax;
 
 pub use accelerated::{relax_accelerated, LevelStats};

@@ -25,8 +25,7 @@ use rayon::prelude::*;
 
 pub use super::evaluation::ForceTerms;
 use super::evaluation::{
-    evaluate, relative_residual, rest_force_floor, shortest_rest, spring_stiffness_bound,
-    Workspace, CHUNK,
+    evaluate, relative_residual, rest_force_floor, shortest_rest, Workspace, CHUNK,
 };
 use crate::error::{Error, Result};
 use crate::knit::{Knit, Vec3};
@@ -97,27 +96,15 @@ impl RelaxObserver for () {
 /// The explicit stability limit on the time step for `knit` under `terms` (see module docs).
 /// Infinite when no point is free.
 pub fn stability_limit(knit: &Knit, terms: &ForceTerms) -> f64 {
-    let x = &knit.particles.x;
-    let mut lambda_max: f64 = 0.0;
-    for i in 0..knit.len() {
-        let p = crate::knit::PointId(i as u32);
-        let inv_mass = knit.particles.inv_mass[i];
-        if inv_mass == 0.0 {
-            continue;
-        }
-        let mut lambda = 0.0;
-        for inc in knit.incident(p) {
-            let s = &knit.springs[inc.spring as usize];
-            let len = (x[s.b.index()] - x[s.a.index()]).norm();
-            lambda += spring_stiffness_bound(terms.c1(knit, inc.spring), s.rest, len);
-        }
-        if let Some(c2) = terms.connection_factor {
-            for conn in knit.connections(p) {
-                lambda += 2.0 * c2 * terms.c1(knit, conn.spring);
-            }
-        }
-        lambda_max = lambda_max.max(lambda * inv_mass);
-    }
+    // The bound of the force evaluation itself, so the limit and the solvers agree on it.
+    let mut ws = Workspace::new(knit);
+    evaluate(knit, terms, &mut ws);
+    let lambda_max = ws
+        .stiffness_bound
+        .iter()
+        .zip(&knit.particles.inv_mass)
+        .map(|(bound, inv_mass)| bound * inv_mass)
+        .fold(0.0, f64::max);
     if lambda_max > 0.0 {
         2.0 / lambda_max.sqrt()
     } else {

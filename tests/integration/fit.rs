@@ -8,8 +8,8 @@ use knitfit::scene::{ContactMethod, Units, UpAxis};
 use nalgebra::Point3;
 
 use crate::util::{
-    files_in, fit, float, knitfit, point, procedural_leg, read_ply, report, sample_legs, stderr,
-    write_tube_leg,
+    base64, files_in, fit, float, knitfit, point, procedural_leg, read_ply, report, sample_legs,
+    stderr, write_tube_leg,
 };
 
 #[test]
@@ -257,27 +257,6 @@ fn gltf_text(positions: [[&str; 3]; 3], mode: u32, extensions: &str) -> String {
 "bufferViews":[{{"buffer":0,"byteLength":36}}],
 "buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,{data}"}}]}}"#
     )
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const ALPHABET: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            *chunk.get(1).unwrap_or(&0),
-            *chunk.get(2).unwrap_or(&0),
-        ];
-        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
-        for k in 0..4 {
-            if k <= chunk.len() {
-                out.push(ALPHABET[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
 }
 
 const TRIANGLE: [[&str; 3]; 3] = [["0", "0", "0"], ["1", "0", "0"], ["0", "1", "0"]];

@@ -3,10 +3,13 @@
 
 mod cli;
 mod fit;
+mod fuzz;
 mod hard_cases;
 mod limits;
 mod physics;
 mod plan;
+mod prop_config;
+mod properties;
 mod render;
 mod skin;
 mod solvers;

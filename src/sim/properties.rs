@@ -1,0 +1,262 @@
+//! Property tests of the force evaluation every solver shares ([`super::evaluation`]): over random
+//! small knits, random positions (coincident points included) and random coefficients, the net
+//! force obeys Newton's third law, every value is finite, and the per-point stiffness bound
+//! covers the stiffness the forces really have (measured by finite differences).
+//!
+//! The kernels themselves and the contact projection are checked from outside, in
+//! `tests/integration/properties.rs`.
+
+#[path = "../../tests/integration/prop_config.rs"]
+mod prop_config;
+
+use nalgebra::{DMatrix, Matrix3};
+use proptest::prelude::*;
+
+use super::evaluation::{evaluate, ForceTerms, Workspace};
+use crate::knit::{Knit, Pattern, Tile, Vec3};
+
+/// A small knit, as the numbers it is built from (so a failing case prints short).
+#[derive(Clone, Debug)]
+struct Case {
+    wales: usize,
+    courses: usize,
+    closed: bool,
+    pattern: Pattern,
+    /// Course rest length, metres; wale rest length over it.
+    rest: f64,
+    aspect: f64,
+    /// Per point, its move from its grid place, in course rest lengths.
+    moves: Vec<[f64; 3]>,
+    /// (to, from): point `to` put exactly where point `from` is.
+    same: Vec<(usize, usize)>,
+    terms: ForceTerms,
+}
+
+impl Case {
+    fn knit(&self) -> Knit {
+        let (rest_course, rest_wale) = (self.rest, self.rest * self.aspect);
+        let tile = Tile::of(self.pattern);
+        let mut knit = Knit::grid(
+            self.wales,
+            self.courses,
+            self.closed,
+            &tile,
+            rest_course,
+            rest_wale,
+            |w, c| Vec3::new(w as f64 * rest_course, c as f64 * rest_wale, 0.0),
+        );
+        for (x, m) in knit.particles.x.iter_mut().zip(&self.moves) {
+            *x += Vec3::from(*m) * self.rest;
+        }
+        for &(to, from) in &self.same {
+            knit.particles.x[to] = knit.particles.x[from];
+        }
+        knit
+    }
+}
+
+/// Knits of 2–5 × 2–5 points (closed courses, sometimes, when there are 3 or more wales), each
+/// point moved at random by up to `jitter` rest lengths from its grid place, and, when
+/// `coincide`, some points put exactly on top of others; c1 in [0.1, 1000] per yarn, and c2 in
+/// [0, 0.99) when `connection`.
+fn cases(jitter: f64, coincide: bool, connection: bool) -> impl Strategy<Value = Case> {
+    (2usize..=5, 2usize..=5, any::<bool>(), any::<bool>())
+        .prop_flat_map(move |(wales, courses, closed, plain)| {
+            let n = wales * courses;
+            (
+                Just((wales, courses, closed && wales >= 3, plain)),
+                1e-4f64..1.0,
+                0.3f64..3.0,
+                proptest::collection::vec(prop::array::uniform3(-jitter..=jitter), n),
+                proptest::collection::vec((0..n, 0..n), if coincide { 1..=n } else { 0..=0 }),
+                (0.1f64..1000.0, 0.1f64..1000.0, 0.0f64..0.99),
+            )
+        })
+        .prop_map(
+            move |((wales, courses, closed, plain), rest, aspect, moves, same, (c_a, c_b, c2))| {
+                Case {
+                    wales,
+                    courses,
+                    closed,
+                    pattern: if plain {
+                        Pattern::Plain
+                    } else {
+                        Pattern::Alternating
+                    },
+                    rest,
+                    aspect,
+                    moves,
+                    same,
+                    terms: ForceTerms {
+                        stiffness: [c_a, c_b],
+                        connection_factor: connection.then_some(c2),
+                    },
+                }
+            },
+        )
+}
+
+/// Net force and stiffness bound of every point.
+fn forces(knit: &Knit, terms: &ForceTerms) -> (Vec<Vec3>, Vec<f64>) {
+    let mut ws = Workspace::new(knit);
+    evaluate(knit, terms, &mut ws);
+    (ws.force, ws.stiffness_bound)
+}
+
+/// The Jacobian of the net force with respect to the positions, by central differences, as
+/// `3n × 3n` (row: force component, column: coordinate).
+fn jacobian(knit: &Knit, terms: &ForceTerms) -> DMatrix<f64> {
+    let n = knit.len();
+    let h = 1e-6
+        * knit
+            .springs
+            .iter()
+            .map(|s| s.rest)
+            .fold(f64::INFINITY, f64::min);
+    let mut j = DMatrix::zeros(3 * n, 3 * n);
+    for col in 0..3 * n {
+        let mut moved = knit.clone();
+        moved.particles.x[col / 3][col % 3] += h;
+        let (plus, _) = forces(&moved, terms);
+        moved.particles.x[col / 3][col % 3] -= 2.0 * h;
+        let (minus, _) = forces(&moved, terms);
+        for row in 0..3 * n {
+            j[(row, col)] = (plus[row / 3][row % 3] - minus[row / 3][row % 3]) / (2.0 * h);
+        }
+    }
+    j
+}
+
+/// Point `p`'s Gershgorin row: Σ over points `q` of the spectral norm of the 3×3 block ∂F_p/∂x_q.
+fn row_sum(j: &DMatrix<f64>, p: usize) -> f64 {
+    (0..j.ncols() / 3)
+        .map(|q| {
+            let block: Matrix3<f64> = j.fixed_view::<3, 3>(3 * p, 3 * q).into_owned();
+            block.singular_values().max()
+        })
+        .sum()
+}
+
+/// How far [`preconditioned_spectral_radius`] may exceed 1 from its own slack (the Frobenius
+/// norm of a 75 × 75 matrix over its spectral norm, and eigenvector conditioning, to the power
+/// 1/4096 stay well below this).
+const SPECTRAL_SLACK: f64 = 1e-2;
+
+/// An upper bound on the largest |eigenvalue| of the Jacobian with each point's rows divided by
+/// its bound: Gelfand's `‖A^k‖^(1/k)` for `k = 2^12`, by repeated squaring with the scale kept
+/// as a logarithm (an eigen-solver may not converge on such a matrix; this always ends). It
+/// exceeds the spectral radius by at most the matrix's conditioning to the power 1/4096.
+fn preconditioned_spectral_radius(case: &Case) -> f64 {
+    const SQUARINGS: i32 = 12;
+    let knit = case.knit();
+    let (_, bound) = forces(&knit, &case.terms);
+    let mut a = jacobian(&knit, &case.terms);
+    for (r, mut row) in a.row_iter_mut().enumerate() {
+        row /= bound[r / 3];
+    }
+    // Invariant: (the preconditioned Jacobian)^(2^i) = exp(log_scale) · a.
+    let mut log_scale = 0.0;
+    for _ in 0..SQUARINGS {
+        let norm = a.norm();
+        if norm == 0.0 {
+            return 0.0;
+        }
+        a /= norm;
+        log_scale = 2.0 * (log_scale + norm.ln());
+        a = &a * &a;
+    }
+    ((log_scale + a.norm().ln()) / 2f64.powi(SQUARINGS)).exp()
+}
+
+/// The shortest spring over its rest length.
+fn shortest_strain(knit: &Knit) -> f64 {
+    let x = &knit.particles.x;
+    knit.springs
+        .iter()
+        .map(|s| (x[s.b.index()] - x[s.a.index()]).norm() / s.rest)
+        .fold(f64::INFINITY, f64::min)
+}
+
+proptest! {
+    #![proptest_config(prop_config::config(64))]
+
+    /// Eq. (1) acts equally and oppositely on a spring's two ends, so the spring forces on the
+    /// whole knit sum to zero, whatever the positions (the connection force is not an
+    /// interaction of pairs and is left out here).
+    #[test]
+    fn spring_forces_on_the_whole_knit_sum_to_zero(case in cases(2.0, true, false)) {
+        let (f, _) = forces(&case.knit(), &case.terms);
+        let total: Vec3 = f.iter().sum();
+        let scale: f64 = f.iter().map(|f| f.norm()).sum();
+        prop_assert!(total.norm() <= 1e-12 * scale + 1e-300, "Σ F = {total} (Σ |F| = {scale})");
+    }
+
+    /// Coincident points, zero-length springs and springs compressed to nothing give finite
+    /// forces and bounds, and every point with a spring has a positive bound.
+    #[test]
+    fn forces_and_bounds_are_finite_even_for_coincident_points(case in cases(2.0, true, true)) {
+        let (f, bound) = forces(&case.knit(), &case.terms);
+        for (p, (f, b)) in f.iter().zip(&bound).enumerate() {
+            prop_assert!(f.iter().all(|c| c.is_finite()), "point {p}: force {f}");
+            prop_assert!(b.is_finite() && *b > 0.0, "point {p}: bound {b}");
+        }
+    }
+
+    /// The bound of each point is at least its Gershgorin row of the true stiffness (the
+    /// Jacobian of eq. 1 and, when it runs, eq. 2), so a step divided by it never overshoots:
+    /// what the accelerated solver and the stability limit rely on.
+    #[test]
+    fn stiffness_bound_covers_each_point_s_row_of_the_jacobian(
+        case in any::<bool>().prop_flat_map(|connection| cases(1.5, false, connection))
+            .prop_filter("no spring near zero length", |c| shortest_strain(&c.knit()) > 0.05)
+    ) {
+        let knit = case.knit();
+        let (_, bound) = forces(&knit, &case.terms);
+        let j = jacobian(&knit, &case.terms);
+        for (p, b) in bound.iter().enumerate() {
+            let row = row_sum(&j, p);
+            prop_assert!(row <= b * (1.0 + 1e-4), "point {p}: row {row} over bound {b}");
+        }
+    }
+
+    /// What the bound is for, checked without Gershgorin's theorem: the Jacobian with each
+    /// point's rows divided by its bound has no eigenvalue beyond 1.
+    #[test]
+    fn steps_divided_by_the_bound_have_spectral_radius_at_most_one(
+        case in cases(1.5, false, true)
+            .prop_filter("no spring near zero length", |c| shortest_strain(&c.knit()) > 0.05)
+    ) {
+        let rho = preconditioned_spectral_radius(&case);
+        prop_assert!(rho <= 1.0 + SPECTRAL_SLACK, "spectral radius {rho}");
+    }
+}
+
+/// Found by `steps_divided_by_the_bound_have_spectral_radius_at_most_one`: with c2 near 1 and a
+/// strained knit, a bound that left out the turning of eq. (2)'s direction let the
+/// preconditioned Jacobian reach a spectral radius of 1.36.
+#[test]
+fn regression_connection_turning_is_in_the_stiffness_bound() {
+    let case = Case {
+        wales: 3,
+        courses: 2,
+        closed: true,
+        pattern: Pattern::Alternating,
+        rest: 1e-4,
+        aspect: 0.3,
+        moves: vec![
+            [0.0; 3],
+            [0.0; 3],
+            [0.0; 3],
+            [-1.0594268894389458, 1.1975061484638405, 1.4888183127454535],
+            [0.0, -1.0502074499578011, -0.8569563689584261],
+            [-0.8022855633160448, -1.242953958657946, -0.9337057828847074],
+        ],
+        same: vec![],
+        terms: ForceTerms {
+            stiffness: [0.1, 0.1],
+            connection_factor: Some(0.9653009032664419),
+        },
+    };
+    let rho = preconditioned_spectral_radius(&case);
+    assert!(rho <= 1.0 + SPECTRAL_SLACK, "spectral radius {rho}");
+}
