@@ -156,8 +156,7 @@ pub fn relax_accelerated(
         step(knit, &ws, &mut velocity, &mut from, beta);
         let p = &mut knit.particles;
         constraints.constrain(&from, &mut p.x, &p.inv_mass);
-        max_move =
-            allowed_moves(&p.x, &from, &p.inv_mass, &*constraints, &mut velocity) / shortest_rest;
+        max_move = allowed_moves(&p.x, &from, &p.inv_mass, &mut velocity) / shortest_rest;
         since_restart += 1;
         iteration += 1;
     }
@@ -183,15 +182,8 @@ fn step(knit: &mut Knit, ws: &Workspace, velocity: &mut [Vec3], from: &mut [Vec3
         });
 }
 
-/// Sets each free point's velocity to the part of the move it was allowed to make that may
-/// carry on ([`Constraints::carried_velocity`]); returns the largest move.
-fn allowed_moves(
-    x: &[Vec3],
-    from: &[Vec3],
-    inv_mass: &[f64],
-    constraints: &dyn Constraints,
-    velocity: &mut [Vec3],
-) -> f64 {
+/// Sets each free point's velocity to the move it was allowed to make; returns the largest.
+fn allowed_moves(x: &[Vec3], from: &[Vec3], inv_mass: &[f64], velocity: &mut [Vec3]) -> f64 {
     velocity
         .par_chunks_mut(CHUNK)
         .enumerate()
@@ -200,9 +192,8 @@ fn allowed_moves(
             for (k, v) in v.iter_mut().enumerate() {
                 let i = chunk * CHUNK + k;
                 if inv_mass[i] > 0.0 {
-                    let moved = x[i] - from[i];
-                    largest = largest.max(moved.norm());
-                    *v = constraints.carried_velocity(i, &moved);
+                    *v = x[i] - from[i];
+                    largest = largest.max(v.norm());
                 }
             }
             largest

@@ -291,8 +291,7 @@ impl SlideParams<'_> {
             state.clearance -= delta.norm();
             to
         } else {
-            let resting_on = touching.then_some(state.normal);
-            let (p, new_state) = self.slide(from, delta, locked, resting_on, counters);
+            let (p, new_state) = self.slide(from, delta, locked, counters);
             *state = new_state;
             p
         }
@@ -321,23 +320,13 @@ impl SlideParams<'_> {
     /// Moves a point from `from` by `delta`, sliding on the leg; returns where it ends with its
     /// new clearance and contact normal. A slide that runs out of [`MAX_SLIDES`] stops there.
     /// A `locked` point's moves keep no component along the axis.
-    ///
-    /// A point that was `resting_on` the skin (that normal) keeps following it: a tangential
-    /// move carries it straight on, which over a convex edge between facets leaves it hovering
-    /// `|delta| sin θ` above the next facet. Counted as off the skin, its whole pressing force
-    /// would be unbalanced for one iteration and it would be pushed back the next: a spike in
-    /// the residual and a jolt to its neighbours, every time some point crossed an edge. So it
-    /// is put back at the offset, plus whatever part of the move itself went outwards (a point
-    /// the force lifts off still lifts off).
     fn slide(
         &self,
         from: &Vec3,
         mut delta: Vec3,
         locked: bool,
-        resting_on: Option<Vec3>,
         counters: &mut ContactCounters,
     ) -> (Vec3, PointContact) {
-        let requested = delta;
         let mut p = Point3::from(*from);
         for _ in 0..MAX_SLIDES {
             if locked {
@@ -380,13 +369,6 @@ impl SlideParams<'_> {
                         counters.pushed_out += 1;
                     }
                     (p, c) = self.push_out(&p, &c, locked, counters);
-                } else if let (Some(n), false) = (resting_on, locked) {
-                    let lifted = self.offset + requested.dot(&n).max(0.0);
-                    let hovering = c.signed_distance - lifted;
-                    if hovering > 0.0 && hovering <= requested.norm() {
-                        p = c.point + c.outward * lifted;
-                        c.signed_distance = lifted;
-                    }
                 }
                 let gap = c.signed_distance.max(self.offset);
                 let touching = gap <= self.offset * 1.5 + 1e-9;
@@ -444,11 +426,6 @@ impl Constraints for LegContact<'_> {
         self.state.fill(PointContact::default());
         let moved = self.push_out_all(x, inv_mass);
         self.counters.settled_out += moved;
-    }
-
-    fn carried_velocity(&self, i: usize, v: &Vec3) -> Vec3 {
-        let n = self.state[i].normal;
-        v - n * v.dot(&n)
     }
 
     fn unheld_force(&self, i: usize, f: &Vec3) -> Vec3 {

@@ -65,12 +65,6 @@ pub trait Constraints: Sync {
     /// for a start from positions that were not reached by constrained moves (interpolated from
     /// a coarser grid, say), which may break the constraints. Default: nothing to do.
     fn settle(&mut self, _x: &mut [Vec3], _inv_mass: &[f64]) {}
-    /// The part of point `i`'s last move `v` that may carry on as momentum: for a point resting
-    /// on a surface, only the slide along it (the push out of the surface, or a lift the surface
-    /// curved away from, is not a velocity to keep). Default: all of it.
-    fn carried_velocity(&self, _i: usize, v: &Vec3) -> Vec3 {
-        *v
-    }
 }
 
 /// No constraints: points go wherever the forces take them.
@@ -143,8 +137,7 @@ pub fn relax_constrained(
     let energy_floor: f64 = knit
         .springs
         .iter()
-        .enumerate()
-        .map(|(i, s)| 0.5 * terms.c1(knit, i as u32) * (1e-6 * s.rest).powi(2))
+        .map(|s| 0.5 * terms.stiffness[s.yarn.index() as usize] * (1e-6 * s.rest).powi(2))
         .sum();
 
     let mut ws = Workspace::new(knit);
@@ -201,11 +194,11 @@ pub fn relax_constrained(
             integrate(knit, &ws.force, h, decay);
             let p = &mut knit.particles;
             constraints.constrain(&from, &mut p.x, &p.inv_mass);
-            // Where a constraint changed the move, the velocity is the part of the move that was
-            // allowed that may carry on (the slide along the skin, not the push out of it).
-            for (i, ((x, v), from)) in p.x.iter().zip(&mut p.v).zip(&from).enumerate() {
-                if p.inv_mass[i] > 0.0 && *x != from + *v * h {
-                    *v = constraints.carried_velocity(i, &(x - from)) / h;
+            // Where a constraint changed the move, the velocity is the move that was allowed.
+            for (((x, v), from), &inv_mass) in p.x.iter().zip(&mut p.v).zip(&from).zip(&p.inv_mass)
+            {
+                if inv_mass > 0.0 && *x != from + *v * h {
+                    *v = (x - from) / h;
                 }
             }
         }
