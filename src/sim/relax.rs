@@ -137,7 +137,8 @@ pub fn relax_constrained(
     let energy_floor: f64 = knit
         .springs
         .iter()
-        .map(|s| 0.5 * terms.stiffness[s.yarn.index() as usize] * (1e-6 * s.rest).powi(2))
+        .enumerate()
+        .map(|(i, s)| 0.5 * terms.c1(knit, i as u32) * (1e-6 * s.rest).powi(2))
         .sum();
 
     let mut ws = Workspace::new(knit);
