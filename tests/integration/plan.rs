@@ -123,14 +123,15 @@ fn turning_yarn_connection_off_makes_course_and_wale_stretch_alike() {
     // runs continuously along the course, which the connection force (eq. 2) models. In a plain
     // knit nothing else tells the directions apart, so without it the two stretches are
     // transposes of each other; with it, course tension draws yarn towards the middle of the
-    // course and the stitches by the held wales open wider.
+    // course and the stitches by the held wales open wider. Square stitches, as the paper's, so
+    // that nothing but the yarn tells the directions apart.
     let dir = tempfile::tempdir().unwrap();
     let patch = |effects: &str, out: &str| {
         let scene = write(
             dir.path(),
             &format!("{out}.json"),
             &format!(
-                r#"{{"knit": {{"pattern": "plain"}}, "effects": {effects}, "outputs": [],
+                r#"{{"knit": {{"pattern": "plain", "wale_spacing_m": 0.0005}}, "effects": {effects}, "outputs": [],
                     "patch": {{"size": [10, 10], "stretch": [{{"axis": "course", "factor": 1.5}},
                                                        {{"axis": "wale", "factor": 1.5}}]}}}}"#
             ),
