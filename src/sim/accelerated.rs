@@ -47,7 +47,7 @@ use std::time::Instant;
 use rayon::prelude::*;
 
 use super::evaluation::{
-    evaluate, residual_of, rest_force_floor, shortest_rest, unheld_forces, Workspace, CHUNK,
+    evaluate_unheld, residual_of, rest_force_floor, shortest_rest, Workspace, CHUNK,
 };
 use super::{Constraints, ForceTerms, RelaxObserver};
 use crate::error::{Error, Result};
@@ -104,18 +104,18 @@ pub fn relax_accelerated(
     let shortest_rest = shortest_rest(knit);
     let force_floor = rest_force_floor(knit, terms);
     let mut ws = Workspace::new(knit);
-    let mut velocity = vec![Vec3::zeros(); knit.len()];
-    let mut from = vec![Vec3::zeros(); knit.len()];
+    // Where each point was before the last iteration: its velocity is the last move, `x − from`
+    // (the move the constraints allowed), so no velocity is stored.
+    let mut from = knit.particles.x.clone();
     let mut since_restart = 0usize;
     let mut restarts = 0;
     let mut start_residual = None;
-    let mut max_move = 0.0;
     let mut iteration = 0;
     loop {
-        let eval = evaluate(knit, terms, &mut ws);
-        let sums = unheld_forces(knit, &mut ws, &*constraints, Some(&velocity));
+        let (eval, sums) = evaluate_unheld(knit, terms, &mut ws, &*constraints, &from);
         let residual = residual_of(knit, &sums, eval.spring_force_sq, force_floor);
         let force_step = STEP * sums.max_step / shortest_rest;
+        let max_move = sums.max_move / shortest_rest;
         observer.on_step(first_step + iteration, residual);
         let start = *start_residual.get_or_insert(residual);
         let diverged = |what: String| Error::SolverDiverged {
@@ -147,56 +147,40 @@ pub fn relax_accelerated(
             });
         }
 
-        if sums.power < 0.0 {
-            velocity.fill(Vec3::zeros());
+        let restart = sums.power < 0.0;
+        if restart {
             since_restart = 0;
             restarts += 1;
         }
         let beta = since_restart as f64 / (since_restart as f64 + 3.0);
-        step(knit, &ws, &mut velocity, &mut from, beta);
+        step(knit, &ws, &mut from, beta, restart);
         let p = &mut knit.particles;
         constraints.constrain(&from, &mut p.x, &p.inv_mass);
-        max_move = allowed_moves(&p.x, &from, &p.inv_mass, &mut velocity) / shortest_rest;
         since_restart += 1;
         iteration += 1;
     }
 }
 
-/// The momentum update and the unconstrained move, on free points.
-fn step(knit: &mut Knit, ws: &Workspace, velocity: &mut [Vec3], from: &mut [Vec3], beta: f64) {
+/// The momentum update and the unconstrained move, on free points: the velocity is the last
+/// move (`x − from`, zero on a `restart`), and `from` becomes where the point is now.
+fn step(knit: &mut Knit, ws: &Workspace, from: &mut [Vec3], beta: f64, restart: bool) {
     let p = &mut knit.particles;
     p.x.par_chunks_mut(CHUNK)
-        .zip(velocity.par_chunks_mut(CHUNK))
         .zip(from.par_chunks_mut(CHUNK))
         .zip(p.inv_mass.par_chunks(CHUNK))
         .zip(ws.unheld.par_chunks(CHUNK))
         .zip(ws.stiffness_bound.par_chunks(CHUNK))
-        .for_each(|(((((x, v), from), inv_mass), f), bound)| {
+        .for_each(|((((x, from), inv_mass), f), bound)| {
             for k in 0..x.len() {
+                let velocity = if restart {
+                    Vec3::zeros()
+                } else {
+                    x[k] - from[k]
+                };
                 from[k] = x[k];
                 if inv_mass[k] > 0.0 && bound[k] > 0.0 {
-                    v[k] = v[k] * beta + f[k] * (STEP / bound[k]);
-                    x[k] += v[k];
+                    x[k] += velocity * beta + f[k] * (STEP / bound[k]);
                 }
             }
         });
-}
-
-/// Sets each free point's velocity to the move it was allowed to make; returns the largest.
-fn allowed_moves(x: &[Vec3], from: &[Vec3], inv_mass: &[f64], velocity: &mut [Vec3]) -> f64 {
-    velocity
-        .par_chunks_mut(CHUNK)
-        .enumerate()
-        .map(|(chunk, v)| {
-            let mut largest: f64 = 0.0;
-            for (k, v) in v.iter_mut().enumerate() {
-                let i = chunk * CHUNK + k;
-                if inv_mass[i] > 0.0 {
-                    *v = x[i] - from[i];
-                    largest = largest.max(v.norm());
-                }
-            }
-            largest
-        })
-        .reduce(|| 0.0, f64::max)
 }

@@ -106,10 +106,70 @@ pub(crate) struct Evaluation {
 /// Computes spring states, the net force and the stiffness bound of every point; returns the
 /// sums the convergence test and the watchdog need.
 pub(crate) fn evaluate(knit: &Knit, terms: &ForceTerms, ws: &mut Workspace) -> Evaluation {
+    let eval = spring_states(knit, terms, &mut ws.springs);
+    let states = &ws.springs;
+    ws.force
+        .par_chunks_mut(CHUNK)
+        .zip(ws.stiffness_bound.par_chunks_mut(CHUNK))
+        .enumerate()
+        .for_each(|(chunk, (forces, bounds))| {
+            for (k, (f, bound)) in forces.iter_mut().zip(bounds.iter_mut()).enumerate() {
+                let p = PointId((chunk * CHUNK + k) as u32);
+                (*f, *bound) = net_force(knit, terms, states, p);
+            }
+        });
+    eval
+}
+
+/// [`evaluate`] and [`unheld_forces`] in one pass over the points, for the fast solver, whose
+/// every iteration needs both: fills the spring states, `ws.stiffness_bound` and `ws.unheld`
+/// (not `ws.force`, which it leaves as it was). The motion sums are taken over the last move,
+/// `x − from`. Each point's figures are those of the two functions, summed in the same chunks,
+/// so the results are bit-identical to calling them in turn; what is saved is a pass that
+/// reads every force back from memory.
+pub(crate) fn evaluate_unheld(
+    knit: &Knit,
+    terms: &ForceTerms,
+    ws: &mut Workspace,
+    constraints: &dyn Constraints,
+    from: &[Vec3],
+) -> (Evaluation, UnheldSums) {
+    let eval = spring_states(knit, terms, &mut ws.springs);
+    let states = &ws.springs;
+    let (x, inv_mass) = (&knit.particles.x, &knit.particles.inv_mass);
+    let partial: Vec<UnheldSums> = ws
+        .unheld
+        .par_chunks_mut(CHUNK)
+        .zip(ws.stiffness_bound.par_chunks_mut(CHUNK))
+        .enumerate()
+        .map(|(chunk, (unheld, bounds))| {
+            let mut sums = UnheldSums::default();
+            for (k, (u, bound)) in unheld.iter_mut().zip(bounds.iter_mut()).enumerate() {
+                let i = chunk * CHUNK + k;
+                let force;
+                (force, *bound) = net_force(knit, terms, states, PointId(i as u32));
+                let last_move = x[i] - from[i];
+                *u = unheld_point(
+                    constraints,
+                    i,
+                    &force,
+                    *bound,
+                    inv_mass[i],
+                    Some(&last_move),
+                    &mut sums,
+                );
+            }
+            sums
+        })
+        .collect();
+    (eval, UnheldSums::sum(&partial))
+}
+
+/// The spring states of eq. (1) for the current positions; returns their sums.
+fn spring_states(knit: &Knit, terms: &ForceTerms, states: &mut [SpringState]) -> Evaluation {
     let x = &knit.particles.x;
     let springs = &knit.springs;
-    let partial: Vec<(f64, f64)> = ws
-        .springs
+    let partial: Vec<(f64, f64)> = states
         .par_chunks_mut(CHUNK)
         .enumerate()
         .map(|(chunk, states)| {
@@ -131,17 +191,6 @@ pub(crate) fn evaluate(knit: &Knit, terms: &ForceTerms, ws: &mut Workspace) -> E
             (force_sq, energy)
         })
         .collect();
-    let states = &ws.springs;
-    ws.force
-        .par_chunks_mut(CHUNK)
-        .zip(ws.stiffness_bound.par_chunks_mut(CHUNK))
-        .enumerate()
-        .for_each(|(chunk, (forces, bounds))| {
-            for (k, (f, bound)) in forces.iter_mut().zip(bounds.iter_mut()).enumerate() {
-                let p = PointId((chunk * CHUNK + k) as u32);
-                (*f, *bound) = net_force(knit, terms, states, p);
-            }
-        });
     let (spring_force_sq, potential_energy) = partial
         .iter()
         .fold((0.0, 0.0), |(a, b), (c, d)| (a + c, b + d));
@@ -206,20 +255,64 @@ pub(crate) struct UnheldSums {
     pub sum_sq: f64,
     /// Free points.
     pub free: usize,
-    /// Σ unheld force · velocity over free points (0 without velocities).
+    /// Σ unheld force · (velocity or last move) over free points (0 without motion).
     pub power: f64,
     /// Largest `|unheld force| / stiffness bound` over free points, metres: how far one plain
     /// preconditioned step would move the worst point.
     pub max_step: f64,
+    /// Largest last move over free points, metres (0 without motion).
+    pub max_move: f64,
+}
+
+impl UnheldSums {
+    /// The sums of all chunks, in their order.
+    fn sum(partial: &[UnheldSums]) -> UnheldSums {
+        partial
+            .iter()
+            .fold(UnheldSums::default(), |a, b| UnheldSums {
+                sum_sq: a.sum_sq + b.sum_sq,
+                free: a.free + b.free,
+                power: a.power + b.power,
+                max_step: a.max_step.max(b.max_step),
+                max_move: a.max_move.max(b.max_move),
+            })
+    }
+}
+
+/// Point `i`'s unheld force (zero when pinned), added into `sums`; `motion` is the point's
+/// velocity or last move, for the power and the largest move.
+fn unheld_point(
+    constraints: &dyn Constraints,
+    i: usize,
+    force: &Vec3,
+    bound: f64,
+    inv_mass: f64,
+    motion: Option<&Vec3>,
+    sums: &mut UnheldSums,
+) -> Vec3 {
+    if inv_mass == 0.0 {
+        return Vec3::zeros();
+    }
+    let u = constraints.unheld_force(i, force);
+    sums.sum_sq += u.norm_squared();
+    sums.free += 1;
+    if let Some(v) = motion {
+        sums.power += u.dot(v);
+        sums.max_move = sums.max_move.max(v.norm());
+    }
+    if bound > 0.0 {
+        sums.max_step = sums.max_step.max(u.norm() / bound);
+    }
+    u
 }
 
 /// Fills `ws.unheld` with the part of each free point's net force the constraints do not hold
-/// (zero on pinned points), and returns its sums; with `velocity`, also the power.
+/// (zero on pinned points), and returns its sums (no motion: the power and the largest move
+/// are 0).
 pub(crate) fn unheld_forces(
     knit: &Knit,
     ws: &mut Workspace,
     constraints: &dyn Constraints,
-    velocity: Option<&[Vec3]>,
 ) -> UnheldSums {
     let inv_mass = &knit.particles.inv_mass;
     let (force, bound) = (&ws.force, &ws.stiffness_bound);
@@ -231,31 +324,20 @@ pub(crate) fn unheld_forces(
             let mut sums = UnheldSums::default();
             for (k, u) in unheld.iter_mut().enumerate() {
                 let i = chunk * CHUNK + k;
-                if inv_mass[i] == 0.0 {
-                    *u = Vec3::zeros();
-                    continue;
-                }
-                *u = constraints.unheld_force(i, &force[i]);
-                sums.sum_sq += u.norm_squared();
-                sums.free += 1;
-                if let Some(v) = velocity {
-                    sums.power += u.dot(&v[i]);
-                }
-                if bound[i] > 0.0 {
-                    sums.max_step = sums.max_step.max(u.norm() / bound[i]);
-                }
+                *u = unheld_point(
+                    constraints,
+                    i,
+                    &force[i],
+                    bound[i],
+                    inv_mass[i],
+                    None,
+                    &mut sums,
+                );
             }
             sums
         })
         .collect();
-    partial
-        .iter()
-        .fold(UnheldSums::default(), |a, b| UnheldSums {
-            sum_sq: a.sum_sq + b.sum_sq,
-            free: a.free + b.free,
-            power: a.power + b.power,
-            max_step: a.max_step.max(b.max_step),
-        })
+    UnheldSums::sum(&partial)
 }
 
 /// The relative residual: RMS unheld force over free points over RMS spring force. Spring
@@ -283,6 +365,6 @@ pub(crate) fn relative_residual(
     spring_force_sq: f64,
     force_floor: f64,
 ) -> f64 {
-    let sums = unheld_forces(knit, ws, constraints, None);
+    let sums = unheld_forces(knit, ws, constraints);
     residual_of(knit, &sums, spring_force_sq, force_floor)
 }
