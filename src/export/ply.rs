@@ -1,9 +1,10 @@
 //! PLY writer (binary little-endian): the yarn points as a `vertex` element with every point
 //! attribute, and the yarn segments as an `edge` element, which Blender imports as loose edges.
 
+use std::borrow::Cow;
+
 use ply_rs_bw::ply::{
-    Addable, DefaultElement, ElementDef, Encoding, Ply, Property, PropertyDef, PropertyType,
-    ScalarType,
+    Addable, ElementDef, Encoding, Ply, PropertyAccess, PropertyDef, PropertyType, ScalarType,
 };
 use ply_rs_bw::writer::Writer;
 
@@ -63,12 +64,7 @@ pub fn write_ply(parts: &[YarnGeometry], comments: &[String]) -> Result<Vec<u8>>
         )));
     }
 
-    let mut ply = Ply::<DefaultElement>::new();
-    ply.header.encoding = Encoding::BinaryLittleEndian;
-    ply.header.comments.extend(comments.iter().cloned());
-    ply.header
-        .comments
-        .push("units: metres; PLY has no axis convention: +Y is up as in glTF".into());
+    let mut ply = header(comments);
     for (i, part) in parts.iter().enumerate() {
         let [x, y, z] = part.offset_m;
         ply.header.comments.push(format!(
@@ -77,69 +73,194 @@ pub fn write_ply(parts: &[YarnGeometry], comments: &[String]) -> Result<Vec<u8>>
         ));
     }
 
-    let scalar =
-        |name: &str, t: ScalarType| PropertyDef::new(name.to_string(), PropertyType::Scalar(t));
-    let mut vertex = ElementDef::new("vertex".into());
-    for axis in ["x", "y", "z"] {
-        vertex.properties.add(scalar(axis, ScalarType::Float));
+    let mut vertex = Table::default();
+    for k in 0..3 {
+        let coordinate = parts.iter().flat_map(|part| {
+            let offset = part.offset_m[k];
+            part.positions.iter().map(move |p| (p[k] + offset) as f32)
+        });
+        vertex.add(["x", "y", "z"][k], Column::Float(coordinate.collect()));
     }
-    for name in &attribute_names {
-        vertex.properties.add(scalar(name, ScalarType::Float));
+    for (a, name) in attribute_names.iter().enumerate() {
+        let values = match parts {
+            [one] => Cow::Borrowed(&one.point_attributes[*name][..]),
+            _ => Cow::Owned(
+                parts
+                    .iter()
+                    .flat_map(|part| part.point_attributes.values().nth(a).into_iter().flatten())
+                    .copied()
+                    .collect(),
+            ),
+        };
+        vertex.add(name, Column::Float(values));
     }
-    vertex.properties.add(scalar("part", ScalarType::UChar));
-    ply.header.elements.add(vertex);
-    let mut edge = ElementDef::new("edge".into());
-    edge.properties.add(scalar("vertex1", ScalarType::Int));
-    edge.properties.add(scalar("vertex2", ScalarType::Int));
-    edge.properties.add(scalar("yarn_kind", ScalarType::UChar));
-    edge.properties.add(scalar("direction", ScalarType::UChar));
-    ply.header.elements.add(edge);
+    // At most 256 parts, checked above.
+    let part_of_vertex = parts
+        .iter()
+        .enumerate()
+        .flat_map(|(i, part)| std::iter::repeat_n(i as u8, part.positions.len()));
+    vertex.add("part", Column::UChar(part_of_vertex.collect()));
 
-    let mut vertices = Vec::new();
-    let mut edges = Vec::new();
+    let mut ends = [Vec::new(), Vec::new()];
+    let (mut yarn_kind, mut direction) = (Vec::new(), Vec::new());
     let mut first_vertex = 0usize;
-    for (part_index, part) in parts.iter().enumerate() {
-        for (i, p) in part.positions.iter().enumerate() {
-            let mut v = DefaultElement::new();
-            for (axis, k) in ["x", "y", "z"].iter().zip(0..3) {
-                v.insert(
-                    axis.to_string(),
-                    Property::Float((p[k] + part.offset_m[k]) as f32),
-                );
-            }
-            for (name, values) in &part.point_attributes {
-                v.insert(name.clone(), Property::Float(values[i]));
-            }
-            // At most 256 parts, checked above.
-            v.insert("part".into(), Property::UChar(part_index as u8));
-            vertices.push(v);
-        }
+    for part in parts {
+        let index = |p: u32| {
+            i32::try_from(first_vertex + p as usize)
+                .map_err(|_| encode_error("more than 2^31 vertices".into()))
+        };
         for s in &part.segments {
-            let index = |p: u32| {
-                i32::try_from(first_vertex + p as usize)
-                    .map_err(|_| encode_error("more than 2^31 vertices".into()))
-            };
-            let mut e = DefaultElement::new();
-            e.insert("vertex1".into(), Property::Int(index(s.a)?));
-            e.insert("vertex2".into(), Property::Int(index(s.b)?));
-            e.insert("yarn_kind".into(), Property::UChar(s.yarn.index()));
-            let direction = match s.direction {
+            ends[0].push(index(s.a)?);
+            ends[1].push(index(s.b)?);
+            yarn_kind.push(s.yarn.index());
+            direction.push(match s.direction {
                 Direction::Course => 0,
                 Direction::Wale => 1,
-            };
-            e.insert("direction".into(), Property::UChar(direction));
-            edges.push(e);
+            });
         }
         first_vertex += part.positions.len();
     }
-    ply.payload.insert("vertex".into(), vertices);
-    ply.payload.insert("edge".into(), edges);
+    let mut edge = Table::default();
+    let [vertex1, vertex2] = ends;
+    edge.add("vertex1", Column::Int(vertex1));
+    edge.add("vertex2", Column::Int(vertex2));
+    edge.add("yarn_kind", Column::UChar(yarn_kind));
+    edge.add("direction", Column::UChar(direction));
 
+    encode(ply, &[("vertex", &vertex), ("edge", &edge)]).map_err(encode_error)
+}
+
+/// A binary little-endian PLY with `comments` and the unit/axis convention, and no elements yet.
+fn header<'a>(comments: &[String]) -> Ply<Row<'a>> {
+    let mut ply = Ply::<Row>::new();
+    ply.header.encoding = Encoding::BinaryLittleEndian;
+    ply.header.comments.extend(comments.iter().cloned());
+    ply.header
+        .comments
+        .push("units: metres; PLY has no axis convention: +Y is up as in glTF".into());
+    ply
+}
+
+/// Adds each table to `ply` as an element (properties in the table's column order) and
+/// encodes the file.
+fn encode<'a>(
+    mut ply: Ply<Row<'a>>,
+    elements: &[(&str, &'a Table<'a>)],
+) -> std::result::Result<Vec<u8>, String> {
+    for (name, table) in elements {
+        let mut def = ElementDef::new(name.to_string());
+        for (property, column) in &table.columns {
+            def.properties
+                .add(PropertyDef::new(property.clone(), column.property_type()));
+        }
+        ply.header.elements.add(def);
+        let rows = (0..table.rows())
+            .map(|row| Row {
+                table: Some(table),
+                row,
+            })
+            .collect();
+        ply.payload.insert(name.to_string(), rows);
+    }
     let mut bytes = Vec::new();
     Writer::new()
         .write_ply(&mut bytes, &mut ply)
-        .map_err(|e| encode_error(e.to_string()))?;
+        .map_err(|e| e.to_string())?;
     Ok(bytes)
+}
+
+/// One element's values, a column per property in the order the file lists them: the writer
+/// reads them row by row through [`Row`]. (ply-rs's `DefaultElement`, a map of named values
+/// per row, took about a kilobyte a yarn point: most of a 400×1600 fit's peak memory.)
+#[derive(Default)]
+struct Table<'a> {
+    columns: Vec<(String, Column<'a>)>,
+}
+
+/// One property's values, one per row.
+enum Column<'a> {
+    Float(Cow<'a, [f32]>),
+    UChar(Vec<u8>),
+    Int(Vec<i32>),
+    /// A list of three `int`s with a `uchar` count: a triangle's vertex indices.
+    Triangles(Vec<[i32; 3]>),
+}
+
+impl Column<'_> {
+    fn property_type(&self) -> PropertyType {
+        match self {
+            Column::Float(_) => PropertyType::Scalar(ScalarType::Float),
+            Column::UChar(_) => PropertyType::Scalar(ScalarType::UChar),
+            Column::Int(_) => PropertyType::Scalar(ScalarType::Int),
+            Column::Triangles(_) => PropertyType::List(ScalarType::UChar, ScalarType::Int),
+        }
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            Column::Float(v) => v.len(),
+            Column::UChar(v) => v.len(),
+            Column::Int(v) => v.len(),
+            Column::Triangles(v) => v.len(),
+        }
+    }
+}
+
+impl<'a> Table<'a> {
+    fn add(&mut self, name: &str, column: Column<'a>) {
+        self.columns.push((name.to_string(), column));
+    }
+
+    fn rows(&self) -> usize {
+        self.columns.first().map_or(0, |(_, c)| c.len())
+    }
+
+    fn column(&self, name: &str) -> Option<&Column<'a>> {
+        self.columns.iter().find(|(n, _)| n == name).map(|(_, c)| c)
+    }
+}
+
+/// Row `row` of a [`Table`], as the writer asks for it: by property name.
+struct Row<'a> {
+    table: Option<&'a Table<'a>>,
+    row: usize,
+}
+
+impl PropertyAccess for Row<'_> {
+    fn new() -> Self {
+        Row {
+            table: None,
+            row: 0,
+        }
+    }
+
+    fn get_float(&self, name: &str) -> Option<f32> {
+        match self.table?.column(name)? {
+            Column::Float(v) => v.get(self.row).copied(),
+            _ => None,
+        }
+    }
+
+    fn get_uchar(&self, name: &str) -> Option<u8> {
+        match self.table?.column(name)? {
+            Column::UChar(v) => v.get(self.row).copied(),
+            _ => None,
+        }
+    }
+
+    fn get_int(&self, name: &str) -> Option<i32> {
+        match self.table?.column(name)? {
+            Column::Int(v) => v.get(self.row).copied(),
+            _ => None,
+        }
+    }
+
+    fn get_list_int(&self, name: &str) -> Option<&[i32]> {
+        match self.table?.column(name)? {
+            Column::Triangles(v) => v.get(self.row).map(|t| &t[..]),
+            _ => None,
+        }
+    }
 }
 
 /// An error naming the first point attribute of `owner` that would take the name of one of the
@@ -180,75 +301,41 @@ pub fn write_mesh_ply(mesh: &SurfaceMesh, comments: &[String]) -> Result<Vec<u8>
         &MESH_VERTEX_PROPERTIES,
     )
     .map_err(encode_error)?;
-    let mut ply = Ply::<DefaultElement>::new();
-    ply.header.encoding = Encoding::BinaryLittleEndian;
-    ply.header.comments.extend(comments.iter().cloned());
-    ply.header
-        .comments
-        .push("units: metres; PLY has no axis convention: +Y is up as in glTF".into());
-    let scalar =
-        |name: &str, t: ScalarType| PropertyDef::new(name.to_string(), PropertyType::Scalar(t));
-    let mut vertex = ElementDef::new("vertex".into());
-    for name in ["x", "y", "z", "nx", "ny", "nz"] {
-        vertex.properties.add(scalar(name, ScalarType::Float));
+    let mut vertex = Table::default();
+    for k in 0..3 {
+        let coordinate = mesh.positions.iter().map(|p| p[k] as f32);
+        vertex.add(["x", "y", "z"][k], Column::Float(coordinate.collect()));
     }
-    for name in mesh.point_attributes.keys() {
-        vertex.properties.add(scalar(name, ScalarType::Float));
+    for k in 0..3 {
+        let normal = mesh.normals.iter().map(|n| n[k]);
+        vertex.add(["nx", "ny", "nz"][k], Column::Float(normal.collect()));
     }
-    if mesh.colours.is_some() {
-        for name in ["red", "green", "blue"] {
-            vertex.properties.add(scalar(name, ScalarType::UChar));
+    for (name, values) in &mesh.point_attributes {
+        vertex.add(name, Column::Float(Cow::Borrowed(values)));
+    }
+    if let Some(colours) = &mesh.colours {
+        for k in 0..3 {
+            let channel = colours
+                .iter()
+                .map(|c| crate::render::colormap::linear_to_srgb8(c[k]));
+            vertex.add(
+                ["red", "green", "blue"][k],
+                Column::UChar(channel.collect()),
+            );
         }
     }
-    ply.header.elements.add(vertex);
-    let mut face = ElementDef::new("face".into());
-    face.properties.add(PropertyDef::new(
-        "vertex_indices".into(),
-        PropertyType::List(ScalarType::UChar, ScalarType::Int),
-    ));
-    ply.header.elements.add(face);
-
-    let mut vertices = Vec::with_capacity(mesh.positions.len());
-    for (i, p) in mesh.positions.iter().enumerate() {
-        let mut v = DefaultElement::new();
-        let n = mesh.normals[i];
-        for (name, value) in ["x", "y", "z"].iter().zip(p) {
-            v.insert(name.to_string(), Property::Float(*value as f32));
-        }
-        for (name, value) in ["nx", "ny", "nz"].iter().zip(n) {
-            v.insert(name.to_string(), Property::Float(value));
-        }
-        for (name, values) in &mesh.point_attributes {
-            v.insert(name.clone(), Property::Float(values[i]));
-        }
-        if let Some(colours) = &mesh.colours {
-            let srgb = colours[i].map(crate::render::colormap::linear_to_srgb8);
-            for (name, value) in ["red", "green", "blue"].iter().zip(srgb) {
-                v.insert(name.to_string(), Property::UChar(value));
-            }
-        }
-        vertices.push(v);
-    }
-    let faces = mesh
+    let triangles = mesh
         .triangles
         .iter()
         .map(|t| {
-            let mut f = DefaultElement::new();
-            let indices = t
-                .iter()
-                .map(|&i| i32::try_from(i).map_err(|_| encode_error("index past 2^31".into())))
-                .collect::<Result<Vec<i32>>>()?;
-            f.insert("vertex_indices".into(), Property::ListInt(indices));
-            Ok(f)
+            let index =
+                |i: u32| i32::try_from(i).map_err(|_| encode_error("index past 2^31".into()));
+            Ok([index(t[0])?, index(t[1])?, index(t[2])?])
         })
         .collect::<Result<Vec<_>>>()?;
-    ply.payload.insert("vertex".into(), vertices);
-    ply.payload.insert("face".into(), faces);
-    let mut bytes = Vec::new();
-    Writer::new()
-        .write_ply(&mut bytes, &mut ply)
-        .map_err(|e| encode_error(e.to_string()))?;
-    Ok(bytes)
+    let mut face = Table::default();
+    face.add("vertex_indices", Column::Triangles(triangles));
+    encode(header(comments), &[("vertex", &vertex), ("face", &face)]).map_err(encode_error)
 }
 
 /// Checks what every writer relies on in a yarn geometry: attribute names of the form
@@ -370,6 +457,7 @@ fn fits_f32(p: &[f64; 3]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use ply_rs_bw::ply::{DefaultElement, Property};
 
     use crate::export::sample_geometry as part;
 
