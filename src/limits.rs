@@ -19,23 +19,24 @@ const GIB: f64 = 1024.0 * MIB;
 // does not depend on how long the solver runs): peak resident set (`/usr/bin/time -v`), MiB.
 //
 //   tube on the procedural leg (41k triangles)   []      ["glb"]  ["ply"]  all three  preview 512²
-//   200×200 (40k points)                          39.2    55.6     149.5    157.7      58.4
-//   400×800 (320k points)                         192.1   299.1    1,039.4  1,083.8    271.7
-//   400×1600 (640k points)                        —       —        —        2,155.0    —
+//   200×200 (40k points)                          38.6    56.2     44.1       60.6     58.4
+//   400×800 (320k points)                         187.2   295.5    187.3     295.8    271.7
+//   400×1600 (640k points), run to convergence    —       —        —         485.1    —
 //   400×800, solver.method "paper"                162.0
 //   200×200, preview 4096², 1 spp                                                      801.6
 //
 //   leg (a cylinder), tube 20×12                  []      ["glb"]  ["ply"]  all three  ["picture"]
 //   41k triangles                                 21.9    —        —        68.9       —
-//   205k triangles                                80.9    —        —        317.0      —
-//   819k triangles                                264.6   347.8    1,236.2  1,266.1    310.0
+//   205k triangles                                82.1    —        89.1     108.7      —
+//   819k triangles                                269.8   347.8    347.0    378.0      310.0
 //   819k triangles, preview 512², 1 spp           418.2
-//   3.28M triangles                               988.1   —        —        4,989.8    —
+//   3.28M triangles                               988.1   —        —        —          —
 //
 // Each constant is the slope between two sizes above (given in its doc), rounded up by about
-// 10%; the parts add, which overestimates a fit writing everything by about 5% (the encoders'
-// scratch is freed between files). The PLY writer dominates every large fit: it builds a
-// property map per element before encoding.
+// 10%; the parts add, which overestimates a fit writing several files (the encoders' scratch
+// is freed between files, and the PLY writer's stays under the solve's peak on large tubes).
+// (The glb and preview columns, and the 41k and 3.28M rows, were measured before the PLY writer
+// read columns instead of building a property map per element; neither depends on it.)
 
 /// What a fit needs whatever its size: the binary, thread stacks, the scene (measured: 22 MiB
 /// for the smallest fit above).
@@ -47,15 +48,16 @@ const SOLVE_BYTES_PER_POINT: f64 = 640.0;
 /// The yarns and stocking surface of `stocking.glb`, with the penetration fix, per tube point
 /// (measured: 340 B).
 const GLB_BYTES_PER_POINT: f64 = 380.0;
-/// `stocking.ply`, with the penetration fix, per tube point (measured: 2,760 B).
-const PLY_BYTES_PER_POINT: f64 = 3_000.0;
+/// `stocking.ply`, with the penetration fix, per tube point (measured: 144 B over the solve's
+/// peak at 200×200; none at 400×800, where the writer stays under it).
+const PLY_BYTES_PER_POINT: f64 = 160.0;
 /// Leg vertices and triangles, the contact BVH and the penetration check, per triangle
 /// (measured: 309 B on legs of two triangles per vertex, from 819k to 3.28M triangles).
 const LEG_BYTES_PER_TRIANGLE: f64 = 340.0;
 /// The leg's node in `stocking.glb` and its attributes, per triangle (measured: 106 B at 819k).
 const LEG_GLB_BYTES_PER_TRIANGLE: f64 = 120.0;
-/// `leg.ply` and the leg's attributes, per triangle (measured: 1,243 B at 819k).
-const LEG_PLY_BYTES_PER_TRIANGLE: f64 = 1_350.0;
+/// `leg.ply` and the leg's attributes, per triangle (measured: 120 B, 205k against 819k).
+const LEG_PLY_BYTES_PER_TRIANGLE: f64 = 130.0;
 /// `density.png` and the leg's attributes, per triangle (measured: 58 B at 819k).
 const LEG_PICTURE_BYTES_PER_TRIANGLE: f64 = 70.0;
 /// The preview's yarn grid and the penetration fix it needs, per tube point (measured: 226 B).

@@ -137,11 +137,9 @@ impl Plan {
         };
         add(
             "load leg",
-            format!(
-                "leg.file = {:?}; its declared triangles and the tube are checked against the \
-                 memory limit before anything is decoded",
-                scene.leg.file
-            ),
+            "the leg file (leg.file, or --leg): its declared triangles and the tube are checked \
+             against the memory limit before anything is decoded"
+                .into(),
         );
         add(
             "find axis",
