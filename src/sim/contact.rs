@@ -51,13 +51,12 @@ pub fn plane_reuse_for(tolerance: f64, spacing_m: f64) -> f64 {
         .min(PLANE_REUSE_M)
 }
 
-/// Per-point contact bookkeeping.
+/// Per-point contact bookkeeping, besides the normal (kept in its own array, as every force
+/// evaluation reads it and nothing else of this).
 #[derive(Clone, Copy, Debug, Default)]
 struct PointContact {
     /// Lower bound on the distance to the surface, metres (0 = unknown: query).
     clearance: f64,
-    /// Outward normal of the surface the point rests on, or zero when it is not touching.
-    normal: Vec3,
     /// A point of the plane the point slides on while touching (surface + offset · normal).
     plane_point: Vec3,
     /// Where the point was at its last exact query.
@@ -102,6 +101,8 @@ pub struct LegContact<'a> {
     /// How far a point slides on a cached plane before an exact query, metres.
     plane_reuse: f64,
     state: Vec<PointContact>,
+    /// Per point, the outward normal of the surface it rests on, or zero when it is not touching.
+    normals: Vec<Vec3>,
     counters: ContactCounters,
 }
 
@@ -135,6 +136,7 @@ impl<'a> LegContact<'a> {
             axially_locked,
             plane_reuse: PLANE_REUSE_M,
             state: vec![PointContact::default(); points],
+            normals: vec![Vec3::zeros(); points],
             counters: ContactCounters::default(),
         }
     }
@@ -272,6 +274,7 @@ impl SlideParams<'_> {
         to: &Vec3,
         locked: bool,
         state: &mut PointContact,
+        normal: &mut Vec3,
         counters: &mut ContactCounters,
     ) -> Vec3 {
         let mut delta = to - from;
@@ -279,10 +282,10 @@ impl SlideParams<'_> {
             delta -= self.axis * delta.dot(&self.axis);
         }
         let to = from + delta;
-        let touching = state.normal != Vec3::zeros();
+        let touching = *normal != Vec3::zeros();
         let on_plane = touching && (to - state.queried_at).norm() < self.plane_reuse;
         if let Some(slid) = on_plane
-            .then(|| self.onto_cached_plane(&to, locked, state))
+            .then(|| self.onto_cached_plane(&to, locked, state, normal))
             .flatten()
         {
             slid
@@ -291,8 +294,8 @@ impl SlideParams<'_> {
             state.clearance -= delta.norm();
             to
         } else {
-            let (p, new_state) = self.slide(from, delta, locked, counters);
-            *state = new_state;
+            let (p, new_state, new_normal) = self.slide(from, delta, locked, counters);
+            (*state, *normal) = (new_state, new_normal);
             p
         }
     }
@@ -302,8 +305,14 @@ impl SlideParams<'_> {
     /// ring's plane (dropping it along the normal and then removing the axial part would put it
     /// back below a tilted plane). `None` when the plane is too steep to slide on within the ring
     /// (its normal nearly along the axis): the caller queries exactly.
-    fn onto_cached_plane(&self, to: &Vec3, locked: bool, state: &PointContact) -> Option<Vec3> {
-        let n = state.normal;
+    fn onto_cached_plane(
+        &self,
+        to: &Vec3,
+        locked: bool,
+        state: &PointContact,
+        n: &Vec3,
+    ) -> Option<Vec3> {
+        let n = *n;
         let below = (to - state.plane_point).dot(&n);
         if below >= 0.0 {
             return Some(*to);
@@ -318,7 +327,7 @@ impl SlideParams<'_> {
     }
 
     /// Moves a point from `from` by `delta`, sliding on the leg; returns where it ends with its
-    /// new clearance and contact normal. A slide that runs out of [`MAX_SLIDES`] stops there.
+    /// new contact state and normal. A slide that runs out of [`MAX_SLIDES`] stops there.
     /// A `locked` point's moves keep no component along the axis.
     fn slide(
         &self,
@@ -326,7 +335,7 @@ impl SlideParams<'_> {
         mut delta: Vec3,
         locked: bool,
         counters: &mut ContactCounters,
-    ) -> (Vec3, PointContact) {
+    ) -> (Vec3, PointContact, Vec3) {
         let mut p = Point3::from(*from);
         for _ in 0..MAX_SLIDES {
             if locked {
@@ -362,7 +371,7 @@ impl SlideParams<'_> {
         }
         // Final check against the closest point: never end inside, never closer than offset.
         counters.closest_queries += 1;
-        let state = match self.closest_for_check(&p, counters) {
+        let (state, normal) = match self.closest_for_check(&p, counters) {
             Some(mut c) => {
                 if c.signed_distance < self.offset * (1.0 - 1e-6) {
                     if c.signed_distance < 0.0 {
@@ -372,20 +381,23 @@ impl SlideParams<'_> {
                 }
                 let gap = c.signed_distance.max(self.offset);
                 let touching = gap <= self.offset * 1.5 + 1e-9;
-                PointContact {
+                let state = PointContact {
                     clearance: gap,
-                    normal: if touching { c.outward } else { Vec3::zeros() },
                     plane_point: c.point.coords + c.outward * self.offset,
                     queried_at: p.coords,
-                }
+                };
+                (state, if touching { c.outward } else { Vec3::zeros() })
             }
-            None => PointContact {
-                clearance: self.query_radius,
-                queried_at: p.coords,
-                ..PointContact::default()
-            },
+            None => {
+                let state = PointContact {
+                    clearance: self.query_radius,
+                    queried_at: p.coords,
+                    ..PointContact::default()
+                };
+                (state, Vec3::zeros())
+            }
         };
-        (p.coords, state)
+        (p.coords, state, normal)
     }
 }
 
@@ -396,10 +408,11 @@ impl Constraints for LegContact<'_> {
         let counters: Vec<ContactCounters> = self
             .state
             .par_chunks_mut(CHUNK)
+            .zip(self.normals.par_chunks_mut(CHUNK))
             .zip(x.par_chunks_mut(CHUNK))
             .zip(from.par_chunks(CHUNK))
             .enumerate()
-            .map(|(chunk, ((states, x), from))| {
+            .map(|(chunk, (((states, normals), x), from))| {
                 let mut counters = ContactCounters::default();
                 for k in 0..x.len() {
                     let i = chunk * CHUNK + k;
@@ -409,6 +422,7 @@ impl Constraints for LegContact<'_> {
                             &x[k],
                             locked[i],
                             &mut states[k],
+                            &mut normals[k],
                             &mut counters,
                         );
                     }
@@ -424,12 +438,13 @@ impl Constraints for LegContact<'_> {
     fn settle(&mut self, x: &mut [Vec3], inv_mass: &[f64]) {
         // Forget cached planes and clearances: they belong to positions before the jump.
         self.state.fill(PointContact::default());
+        self.normals.fill(Vec3::zeros());
         let moved = self.push_out_all(x, inv_mass);
         self.counters.settled_out += moved;
     }
 
     fn unheld_force(&self, i: usize, f: &Vec3) -> Vec3 {
-        let n: Vector3<f64> = self.state[i].normal;
+        let n: Vector3<f64> = self.normals[i];
         if self.axially_locked[i] {
             let in_plane = f - self.axis * f.dot(&self.axis);
             if in_plane.dot(&n) >= 0.0 {
