@@ -84,6 +84,9 @@ pub struct Connection {
     pub from_at_a: bool,
     /// Index into [`Knit::springs`] of spring `j–k`.
     pub spring: u32,
+    /// The yarn of spring `j–k` (a course spring): with it the force loop has the spring's c1
+    /// without reading the spring.
+    pub yarn: YarnKind,
 }
 
 /// The knit: grid topology, springs, per-point classes and the particle state.
@@ -198,6 +201,7 @@ impl Knit {
                             from: inc.spring,
                             from_at_a: inc.at_a,
                             spring: onward.spring,
+                            yarn: s.yarn,
                         });
                     }
                 }

@@ -8,7 +8,7 @@
 use rayon::prelude::*;
 
 use super::Constraints;
-use crate::knit::{Knit, PointId, Vec3};
+use crate::knit::{Direction, Knit, PointId, Vec3, YarnKind};
 
 /// Points or springs per parallel chunk. Fixed, so that sums do not depend on the thread count.
 pub(crate) const CHUNK: usize = 4096;
@@ -30,7 +30,12 @@ impl ForceTerms {
     /// direction ([`Knit::stiffness_scale`]).
     pub(crate) fn c1(&self, knit: &Knit, spring: u32) -> f64 {
         let s = &knit.springs[spring as usize];
-        self.stiffness[s.yarn.index() as usize] * knit.stiffness_scale[s.direction.index()]
+        self.c1_of(knit, s.yarn, s.direction)
+    }
+
+    /// c1 of a spring of `yarn` along `direction` in the knit.
+    pub(crate) fn c1_of(&self, knit: &Knit, yarn: YarnKind, direction: Direction) -> f64 {
+        self.stiffness[yarn.index() as usize] * knit.stiffness_scale[direction.index()]
     }
 }
 
@@ -226,7 +231,8 @@ fn net_force(knit: &Knit, terms: &ForceTerms, states: &[SpringState], p: PointId
             // Drawn towards the middle point j, along spring i–j (sign: see forces.rs).
             f += away(conn.from, conn.from_at_a) * (c2 * tension);
             let len_ij = states[conn.from as usize].len;
-            bound += connection_stiffness_bound(c2, terms.c1(knit, conn.spring), tension, len_ij);
+            let c1 = terms.c1_of(knit, conn.yarn, Direction::Course);
+            bound += connection_stiffness_bound(c2, c1, tension, len_ij);
         }
     }
     (f, bound)
