@@ -162,25 +162,29 @@ pub fn relax_accelerated(
 }
 
 /// The momentum update and the unconstrained move, on free points: the velocity is the last
-/// move (`x − from`, zero on a `restart`), and `from` becomes where the point is now.
-fn step(knit: &mut Knit, ws: &Workspace, from: &mut [Vec3], beta: f64, restart: bool) {
+/// move (`x − from`, zero on a `restart`). The new positions are written over `from`, which is
+/// then swapped with the knit's positions, so `from` holds where each point was: one array
+/// written per point instead of two.
+fn step(knit: &mut Knit, ws: &Workspace, from: &mut Vec<Vec3>, beta: f64, restart: bool) {
     let p = &mut knit.particles;
-    p.x.par_chunks_mut(CHUNK)
-        .zip(from.par_chunks_mut(CHUNK))
+    from.par_chunks_mut(CHUNK)
+        .zip(p.x.par_chunks(CHUNK))
         .zip(p.inv_mass.par_chunks(CHUNK))
         .zip(ws.unheld.par_chunks(CHUNK))
         .zip(ws.stiffness_bound.par_chunks(CHUNK))
-        .for_each(|((((x, from), inv_mass), f), bound)| {
+        .for_each(|((((next, x), inv_mass), f), bound)| {
             for k in 0..x.len() {
                 let velocity = if restart {
                     Vec3::zeros()
                 } else {
-                    x[k] - from[k]
+                    x[k] - next[k]
                 };
-                from[k] = x[k];
-                if inv_mass[k] > 0.0 && bound[k] > 0.0 {
-                    x[k] += velocity * beta + f[k] * (STEP / bound[k]);
-                }
+                next[k] = if inv_mass[k] > 0.0 && bound[k] > 0.0 {
+                    x[k] + (velocity * beta + f[k] * (STEP / bound[k]))
+                } else {
+                    x[k]
+                };
             }
         });
+    std::mem::swap(&mut p.x, from);
 }
