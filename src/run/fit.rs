@@ -27,7 +27,7 @@ use crate::render::density_picture::{self, DensityPictureStyle};
 use crate::render::{self, colormap};
 use crate::report::{Metrics, Report, StageClock};
 use crate::scene::{Effect, Output, Scene, SolverMethod, RELAXED_LENGTH_FRACTION};
-use crate::sim::contact::{plane_reuse_for, ContactCounters, LegContact};
+use crate::sim::contact::{ContactCounters, LegContact};
 use crate::sim::{
     relax_constrained, relax_multilevel, Constraints, Levels, MultilevelStats, RelaxStats,
 };
@@ -281,7 +281,6 @@ pub fn solve_fit(
         offset,
         contact: None,
         retired: ContactCounters::default(),
-        tolerance: scene.solver.tolerance,
     };
     let (mut knit, solver) = match scene.solver.method {
         SolverMethod::Paper => {
@@ -383,8 +382,6 @@ struct TubeLevels<'a> {
     contact: Option<LegContact<'a>>,
     /// Counters of the levels solved before it.
     retired: ContactCounters,
-    /// The solver's tolerance, which sizes the contact's plane cache.
-    tolerance: f64,
 }
 
 impl<'a> Levels for TubeLevels<'a> {
@@ -403,18 +400,13 @@ impl<'a> Levels for TubeLevels<'a> {
         }
         let rest_spacing = self.spec.relaxed_circumference_m / knit.wales as f64;
         let query_radius = (10.0 * rest_spacing).max(0.005);
-        let shortest_rest =
-            rest_spacing.min(self.spec.relaxed_length_m / (knit.courses - 1) as f64);
-        self.contact.insert(
-            LegContact::new(
-                self.collider,
-                self.offset,
-                query_radius,
-                self.axis.direction(),
-                end_rings(knit),
-            )
-            .with_plane_reuse(plane_reuse_for(self.tolerance, shortest_rest)),
-        )
+        self.contact.insert(LegContact::new(
+            self.collider,
+            self.offset,
+            query_radius,
+            self.axis.direction(),
+            end_rings(knit),
+        ))
     }
 }
 
