@@ -16,12 +16,15 @@
 //! wide and cheap to remove, and each level starts from a state close to its own rest.
 //!
 //! What it does not do (yet): keep the fine grid's work flat. Measured (README, `knitfit
-//! fit`), the finest grid still needs more iterations the finer it is (203 at 150×150 and
-//! 419 at 300×300 on the MakeHuman leg for 1e-4), and tightening the coarse levels does not shorten it, so
-//! the error it removes is not the coarse solve's. (400×1600 converges since the grids became
-//! the same fabric, `Knit::with_stitch_shape`: 31 s to 1e-4.) Full multigrid would also send
-//! the fine grid's residual back down (V-cycles, FAS); a first try, with the residual restricted
-//! by the transpose of the interpolation, did not lower the fine residual (closing note).
+//! fit`), the finest grid still needs more iterations the finer it is (259 at 150×150 and 404 at
+//! 300×300 on the MakeHuman leg for 1e-4, though 250 at 400×1600), and tightening the coarse
+//! levels does not shorten it, so the error it removes is not the coarse solve's: its tail is a
+//! handful of points whose force step flickers above the tolerance. (400×1600 converges since
+//! the grids became the same fabric, `Knit::with_stitch_shape`, and takes 15 s to 1e-4 since
+//! the contact's plane cache stopped shrinking with the tolerance.) Full multigrid would also
+//! send the fine grid's residual back down (V-cycles, FAS); a first try, with the residual
+//! restricted by the transpose of the interpolation, did not lower the fine residual (closing
+//! note).
 
 use super::accelerated::{relax_accelerated, LevelStats};
 use super::{Constraints, ForceTerms, RelaxObserver};
