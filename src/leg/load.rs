@@ -120,7 +120,7 @@ pub fn read_leg_file(path: &Path) -> Result<LegFile> {
         )));
     }
     check_position_accessors(unchecked.document.as_json()).map_err(fail)?;
-    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| fail(format!("invalid glTF: {e}")))?;
+    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| fail(invalid_gltf(&e)))?;
     Ok(LegFile {
         path: path.to_path_buf(),
         gltf,
@@ -214,6 +214,15 @@ pub fn decode_leg(file: LegFile, units: Units, up: UpAxis) -> Result<Leg> {
     };
     check_height(&leg)?;
     Ok(leg)
+}
+
+/// The message for a document gltf refuses: its validation errors already say "invalid glTF:"
+/// and end each with ";", so they are not prefixed again.
+fn invalid_gltf(e: &gltf::Error) -> String {
+    match e {
+        gltf::Error::Validation(_) => e.to_string().trim_end_matches(';').to_string(),
+        _ => format!("invalid glTF: {e}"),
+    }
 }
 
 /// Refuses a primitive whose `POSITION` names an accessor the file does not have. The glTF

@@ -271,6 +271,22 @@ fn a_file_that_is_not_gltf_is_refused() {
 }
 
 #[test]
+fn an_invalid_document_is_refused_with_what_is_wrong_said_once() {
+    let name = "dangling.gltf";
+    let text = r#"{"asset":{"version":"2.0"},"scenes":[{"nodes":[7]}]}"#;
+    bad_leg(
+        name,
+        text.as_bytes(),
+        "invalid glTF: scenes[0].nodes[0]: Index out of bounds",
+    );
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join(name), text).unwrap();
+    let err = stderr(&knitfit(dir.path(), &["fit", "--leg", name]));
+    assert_eq!(err.matches("invalid glTF").count(), 1, "{err}");
+    assert!(!err.trim_end().ends_with(';'), "{err}");
+}
+
+#[test]
 fn a_leg_of_lines_only_is_refused() {
     bad_leg(
         "lines.gltf",
