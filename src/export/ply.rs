@@ -81,14 +81,13 @@ pub fn write_ply(parts: &[YarnGeometry], comments: &[String]) -> Result<Vec<u8>>
         });
         vertex.add(["x", "y", "z"][k], Column::Float(coordinate.collect()));
     }
-    for (a, name) in attribute_names.iter().enumerate() {
+    for name in &attribute_names {
         let values = match parts {
             [one] => Cow::Borrowed(&one.point_attributes[*name][..]),
             _ => Cow::Owned(
                 parts
                     .iter()
-                    .flat_map(|part| part.point_attributes.values().nth(a).into_iter().flatten())
-                    .copied()
+                    .flat_map(|part| part.point_attributes[*name].iter().copied())
                     .collect(),
             ),
         };

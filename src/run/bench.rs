@@ -51,6 +51,14 @@ pub struct BenchCase {
     pub tolerance: f64,
 }
 
+impl BenchCase {
+    /// The leg and grid as two table cells: `makehuman_leg | 50×50`.
+    fn leg_and_grid(&self) -> String {
+        let leg = self.leg.trim_end_matches(".glb");
+        format!("{leg} | {}×{}", self.wales, self.courses)
+    }
+}
+
 /// What one case measured.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BenchRow {
@@ -390,11 +398,9 @@ fn markdown(
     for r in rows {
         let c = &r.case;
         md.push_str(&format!(
-            "| {} | {}×{} | {} | {} | {:.0e} | {:.2} | {} | {:.1e} | {:.1e} | {} | {:.4} | {} | \
+            "| {} | {} | {} | {:.0e} | {:.2} | {} | {:.1e} | {:.1e} | {} | {:.4} | {} | \
              {} | {} |\n",
-            c.leg.trim_end_matches(".glb"),
-            c.wales,
-            c.courses,
+            c.leg_and_grid(),
             c.wales * c.courses,
             c.solver.name(),
             c.tolerance,
@@ -417,10 +423,8 @@ fn markdown(
         md.push_str("|---|---|---:|---:|---:|---:|\n");
         for (c, paper, fast) in speedups {
             md.push_str(&format!(
-                "| {} | {}×{} | {:.0e} | {:.2} | {:.2} | {:.0}× |\n",
-                c.leg.trim_end_matches(".glb"),
-                c.wales,
-                c.courses,
+                "| {} | {:.0e} | {:.2} | {:.2} | {:.0}× |\n",
+                c.leg_and_grid(),
                 c.tolerance,
                 paper,
                 fast,
@@ -439,10 +443,8 @@ fn markdown(
         for (paper, fast) in matched {
             let c = &paper.case;
             md.push_str(&format!(
-                "| {} | {}×{} | {:.0e} | {:.2} | {:.2e} | {:.0e} | {:.2} | {:.2e} | {:.0}× |\n",
-                c.leg.trim_end_matches(".glb"),
-                c.wales,
-                c.courses,
+                "| {} | {:.0e} | {:.2} | {:.2e} | {:.0e} | {:.2} | {:.2e} | {:.0}× |\n",
+                c.leg_and_grid(),
                 c.tolerance,
                 paper.seconds,
                 paper.density_error.unwrap_or(f64::NAN),
@@ -461,10 +463,8 @@ fn markdown(
         for r in references {
             let c = &r.case;
             md.push_str(&format!(
-                "| {} | {}×{} | {:.2} | {} | {:.1e} | {} |\n",
-                c.leg.trim_end_matches(".glb"),
-                c.wales,
-                c.courses,
+                "| {} | {:.2} | {} | {:.1e} | {} |\n",
+                c.leg_and_grid(),
                 r.seconds,
                 r.iterations,
                 r.residual,
