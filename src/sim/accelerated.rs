@@ -114,8 +114,8 @@ pub fn relax_accelerated(
     loop {
         let (eval, sums) = evaluate_unheld(knit, terms, &mut ws, &*constraints, &from);
         let residual = residual_of(knit, &sums, eval.spring_force_sq, force_floor);
-        let force_step = STEP * sums.max_step / shortest_rest;
-        let max_move = sums.max_move / shortest_rest;
+        let force_step = STEP * sums.max_step() / shortest_rest;
+        let max_move = sums.max_move() / shortest_rest;
         observer.on_step(first_step + iteration, residual);
         let start = *start_residual.get_or_insert(residual);
         let diverged = |what: String| Error::SolverDiverged {
@@ -170,17 +170,17 @@ fn step(knit: &mut Knit, ws: &Workspace, from: &mut Vec<Vec3>, beta: f64, restar
     from.par_chunks_mut(CHUNK)
         .zip(p.x.par_chunks(CHUNK))
         .zip(p.inv_mass.par_chunks(CHUNK))
-        .zip(ws.unheld.par_chunks(CHUNK))
-        .zip(ws.stiffness_bound.par_chunks(CHUNK))
-        .for_each(|((((next, x), inv_mass), f), bound)| {
+        .zip(ws.preconditioned.par_chunks(CHUNK))
+        .for_each(|(((next, x), inv_mass), step)| {
             for k in 0..x.len() {
                 let velocity = if restart {
                     Vec3::zeros()
                 } else {
                     x[k] - next[k]
                 };
-                next[k] = if inv_mass[k] > 0.0 && bound[k] > 0.0 {
-                    x[k] + (velocity * beta + f[k] * (STEP / bound[k]))
+                // A free point with no springs (bound 0) has a zero step: it never starts moving.
+                next[k] = if inv_mass[k] > 0.0 {
+                    x[k] + (velocity * beta + step[k] * STEP)
                 } else {
                     x[k]
                 };

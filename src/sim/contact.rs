@@ -267,7 +267,8 @@ impl SlideParams<'_> {
         }
         let to = from + delta;
         let touching = *normal != Vec3::zeros();
-        let on_plane = touching && (to - state.queried_at).norm() < PLANE_REUSE_M;
+        let on_plane =
+            touching && (to - state.queried_at).norm_squared() < PLANE_REUSE_M * PLANE_REUSE_M;
         if let Some(slid) = on_plane
             .then(|| self.onto_cached_plane(&to, locked, state, normal))
             .flatten()

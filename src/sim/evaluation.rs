@@ -8,7 +8,7 @@
 use rayon::prelude::*;
 
 use super::Constraints;
-use crate::knit::{Direction, Knit, PointId, Vec3, YarnKind};
+use crate::knit::{Direction, Knit, Vec3, YarnKind};
 
 /// Points or springs per parallel chunk. Fixed, so that sums do not depend on the thread count.
 pub(crate) const CHUNK: usize = 4096;
@@ -42,42 +42,69 @@ impl ForceTerms {
 /// Gershgorin contribution of one spring to the stiffness bound of each of its ends: `2 c1`
 /// scaled by the spring's geometric stiffness `|1 − l/len|` where that exceeds 1 (a spring
 /// compressed below half its rest length is stiffer across than along).
-pub(crate) fn spring_stiffness_bound(c1: f64, rest: f64, len: f64) -> f64 {
-    let geometric = if len > 0.0 {
-        (1.0 - rest / len).abs()
-    } else {
-        1.0
-    };
-    2.0 * c1 * geometric.max(1.0)
+/// `inv_len` is `1 / len`, 0 for coincident ends (which gives the factor 1).
+pub(crate) fn spring_stiffness_bound(c1: f64, rest: f64, inv_len: f64) -> f64 {
+    2.0 * c1 * (1.0 - rest * inv_len).abs().max(1.0)
 }
 
 /// Gershgorin contribution of one connection term (eq. 2) to the bound of the point `i` it acts
 /// on: `2 c2 c1` from the tension of `j–k` changing as `j` and `k` move, plus `2 c2 T / |x_i −
 /// x_j|` from its direction `i → j` turning as `i` and `j` move (none when they coincide: the
-/// force is zero there). Without the turning part a strained knit with a large c2 can have
+/// force is zero there, and `inv_len_ij`, `1 / |x_i − x_j|`, is 0). Without the turning part a strained knit with a large c2 can have
 /// steps divided by the bound overshoot (`sim::properties`).
-pub(crate) fn connection_stiffness_bound(c2: f64, c1: f64, tension: f64, len_ij: f64) -> f64 {
-    let turning = if len_ij > 0.0 { tension / len_ij } else { 0.0 };
-    2.0 * c2 * (c1 + turning)
+pub(crate) fn connection_stiffness_bound(c2: f64, c1: f64, tension: f64, inv_len_ij: f64) -> f64 {
+    2.0 * c2 * (c1 + tension * inv_len_ij)
 }
 
 /// Per-spring state of one force evaluation.
 #[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct SpringState {
+struct SpringState {
     /// Signed spring force magnitude `c1 (|x_b − x_a| − l)`: positive in tension.
-    pub tension: f64,
+    tension: f64,
     /// Unit vector from end `a` to end `b` (zero when they coincide).
-    pub unit_ab: Vec3,
+    unit_ab: Vec3,
     /// Length `|x_b − x_a|`, metres.
-    pub len: f64,
+    len: f64,
+    /// `1 / len`, or 0 when the ends coincide. Divisions are the pass's costliest arithmetic:
+    /// this is the spring's only one.
+    inv_len: f64,
+    /// The spring's c1.
+    c1: f64,
     /// [`spring_stiffness_bound`] of this spring.
-    pub stiffness_bound: f64,
+    stiffness_bound: f64,
+}
+
+impl SpringState {
+    /// The state of spring `spring` of `knit` at positions `x`.
+    fn of(knit: &Knit, terms: &ForceTerms, x: &[Vec3], spring: usize) -> SpringState {
+        let s = &knit.springs[spring];
+        let c1 = terms.c1(knit, spring as u32);
+        let d = x[s.b.index()] - x[s.a.index()];
+        let len = d.norm();
+        let inv_len = if len > 0.0 { 1.0 / len } else { 0.0 };
+        SpringState {
+            tension: c1 * (len - s.rest),
+            unit_ab: d * inv_len,
+            len,
+            inv_len,
+            c1,
+            stiffness_bound: spring_stiffness_bound(c1, s.rest, inv_len),
+        }
+    }
+
+    /// Unit vector along the spring, pointing away from the end the force acts on (end `a` when
+    /// `at_a`).
+    fn away(&self, at_a: bool) -> Vec3 {
+        if at_a {
+            self.unit_ab
+        } else {
+            -self.unit_ab
+        }
+    }
 }
 
 /// Scratch space and results of force evaluations, reused across iterations.
 pub(crate) struct Workspace {
-    /// Per spring.
-    pub springs: Vec<SpringState>,
     /// Net force per point.
     pub force: Vec<Vec3>,
     /// Per point, a bound on the largest eigenvalue of the stiffness seen from that point
@@ -86,21 +113,26 @@ pub(crate) struct Workspace {
     /// Per point, the part of the net force the constraints do not hold (contact reactions and
     /// locked directions removed; zero on pinned points): what can still move it.
     pub unheld: Vec<Vec3>,
+    /// Per point, the unheld force over the stiffness bound: the move one plain preconditioned
+    /// step would make (zero on pinned points and where the bound is 0). Filled by
+    /// [`evaluate_unheld`] only, sized on first use.
+    pub preconditioned: Vec<Vec3>,
 }
 
 impl Workspace {
     /// Space for `knit`.
     pub fn new(knit: &Knit) -> Workspace {
         Workspace {
-            springs: vec![SpringState::default(); knit.springs.len()],
             force: vec![Vec3::zeros(); knit.len()],
             stiffness_bound: vec![0.0; knit.len()],
             unheld: vec![Vec3::zeros(); knit.len()],
+            preconditioned: Vec::new(),
         }
     }
 }
 
 /// Sums of one force evaluation.
+#[derive(Clone, Copy, Debug, Default)]
 pub(crate) struct Evaluation {
     /// Σ over springs of (spring force magnitude)².
     pub spring_force_sq: f64,
@@ -108,30 +140,31 @@ pub(crate) struct Evaluation {
     pub potential_energy: f64,
 }
 
-/// Computes spring states, the net force and the stiffness bound of every point; returns the
-/// sums the convergence test and the watchdog need.
+impl Evaluation {
+    fn add(&mut self, knit: &Knit, spring: usize, state: &SpringState) {
+        let stretch = state.len - knit.springs[spring].rest;
+        self.spring_force_sq += state.tension * state.tension;
+        self.potential_energy += 0.5 * state.c1 * stretch * stretch;
+    }
+}
+
+/// Computes the net force and the stiffness bound of every point into `ws.force` and
+/// `ws.stiffness_bound`; returns the sums the convergence test and the watchdog need.
 pub(crate) fn evaluate(knit: &Knit, terms: &ForceTerms, ws: &mut Workspace) -> Evaluation {
-    let eval = spring_states(knit, terms, &mut ws.springs);
-    let states = &ws.springs;
-    ws.force
-        .par_chunks_mut(CHUNK)
-        .zip(ws.stiffness_bound.par_chunks_mut(CHUNK))
-        .enumerate()
-        .for_each(|(chunk, (forces, bounds))| {
-            for (k, (f, bound)) in forces.iter_mut().zip(bounds.iter_mut()).enumerate() {
-                let p = PointId((chunk * CHUNK + k) as u32);
-                (*f, *bound) = net_force(knit, terms, states, p);
-            }
-        });
+    let (eval, _) = force_pass(
+        knit,
+        terms,
+        &mut ws.force,
+        &mut ws.stiffness_bound,
+        |_, force, _, out, _: &mut ()| *out = *force,
+    );
     eval
 }
 
 /// [`evaluate`] and [`unheld_forces`] in one pass over the points, for the fast solver, whose
-/// every iteration needs both: fills the spring states, `ws.stiffness_bound` and `ws.unheld`
-/// (not `ws.force`, which it leaves as it was). The motion sums are taken over the last move,
-/// `x − from`. Each point's figures are those of the two functions, summed in the same chunks,
-/// so the results are bit-identical to calling them in turn; what is saved is a pass that
-/// reads every force back from memory.
+/// every iteration needs both: fills `ws.stiffness_bound` and `ws.preconditioned` (not
+/// `ws.force` or `ws.unheld`, which it leaves as they were). The motion sums are taken over the
+/// last move, `x − from`.
 pub(crate) fn evaluate_unheld(
     knit: &Knit,
     terms: &ForceTerms,
@@ -139,103 +172,237 @@ pub(crate) fn evaluate_unheld(
     constraints: &dyn Constraints,
     from: &[Vec3],
 ) -> (Evaluation, UnheldSums) {
-    let eval = spring_states(knit, terms, &mut ws.springs);
-    let states = &ws.springs;
     let (x, inv_mass) = (&knit.particles.x, &knit.particles.inv_mass);
-    let partial: Vec<UnheldSums> = ws
-        .unheld
-        .par_chunks_mut(CHUNK)
-        .zip(ws.stiffness_bound.par_chunks_mut(CHUNK))
-        .enumerate()
-        .map(|(chunk, (unheld, bounds))| {
-            let mut sums = UnheldSums::default();
-            for (k, (u, bound)) in unheld.iter_mut().zip(bounds.iter_mut()).enumerate() {
-                let i = chunk * CHUNK + k;
-                let force;
-                (force, *bound) = net_force(knit, terms, states, PointId(i as u32));
-                let last_move = x[i] - from[i];
-                *u = unheld_point(
-                    constraints,
-                    i,
-                    &force,
-                    *bound,
-                    inv_mass[i],
-                    Some(&last_move),
-                    &mut sums,
-                );
-            }
-            sums
-        })
-        .collect();
+    ws.preconditioned.resize(knit.len(), Vec3::zeros());
+    let (eval, partial) = force_pass(
+        knit,
+        terms,
+        &mut ws.preconditioned,
+        &mut ws.stiffness_bound,
+        |i, force, bound, preconditioned, sums: &mut UnheldSums| {
+            let last_move = x[i] - from[i];
+            let inv_bound = if bound > 0.0 { 1.0 / bound } else { 0.0 };
+            let unheld = unheld_point(
+                constraints,
+                i,
+                force,
+                inv_bound,
+                inv_mass[i],
+                Some(&last_move),
+                sums,
+            );
+            *preconditioned = unheld * inv_bound;
+        },
+    );
     (eval, UnheldSums::sum(&partial))
 }
 
-/// The spring states of eq. (1) for the current positions; returns their sums.
-fn spring_states(knit: &Knit, terms: &ForceTerms, states: &mut [SpringState]) -> Evaluation {
-    let x = &knit.particles.x;
-    let springs = &knit.springs;
-    let partial: Vec<(f64, f64)> = states
-        .par_chunks_mut(CHUNK)
-        .enumerate()
-        .map(|(chunk, states)| {
-            let (mut force_sq, mut energy) = (0.0, 0.0);
-            for (k, state) in states.iter_mut().enumerate() {
-                let spring = chunk * CHUNK + k;
-                let s = &springs[spring];
-                let c1 = terms.c1(knit, spring as u32);
-                let d = x[s.b.index()] - x[s.a.index()];
-                let len = d.norm();
-                let stretch = len - s.rest;
-                state.tension = c1 * stretch;
-                state.unit_ab = if len > 0.0 { d / len } else { Vec3::zeros() };
-                state.len = len;
-                state.stiffness_bound = spring_stiffness_bound(c1, s.rest, len);
-                force_sq += state.tension * state.tension;
-                energy += 0.5 * c1 * stretch * stretch;
-            }
-            (force_sq, energy)
-        })
-        .collect();
-    let (spring_force_sq, potential_energy) = partial
-        .iter()
-        .fold((0.0, 0.0), |(a, b), (c, d)| (a + c, b + d));
-    Evaluation {
-        spring_force_sq,
-        potential_energy,
-    }
+/// Whole rows of the grid per parallel chunk of the force pass: at most [`CHUNK`] points, and
+/// small grids still split in 8 so every thread has work. A function of the grid alone, so the
+/// sums do not depend on the thread count.
+fn rows_per_chunk(knit: &Knit) -> usize {
+    let by_size = (CHUNK / knit.wales.max(1)).max(1);
+    by_size.min(knit.courses.div_ceil(8)).max(1)
 }
 
-/// Net force on point `p` and its stiffness bound: eq. (1) over its springs, plus eq. (2) over
-/// its connection terms when the yarn connection runs. Summed in the knit's fixed incident order.
-fn net_force(knit: &Knit, terms: &ForceTerms, states: &[SpringState], p: PointId) -> (Vec3, f64) {
-    // Unit vector along spring `s`, pointing away from `p` (which is end `a` when `at_a`).
-    let away = |s: u32, at_a: bool| {
-        let unit = states[s as usize].unit_ab;
-        if at_a {
-            unit
-        } else {
-            -unit
-        }
+/// The force pass every evaluation shares: eq. (1) over each point's springs, plus eq. (2) over
+/// its connection terms when the yarn connection runs, written as `(force, bound)` to
+/// `visit(point, force, bound, out[point], chunk sums)`, which also fills `out`; the bound goes
+/// to `bounds`. Returns the spring sums and each chunk's sums, in order.
+///
+/// It walks the grid row by row (the knit's springs are laid out that way, [`Knit::grid`]):
+/// each row's course springs and the wale springs up to the next row are computed into small
+/// buffers just before the row's points read them, so every spring is computed once and read
+/// from cache, never stored for the whole knit. A chunk also computes the wale springs just
+/// below its first row (the chunk before owns and sums them). Each point's force is what the
+/// kernels of `forces.rs` summed over its lists ([`Knit::incident`], [`Knit::connections`])
+/// give, to rounding (`sim::properties` checks it); only the neighbours' places come from the
+/// grid layout.
+fn force_pass<T: Send, S: Default + Send>(
+    knit: &Knit,
+    terms: &ForceTerms,
+    out: &mut [T],
+    bounds: &mut [f64],
+    visit: impl Fn(usize, &Vec3, f64, &mut T, &mut S) + Sync,
+) -> (Evaluation, Vec<S>) {
+    let (wales, courses) = (knit.wales, knit.courses);
+    let wraps = knit.closed_courses;
+    let per_row = if wraps {
+        wales
+    } else {
+        wales.saturating_sub(1)
     };
-    let mut f = Vec3::zeros();
-    let mut bound = 0.0;
-    for inc in knit.incident(p) {
-        let state = &states[inc.spring as usize];
-        // Tension pulls p along the spring, compression pushes it back: eq. (1).
-        f += away(inc.spring, inc.at_a) * state.tension;
-        bound += state.stiffness_bound;
-    }
-    if let Some(c2) = terms.connection_factor {
-        for conn in knit.connections(p) {
-            let tension = states[conn.spring as usize].tension.max(0.0);
-            // Drawn towards the middle point j, along spring i–j (sign: see forces.rs).
-            f += away(conn.from, conn.from_at_a) * (c2 * tension);
-            let len_ij = states[conn.from as usize].len;
-            let c1 = terms.c1_of(knit, conn.yarn, Direction::Course);
-            bound += connection_stiffness_bound(c2, c1, tension, len_ij);
+    let wale_start = courses * per_row;
+    let x = &knit.particles.x;
+    let rows = rows_per_chunk(knit);
+    let chunk_points = (rows * wales).max(1);
+    let partial: Vec<(Evaluation, S)> = out
+        .par_chunks_mut(chunk_points)
+        .zip(bounds.par_chunks_mut(chunk_points))
+        .enumerate()
+        .map(|(chunk, (out, bounds))| {
+            let mut eval = Evaluation::default();
+            let mut sums = S::default();
+            let first = chunk * rows;
+            let wale_row = |c: usize, row: &mut Vec<SpringState>| {
+                row.clear();
+                row.extend(
+                    (0..wales).map(|w| SpringState::of(knit, terms, x, wale_start + c * wales + w)),
+                );
+            };
+            let (mut course, mut below, mut above) = (Vec::new(), Vec::new(), Vec::new());
+            if first > 0 {
+                wale_row(first - 1, &mut below);
+            }
+            for (r, (out, bounds)) in out
+                .chunks_mut(wales)
+                .zip(bounds.chunks_mut(wales))
+                .enumerate()
+            {
+                let c = first + r;
+                course.clear();
+                course.extend((0..per_row).map(|w| {
+                    let spring = c * per_row + w;
+                    let state = SpringState::of(knit, terms, x, spring);
+                    eval.add(knit, spring, &state);
+                    state
+                }));
+                let has_above = c + 1 < courses;
+                if has_above {
+                    wale_row(c, &mut above);
+                    for (w, state) in above.iter().enumerate() {
+                        eval.add(knit, wale_start + c * wales + w, state);
+                    }
+                }
+                let row = RowSprings {
+                    course: &course,
+                    below: (c > 0).then_some(&below[..]),
+                    above: has_above.then_some(&above[..]),
+                    wraps,
+                };
+                for (w, (out, bound)) in out.iter_mut().zip(bounds.iter_mut()).enumerate() {
+                    let force;
+                    (force, *bound) = row.net_force(w, terms.connection_factor);
+                    visit(c * wales + w, &force, *bound, out, &mut sums);
+                }
+                std::mem::swap(&mut below, &mut above);
+            }
+            (eval, sums)
+        })
+        .collect();
+    let eval = partial
+        .iter()
+        .fold(Evaluation::default(), |a, (b, _)| Evaluation {
+            spring_force_sq: a.spring_force_sq + b.spring_force_sq,
+            potential_energy: a.potential_energy + b.potential_energy,
+        });
+    (eval, partial.into_iter().map(|(_, s)| s).collect())
+}
+
+/// Eq. (2) on point `i`: the tension of `onward` (spring j–k) draws it towards the middle point j
+/// along `from` (spring i–j, with `i` its end `a` when `at_a`); sign: see forces.rs.
+#[inline]
+fn add_connection(
+    c2: f64,
+    from: &SpringState,
+    at_a: bool,
+    onward: &SpringState,
+    f: &mut Vec3,
+    bound: &mut f64,
+) {
+    let tension = onward.tension.max(0.0);
+    *f += from.away(at_a) * (c2 * tension);
+    *bound += connection_stiffness_bound(c2, onward.c1, tension, from.inv_len);
+}
+
+/// The spring states one row of points reads: the row's course springs, and the wale springs
+/// below and above it (none at the first and last row).
+struct RowSprings<'a> {
+    course: &'a [SpringState],
+    below: Option<&'a [SpringState]>,
+    above: Option<&'a [SpringState]>,
+    wraps: bool,
+}
+
+impl RowSprings<'_> {
+    /// The course spring `w + offset` of the row (around the ring when it wraps), if any.
+    fn course_at(&self, w: usize, offset: isize) -> Option<&SpringState> {
+        let n = self.course.len() as isize;
+        let i = w as isize + offset;
+        if self.wraps {
+            self.course.get(i.rem_euclid(n.max(1)) as usize)
+        } else if (0..n).contains(&i) {
+            self.course.get(i as usize)
+        } else {
+            None
         }
     }
-    (f, bound)
+
+    /// Net force on the row's point `w` and its stiffness bound: its course springs (left, then
+    /// right), its wale springs (below, then above), then its connection terms.
+    #[inline]
+    fn net_force(&self, w: usize, connection_factor: Option<f64>) -> (Vec3, f64) {
+        let course = self.course;
+        if w >= 2 && w + 2 < course.len() + usize::from(!self.wraps) {
+            // Away from the ring's ends (all but a few points) both course springs and both
+            // onward springs are there: a path with nothing to look up (the general one below
+            // made the whole fit 8% slower).
+            let ends = [(&course[w - 1], false), (&course[w], true)];
+            let onward = [&course[w - 2], &course[w + 1]];
+            let mut f = Vec3::zeros();
+            let mut bound = 0.0;
+            for (state, at_a) in ends {
+                // Tension pulls the point along the spring, compression pushes it back: eq. (1).
+                f += state.away(at_a) * state.tension;
+                bound += state.stiffness_bound;
+            }
+            self.add_wale(w, &mut f, &mut bound);
+            if let Some(c2) = connection_factor {
+                for ((from, at_a), onward) in ends.into_iter().zip(onward) {
+                    add_connection(c2, from, at_a, onward, &mut f, &mut bound);
+                }
+            }
+            return (f, bound);
+        }
+        // Each course spring with the point's end of it, and the onward spring j–k beyond it:
+        // the spring to the left ends at `w` (end b), the one to the right starts there.
+        let ends = [
+            self.course_at(w, -1)
+                .map(|s| (s, false, self.course_at(w, -2))),
+            self.course_at(w, 0)
+                .map(|s| (s, true, self.course_at(w, 1))),
+        ];
+        let mut f = Vec3::zeros();
+        let mut bound = 0.0;
+        for &(state, at_a, _) in ends.iter().flatten() {
+            f += state.away(at_a) * state.tension;
+            bound += state.stiffness_bound;
+        }
+        self.add_wale(w, &mut f, &mut bound);
+        if let Some(c2) = connection_factor {
+            for &(from, at_a, onward) in ends.iter().flatten() {
+                if let Some(onward) = onward {
+                    add_connection(c2, from, at_a, onward, &mut f, &mut bound);
+                }
+            }
+        }
+        (f, bound)
+    }
+
+    /// Adds the wale springs below and above point `w` (eq. 1).
+    #[inline]
+    fn add_wale(&self, w: usize, f: &mut Vec3, bound: &mut f64) {
+        if let Some(below) = self.below {
+            let state = &below[w];
+            *f += state.away(false) * state.tension;
+            *bound += state.stiffness_bound;
+        }
+        if let Some(above) = self.above {
+            let state = &above[w];
+            *f += state.away(true) * state.tension;
+            *bound += state.stiffness_bound;
+        }
+    }
 }
 
 /// The residual's floor: the spring force of a strain of [`REST_STRAIN`] on the softest, shortest
@@ -263,11 +430,11 @@ pub(crate) struct UnheldSums {
     pub free: usize,
     /// Σ unheld force · (velocity or last move) over free points (0 without motion).
     pub power: f64,
-    /// Largest `|unheld force| / stiffness bound` over free points, metres: how far one plain
-    /// preconditioned step would move the worst point.
-    pub max_step: f64,
-    /// Largest last move over free points, metres (0 without motion).
-    pub max_move: f64,
+    /// Square of the largest `|unheld force| / stiffness bound` over free points (see
+    /// [`UnheldSums::max_step`]): squares, so that no point needs a square root for it.
+    max_step_sq: f64,
+    /// Square of the largest last move over free points.
+    max_move_sq: f64,
 }
 
 impl UnheldSums {
@@ -279,19 +446,31 @@ impl UnheldSums {
                 sum_sq: a.sum_sq + b.sum_sq,
                 free: a.free + b.free,
                 power: a.power + b.power,
-                max_step: a.max_step.max(b.max_step),
-                max_move: a.max_move.max(b.max_move),
+                max_step_sq: a.max_step_sq.max(b.max_step_sq),
+                max_move_sq: a.max_move_sq.max(b.max_move_sq),
             })
+    }
+
+    /// Largest `|unheld force| / stiffness bound` over free points, metres: how far one plain
+    /// preconditioned step would move the worst point.
+    pub fn max_step(&self) -> f64 {
+        self.max_step_sq.sqrt()
+    }
+
+    /// Largest last move over free points, metres (0 without motion).
+    pub fn max_move(&self) -> f64 {
+        self.max_move_sq.sqrt()
     }
 }
 
-/// Point `i`'s unheld force (zero when pinned), added into `sums`; `motion` is the point's
-/// velocity or last move, for the power and the largest move.
+/// Point `i`'s unheld force (zero when pinned), added into `sums`; `inv_bound` is 1 over its
+/// stiffness bound (0 where the bound is 0), `motion` the point's velocity or last move, for the
+/// power and the largest move.
 fn unheld_point(
     constraints: &dyn Constraints,
     i: usize,
     force: &Vec3,
-    bound: f64,
+    inv_bound: f64,
     inv_mass: f64,
     motion: Option<&Vec3>,
     sums: &mut UnheldSums,
@@ -300,15 +479,14 @@ fn unheld_point(
         return Vec3::zeros();
     }
     let u = constraints.unheld_force(i, force);
-    sums.sum_sq += u.norm_squared();
+    let u_sq = u.norm_squared();
+    sums.sum_sq += u_sq;
     sums.free += 1;
     if let Some(v) = motion {
         sums.power += u.dot(v);
-        sums.max_move = sums.max_move.max(v.norm());
+        sums.max_move_sq = sums.max_move_sq.max(v.norm_squared());
     }
-    if bound > 0.0 {
-        sums.max_step = sums.max_step.max(u.norm() / bound);
-    }
+    sums.max_step_sq = sums.max_step_sq.max(u_sq * (inv_bound * inv_bound));
     u
 }
 
@@ -330,11 +508,12 @@ pub(crate) fn unheld_forces(
             let mut sums = UnheldSums::default();
             for (k, u) in unheld.iter_mut().enumerate() {
                 let i = chunk * CHUNK + k;
+                let inv_bound = if bound[i] > 0.0 { 1.0 / bound[i] } else { 0.0 };
                 *u = unheld_point(
                     constraints,
                     i,
                     &force[i],
-                    bound[i],
+                    inv_bound,
                     inv_mass[i],
                     None,
                     &mut sums,

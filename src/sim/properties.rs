@@ -12,8 +12,11 @@ mod prop_config;
 use nalgebra::{DMatrix, Matrix3};
 use proptest::prelude::*;
 
-use super::evaluation::{evaluate, ForceTerms, Workspace};
-use crate::knit::{Knit, Pattern, Tile, Vec3};
+use super::evaluation::{
+    connection_stiffness_bound, evaluate, spring_stiffness_bound, ForceTerms, Workspace,
+};
+use super::forces::{connection_force, spring_force, spring_tension};
+use crate::knit::{Knit, Pattern, PointId, Tile, Vec3};
 
 /// A small knit, as the numbers it is built from (so a failing case prints short).
 #[derive(Clone, Debug)]
@@ -177,8 +180,67 @@ fn shortest_strain(knit: &Knit) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// Point `i`'s net force and stiffness bound the plain way: the kernels of `forces.rs` summed
+/// over the point's lists ([`Knit::incident`], [`Knit::connections`]); with the sum of the
+/// terms' magnitudes, the scale of their rounding.
+fn forces_from_lists(knit: &Knit, terms: &ForceTerms, i: usize) -> (Vec3, f64, f64) {
+    let x = &knit.particles.x;
+    let inv_len = |a: &Vec3, b: &Vec3| {
+        let len = (a - b).norm();
+        if len > 0.0 {
+            1.0 / len
+        } else {
+            0.0
+        }
+    };
+    let (mut force, mut bound, mut scale) = (Vec3::zeros(), 0.0, 0.0);
+    let p = PointId(i as u32);
+    for inc in knit.incident(p) {
+        let s = &knit.springs[inc.spring as usize];
+        let c1 = terms.c1(knit, inc.spring);
+        let other = &x[inc.other.index()];
+        let f = spring_force(&x[i], other, s.rest, c1);
+        (force, scale) = (force + f, scale + f.norm());
+        bound += spring_stiffness_bound(c1, s.rest, inv_len(&x[i], other));
+    }
+    if let Some(c2) = terms.connection_factor {
+        for conn in knit.connections(p) {
+            let s = &knit.springs[conn.spring as usize];
+            let c1 = terms.c1(knit, conn.spring);
+            let tension = spring_tension(&x[s.a.index()], &x[s.b.index()], s.rest, c1);
+            let via = &x[conn.via.index()];
+            let f = connection_force(&x[i], via, tension, c2);
+            (force, scale) = (force + f, scale + f.norm());
+            bound += connection_stiffness_bound(c2, c1, tension, inv_len(&x[i], via));
+        }
+    }
+    (force, bound, scale)
+}
+
 proptest! {
     #![proptest_config(prop_config::config(64))]
+
+    /// The force pass walks the grid row by row with the neighbours' places worked out from
+    /// the layout; it gives what the kernels of eq. (1) and (2) summed over each point's own
+    /// lists give, at the ends of rings and courses, across the seam and with coincident points.
+    #[test]
+    fn the_force_pass_matches_the_kernels_summed_over_each_point_s_lists(
+        case in cases(2.0, true, true)
+    ) {
+        let knit = case.knit();
+        let (f, bound) = forces(&knit, &case.terms);
+        for i in 0..knit.len() {
+            let (expect, expect_bound, scale) = forces_from_lists(&knit, &case.terms, i);
+            prop_assert!(
+                (f[i] - expect).norm() <= 1e-12 * scale,
+                "point {i}: force {} against {expect}", f[i]
+            );
+            prop_assert!(
+                (bound[i] - expect_bound).abs() <= 1e-12 * expect_bound,
+                "point {i}: bound {} against {expect_bound}", bound[i]
+            );
+        }
+    }
 
     /// Eq. (1) acts equally and oppositely on a spring's two ends, so the spring forces on the
     /// whole knit sum to zero, whatever the positions (the connection force is not an
