@@ -75,20 +75,19 @@ struct SpringState {
 }
 
 impl SpringState {
-    /// The state of spring `spring` of `knit` at positions `x`.
-    fn of(knit: &Knit, terms: &ForceTerms, x: &[Vec3], spring: usize) -> SpringState {
-        let s = &knit.springs[spring];
-        let c1 = terms.c1(knit, spring as u32);
-        let d = x[s.b.index()] - x[s.a.index()];
+    /// The state of a spring of rest length `rest` and stiffness `c1` from `a` to `b`.
+    #[inline(always)]
+    fn between(a: &Vec3, b: &Vec3, rest: f64, c1: f64) -> SpringState {
+        let d = b - a;
         let len = d.norm();
         let inv_len = if len > 0.0 { 1.0 / len } else { 0.0 };
         SpringState {
-            tension: c1 * (len - s.rest),
+            tension: c1 * (len - rest),
             unit_ab: d * inv_len,
             len,
             inv_len,
             c1,
-            stiffness_bound: spring_stiffness_bound(c1, s.rest, inv_len),
+            stiffness_bound: spring_stiffness_bound(c1, rest, inv_len),
         }
     }
 
@@ -141,8 +140,10 @@ pub(crate) struct Evaluation {
 }
 
 impl Evaluation {
-    fn add(&mut self, knit: &Knit, spring: usize, state: &SpringState) {
-        let stretch = state.len - knit.springs[spring].rest;
+    /// Adds a spring of rest length `rest` in `state`.
+    #[inline(always)]
+    fn add(&mut self, state: &SpringState, rest: f64) {
+        let stretch = state.len - rest;
         self.spring_force_sq += state.tension * state.tension;
         self.potential_energy += 0.5 * state.c1 * stretch * stretch;
     }
@@ -234,6 +235,9 @@ fn force_pass<T: Send, S: Default + Send>(
     };
     let wale_start = courses * per_row;
     let x = &knit.particles.x;
+    // c1 by direction (course, wale) and yarn, looked up once rather than per spring.
+    let c1 = [Direction::Course, Direction::Wale]
+        .map(|d| YarnKind::ALL.map(|yarn| terms.c1_of(knit, yarn, d)));
     let rows = rows_per_chunk(knit);
     let chunk_points = (rows * wales).max(1);
     let partial: Vec<(Evaluation, S)> = out
@@ -244,15 +248,32 @@ fn force_pass<T: Send, S: Default + Send>(
             let mut eval = Evaluation::default();
             let mut sums = S::default();
             let first = chunk * rows;
-            let wale_row = |c: usize, row: &mut Vec<SpringState>| {
+            // The wale springs from row c up to row c + 1.
+            let wale_row = |c: usize, row: &mut Vec<SpringState>, eval: Option<&mut Evaluation>| {
                 row.clear();
-                row.extend(
-                    (0..wales).map(|w| SpringState::of(knit, terms, x, wale_start + c * wales + w)),
-                );
+                let (below, above) = (&x[c * wales..][..wales], &x[(c + 1) * wales..][..wales]);
+                let springs = &knit.springs[wale_start + c * wales..][..wales];
+                row.extend(springs.iter().enumerate().map(|(w, s)| {
+                    debug_assert_eq!(
+                        (s.a.index(), s.b.index()),
+                        (c * wales + w, (c + 1) * wales + w)
+                    );
+                    SpringState::between(
+                        &below[w],
+                        &above[w],
+                        s.rest,
+                        c1[1][s.yarn.index() as usize],
+                    )
+                }));
+                if let Some(eval) = eval {
+                    for (state, s) in row.iter().zip(springs) {
+                        eval.add(state, s.rest);
+                    }
+                }
             };
             let (mut course, mut below, mut above) = (Vec::new(), Vec::new(), Vec::new());
             if first > 0 {
-                wale_row(first - 1, &mut below);
+                wale_row(first - 1, &mut below, None);
             }
             for (r, (out, bounds)) in out
                 .chunks_mut(wales)
@@ -260,19 +281,28 @@ fn force_pass<T: Send, S: Default + Send>(
                 .enumerate()
             {
                 let c = first + r;
+                let points = &x[c * wales..][..wales];
                 course.clear();
-                course.extend((0..per_row).map(|w| {
-                    let spring = c * per_row + w;
-                    let state = SpringState::of(knit, terms, x, spring);
-                    eval.add(knit, spring, &state);
-                    state
-                }));
+                course.extend(
+                    knit.springs[c * per_row..][..per_row]
+                        .iter()
+                        .enumerate()
+                        .map(|(w, s)| {
+                            // The last spring of a closed ring goes back to its first point.
+                            let next = if w + 1 < wales { w + 1 } else { 0 };
+                            debug_assert_eq!(
+                                (s.a.index(), s.b.index()),
+                                (c * wales + w, c * wales + next)
+                            );
+                            let c1 = c1[0][s.yarn.index() as usize];
+                            let state = SpringState::between(&points[w], &points[next], s.rest, c1);
+                            eval.add(&state, s.rest);
+                            state
+                        }),
+                );
                 let has_above = c + 1 < courses;
                 if has_above {
-                    wale_row(c, &mut above);
-                    for (w, state) in above.iter().enumerate() {
-                        eval.add(knit, wale_start + c * wales + w, state);
-                    }
+                    wale_row(c, &mut above, Some(&mut eval));
                 }
                 let row = RowSprings {
                     course: &course,
