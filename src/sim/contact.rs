@@ -29,7 +29,7 @@
 //! queries also make each iteration cheaper: over 15 fits at 1e-4 (three legs, 100×100 to
 //! 200×200) the solve took 16.7 s against 24.5 s, for about the same number of iterations.
 
-use nalgebra::{Point3, Vector3};
+use nalgebra::Point3;
 use rayon::prelude::*;
 
 use super::Constraints;
@@ -40,8 +40,18 @@ use crate::leg::{Closest, Collider};
 const PUSH_TRIES: usize = 4;
 /// How many times one move may slide from face to face before it stops where it is.
 const MAX_SLIDES: usize = 4;
-/// Points per parallel chunk.
+/// Points per parallel chunk, at most: a small knit is split in at least 16 chunks (down to
+/// [`MIN_CHUNK`] points), as its moves are long and its queries many, and two chunks of
+/// unequal size left one thread with most of them. Counters are the only sums, so the split
+/// changes no result.
 const CHUNK: usize = 1024;
+/// Points per parallel chunk, at least.
+const MIN_CHUNK: usize = 64;
+
+/// Points per parallel chunk for a knit of `points` points.
+fn chunk_for(points: usize) -> usize {
+    (points / 16).clamp(MIN_CHUNK, CHUNK)
+}
 /// How far a point may slide on a cached tangent plane before it is queried again, metres: the
 /// plane departs from a skin of 1 cm radius by `d² / 2R` = 12.5 µm there, under half the default
 /// yarn offset (module docs).
@@ -163,14 +173,15 @@ impl<'a> LegContact<'a> {
     fn push_out_all(&mut self, x: &mut [Vec3], inv_mass: &[f64]) -> u64 {
         let params = self.slide_params();
         let locked = &self.axially_locked;
+        let size = chunk_for(x.len());
         let counters: Vec<(ContactCounters, u64)> = x
-            .par_chunks_mut(CHUNK)
+            .par_chunks_mut(size)
             .enumerate()
             .map(|(chunk, x)| {
                 let mut counters = ContactCounters::default();
                 let mut moved = 0;
                 for (k, p) in x.iter_mut().enumerate() {
-                    let i = chunk * CHUNK + k;
+                    let i = chunk * size + k;
                     if inv_mass[i] == 0.0 {
                         continue;
                     }
@@ -390,17 +401,18 @@ impl Constraints for LegContact<'_> {
     fn constrain(&mut self, from: &[Vec3], x: &mut [Vec3], inv_mass: &[f64]) {
         let params = self.slide_params();
         let locked = &self.axially_locked;
+        let size = chunk_for(x.len());
         let counters: Vec<ContactCounters> = self
             .state
-            .par_chunks_mut(CHUNK)
-            .zip(self.normals.par_chunks_mut(CHUNK))
-            .zip(x.par_chunks_mut(CHUNK))
-            .zip(from.par_chunks(CHUNK))
+            .par_chunks_mut(size)
+            .zip(self.normals.par_chunks_mut(size))
+            .zip(x.par_chunks_mut(size))
+            .zip(from.par_chunks(size))
             .enumerate()
             .map(|(chunk, (((states, normals), x), from))| {
                 let mut counters = ContactCounters::default();
                 for k in 0..x.len() {
-                    let i = chunk * CHUNK + k;
+                    let i = chunk * size + k;
                     if inv_mass[i] > 0.0 {
                         x[k] = params.constrain_point(
                             &from[k],
@@ -428,9 +440,26 @@ impl Constraints for LegContact<'_> {
         self.counters.settled_out += moved;
     }
 
+    fn unheld_forces_from(&self, first: usize, forces: &mut [Vec3]) {
+        let range = first..first + forces.len();
+        let (normals, locked) = (&self.normals[range.clone()], &self.axially_locked[range]);
+        for ((f, n), &locked) in forces.iter_mut().zip(normals).zip(locked) {
+            *f = self.unheld_at(n, locked, f);
+        }
+    }
+
     fn unheld_force(&self, i: usize, f: &Vec3) -> Vec3 {
-        let n: Vector3<f64> = self.normals[i];
-        if self.axially_locked[i] {
+        self.unheld_at(&self.normals[i], self.axially_locked[i], f)
+    }
+}
+
+impl LegContact<'_> {
+    /// The unheld part of force `f` on a point with contact normal `n` (zero when not touching),
+    /// held at its height when `locked`.
+    #[inline]
+    fn unheld_at(&self, n: &Vec3, locked: bool, f: &Vec3) -> Vec3 {
+        let n = *n;
+        if locked {
             let in_plane = f - self.axis * f.dot(&self.axis);
             if in_plane.dot(&n) >= 0.0 {
                 return in_plane;
