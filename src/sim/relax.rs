@@ -61,6 +61,13 @@ pub trait Constraints: Sync {
     /// reaction and a locked direction removed), so the residual measures only what can still
     /// move points.
     fn unheld_force(&self, i: usize, f: &Vec3) -> Vec3;
+    /// [`Constraints::unheld_force`] of the points `first..first + forces.len()`, in place: the
+    /// force pass asks once per row of the grid rather than once per point.
+    fn unheld_forces_from(&self, first: usize, forces: &mut [Vec3]) {
+        for (k, f) in forces.iter_mut().enumerate() {
+            *f = self.unheld_force(first + k, f);
+        }
+    }
     /// Puts every free point where the constraints allow it to rest, with no move to follow:
     /// for a start from positions that were not reached by constrained moves (interpolated from
     /// a coarser grid, say), which may break the constraints. Default: nothing to do.
