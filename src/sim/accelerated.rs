@@ -171,15 +171,16 @@ fn step(knit: &mut Knit, ws: &Workspace, from: &mut Vec<Vec3>, beta: f64, restar
         .zip(p.x.par_chunks(CHUNK))
         .zip(p.inv_mass.par_chunks(CHUNK))
         .zip(ws.preconditioned.par_chunks(CHUNK))
-        .for_each(|(((next, x), inv_mass), step)| {
+        .zip(ws.stiffness_bound.par_chunks(CHUNK))
+        .for_each(|((((next, x), inv_mass), step), bound)| {
             for k in 0..x.len() {
                 let velocity = if restart {
                     Vec3::zeros()
                 } else {
                     x[k] - next[k]
                 };
-                // A free point with no springs (bound 0) has a zero step: it never starts moving.
-                next[k] = if inv_mass[k] > 0.0 {
+                // A point with no springs (bound 0) stays where the constraints put it.
+                next[k] = if inv_mass[k] > 0.0 && bound[k] > 0.0 {
                     x[k] + (velocity * beta + step[k] * STEP)
                 } else {
                     x[k]

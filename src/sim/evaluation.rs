@@ -56,8 +56,9 @@ pub(crate) fn spring_stiffness_bound(c1: f64, rest: f64, inv_len: f64) -> f64 {
 /// Gershgorin contribution of one connection term (eq. 2) to the bound of the point `i` it acts
 /// on: `2 c2 c1` from the tension of `j–k` changing as `j` and `k` move, plus `2 c2 T / |x_i −
 /// x_j|` from its direction `i → j` turning as `i` and `j` move (none when they coincide: the
-/// force is zero there, and `inv_len_ij`, `1 / |x_i − x_j|`, is 0). Without the turning part a strained knit with a large c2 can have
-/// steps divided by the bound overshoot (`sim::properties`).
+/// force is zero there, and `inv_len_ij`, `1 / |x_i − x_j|`, is 0). Without the turning part a
+/// strained knit with a large c2 can have steps divided by the bound overshoot
+/// (`sim::properties`).
 pub(crate) fn connection_stiffness_bound(c2: f64, c1: f64, tension: f64, inv_len_ij: f64) -> f64 {
     2.0 * c2 * (c1 + tension * inv_len_ij)
 }
@@ -97,8 +98,8 @@ impl SpringState {
         }
     }
 
-    /// Unit vector along the spring, pointing away from the end the force acts on (end `a` when
-    /// `at_a`).
+    /// Unit vector from the point the force acts on towards the spring's other end (the point is
+    /// end `a` when `at_a`): a tension pulls the point along it.
     fn away(&self, at_a: bool) -> Vec3 {
         if at_a {
             self.unit_ab
@@ -118,8 +119,8 @@ pub(crate) struct Workspace {
     /// Per point, the part of the net force the constraints do not hold (contact reactions and
     /// locked directions removed; zero on pinned points): what can still move it.
     pub unheld: Vec<Vec3>,
-    /// Per point, the unheld force over the stiffness bound: the move one plain preconditioned
-    /// step would make (zero on pinned points and where the bound is 0). Filled by
+    /// Per point, the unheld force over the stiffness bound (zero on pinned points and where the
+    /// bound is 0): a preconditioned step moves the point by a multiple of it. Filled by
     /// [`evaluate_unheld`] only, sized on first use.
     pub preconditioned: Vec<Vec3>,
 }
@@ -205,9 +206,10 @@ pub(crate) fn evaluate_unheld(
     (eval, UnheldSums::sum(&partial))
 }
 
-/// Whole rows of the grid per parallel chunk of the force pass: at most [`CHUNK`] points, and
-/// small grids still split in 8 so every thread has work. A function of the grid alone, so the
-/// sums do not depend on the thread count.
+/// Whole rows of the grid per parallel chunk of the force pass: about [`CHUNK`] points (one row
+/// where a row is longer), and no more than an eighth of the rows, so small grids still give
+/// every thread work. A function of the grid alone, so the sums do not depend on the thread
+/// count.
 fn rows_per_chunk(knit: &Knit) -> usize {
     let by_size = (CHUNK / knit.wales.max(1)).max(1);
     by_size.min(knit.courses.div_ceil(8)).max(1)
@@ -317,6 +319,7 @@ fn force_pass<T: Send, S: Default + Send>(
                     course: &course,
                     below: (c > 0).then_some(&below[..]),
                     above: has_above.then_some(&above[..]),
+                    wales,
                     wraps,
                 };
                 for (w, (force, bound)) in forces.iter_mut().zip(bounds.iter_mut()).enumerate() {
@@ -359,6 +362,8 @@ struct RowSprings<'a> {
     course: &'a [SpringState],
     below: Option<&'a [SpringState]>,
     above: Option<&'a [SpringState]>,
+    /// Points in the row.
+    wales: usize,
     wraps: bool,
 }
 
@@ -381,7 +386,7 @@ impl RowSprings<'_> {
     #[inline]
     fn net_force(&self, w: usize, connection_factor: Option<f64>) -> (Vec3, f64) {
         let course = self.course;
-        if w >= 2 && w + 2 < course.len() + usize::from(!self.wraps) {
+        if w >= 2 && w + 2 < self.wales {
             // Away from the ring's ends (all but a few points) both course springs and both
             // onward springs are there: a path with nothing to look up (the general one below
             // made the whole fit 8% slower).

@@ -63,7 +63,18 @@ impl Case {
 /// `coincide`, some points put exactly on top of others; c1 in [0.1, 1000] per yarn, and c2 in
 /// [0, 0.99) when `connection`.
 fn cases(jitter: f64, coincide: bool, connection: bool) -> impl Strategy<Value = Case> {
-    (2usize..=5, 2usize..=5, any::<bool>(), any::<bool>())
+    sized_cases(2..=5, 2..=5, jitter, coincide, connection)
+}
+
+/// [`cases`] with `wales` and `courses` drawn from the given ranges.
+fn sized_cases(
+    wales: std::ops::RangeInclusive<usize>,
+    courses: std::ops::RangeInclusive<usize>,
+    jitter: f64,
+    coincide: bool,
+    connection: bool,
+) -> impl Strategy<Value = Case> {
+    (wales, courses, any::<bool>(), any::<bool>())
         .prop_flat_map(move |(wales, courses, closed, plain)| {
             let n = wales * courses;
             (
@@ -222,10 +233,12 @@ proptest! {
 
     /// The force pass walks the grid row by row with the neighbours' places worked out from
     /// the layout; it gives what the kernels of eq. (1) and (2) summed over each point's own
-    /// lists give, at the ends of rings and courses, across the seam and with coincident points.
+    /// lists give, at the ends of rings and courses, across the seam, with coincident points,
+    /// for single wales and courses, and with several rows per parallel chunk (9 courses and
+    /// more).
     #[test]
     fn the_force_pass_matches_the_kernels_summed_over_each_point_s_lists(
-        case in cases(2.0, true, true)
+        case in sized_cases(1..=7, 1..=20, 2.0, true, true)
     ) {
         let knit = case.knit();
         let (f, bound) = forces(&knit, &case.terms);

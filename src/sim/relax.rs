@@ -62,7 +62,8 @@ pub trait Constraints: Sync {
     /// move points.
     fn unheld_force(&self, i: usize, f: &Vec3) -> Vec3;
     /// [`Constraints::unheld_force`] of the points `first..first + forces.len()`, in place: the
-    /// force pass asks once per row of the grid rather than once per point.
+    /// force pass asks once per row of the grid rather than once per point. Pinned points may be
+    /// among them; the caller ignores what they get.
     fn unheld_forces_from(&self, first: usize, forces: &mut [Vec3]) {
         for (k, f) in forces.iter_mut().enumerate() {
             *f = self.unheld_force(first + k, f);
