@@ -1,8 +1,10 @@
 //! The knit as a mass-spring system (Sakaguchi & Miyata §4, Fig. 5): a grid of mass points at the
 //! yarn crossings, joined to their four neighbours by springs that stand for yarn.
 //!
-//! Particle state is kept as parallel arrays ([`Particles`]); springs and the per-point lists the
-//! force loop gathers over are built once, here.
+//! Particle state is kept as parallel arrays ([`Particles`]); springs and the per-point lists of
+//! what acts on each point are built once, here. The force pass (`sim::evaluation`) finds the
+//! same neighbours from the grid layout instead of reading the lists; a property test holds the
+//! two together, and the lists serve the fields computed after the fit.
 
 use nalgebra::Vector3;
 
@@ -67,9 +69,6 @@ pub struct Incident {
     pub spring: u32,
     /// The point at the other end.
     pub other: PointId,
-    /// True when the point this entry belongs to is the spring's end `a` (saves reading the
-    /// spring in the force loop).
-    pub at_a: bool,
 }
 
 /// A connection-force term acting on a point `i` (eq. 2): the tension of spring `j–k`, where `j`
@@ -78,15 +77,8 @@ pub struct Incident {
 pub struct Connection {
     /// The middle point `j`, towards which `i` is drawn.
     pub via: PointId,
-    /// Index into [`Knit::springs`] of spring `i–j` (its direction is the force's direction).
-    pub from: u32,
-    /// True when `i` is end `a` of spring `i–j`.
-    pub from_at_a: bool,
     /// Index into [`Knit::springs`] of spring `j–k`.
     pub spring: u32,
-    /// The yarn of spring `j–k` (a course spring): with it the force loop has the spring's c1
-    /// without reading the spring.
-    pub yarn: YarnKind,
 }
 
 /// The knit: grid topology, springs, per-point classes and the particle state.
@@ -177,12 +169,10 @@ impl Knit {
             per_point[spring.a.index()].push(Incident {
                 spring: s as u32,
                 other: spring.b,
-                at_a: true,
             });
             per_point[spring.b.index()].push(Incident {
                 spring: s as u32,
                 other: spring.a,
-                at_a: false,
             });
         }
         // Connection terms: for i, each course neighbour j, and j's other course spring j–k.
@@ -198,10 +188,7 @@ impl Knit {
                     if s.direction == Direction::Course && onward.other.index() != i {
                         per_point_connections[i].push(Connection {
                             via: j,
-                            from: inc.spring,
-                            from_at_a: inc.at_a,
                             spring: onward.spring,
-                            yarn: s.yarn,
                         });
                     }
                 }
@@ -277,7 +264,7 @@ impl Knit {
         (p.index() % self.wales, p.index() / self.wales)
     }
 
-    /// Springs incident to point `p`, in a fixed order (the order the force loop sums them in).
+    /// Springs incident to point `p`, in a fixed order.
     pub fn incident(&self, p: PointId) -> &[Incident] {
         let i = p.index();
         &self.incident[self.incident_start[i] as usize..self.incident_start[i + 1] as usize]

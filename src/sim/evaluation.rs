@@ -3,10 +3,11 @@
 //! stiffness (Gershgorin), and the relative residual that says how far from rest the knit is.
 //!
 //! The pass walks the grid row by row ([`force_pass`]): a row's springs are computed into small
-//! buffers just before its points read them, with one division each. That, rather than a
-//! state per spring kept for the whole knit and read back per point, is what the fast solver's
-//! iteration costs: on the 300×300 MakeHuman fit the finest level went from 6.1 to 4.3 ms per
-//! iteration (same iterations; medians of alternating runs).
+//! buffers just before its points read them, with one division each, and the constraints are
+//! asked for a whole row's unheld forces at once. Against a state per spring kept for the whole
+//! knit and read back per point, with four divisions per spring, the 300×300 MakeHuman fit's
+//! finest level went from 6.1 to about 3.5 ms per iteration (same iterations; medians of
+//! alternating runs).
 //!
 //! Every sum is taken in chunks fixed by the grid alone, in a fixed order, so results are
 //! bit-identical whatever the number of threads.
@@ -16,7 +17,8 @@ use rayon::prelude::*;
 use super::Constraints;
 use crate::knit::{Direction, Knit, Vec3, YarnKind};
 
-/// Points or springs per parallel chunk. Fixed, so that sums do not depend on the thread count.
+/// Points per parallel chunk (the force pass takes whole rows of about this many). Fixed, so that
+/// sums do not depend on the thread count.
 pub(crate) const CHUNK: usize = 4096;
 /// A strain this small is rest: it sets the floor of the residual's denominator.
 const REST_STRAIN: f64 = 1e-9;
@@ -215,11 +217,12 @@ fn rows_per_chunk(knit: &Knit) -> usize {
     by_size.min(knit.courses.div_ceil(8)).max(1)
 }
 
-/// The force pass every evaluation shares: eq. (1) over each point's springs, plus eq. (2) over
-/// its connection terms when the yarn connection runs, written as `(force, bound)` to
-/// `visit(first point, forces, bounds, out, chunk sums)` a row at a time (`forces` may be
-/// changed in place, `out` is the row's part of it), which also fills `out`; the bound goes to
-/// `bounds`. Returns the spring sums and each chunk's sums, in order.
+/// The force pass every evaluation shares: the net force on each point (eq. 1 over its springs,
+/// plus eq. 2 over its connection terms when the yarn connection runs) and its stiffness bound,
+/// which goes to `bounds`. A row at a time, it calls `visit(first point, forces, bounds, out,
+/// sums)` with the row's forces (which `visit` may change in place), bounds and share of `out`,
+/// which `visit` fills, and its chunk's sums. Returns the spring sums and each chunk's sums, in
+/// order.
 ///
 /// It walks the grid row by row (the knit's springs are laid out that way, [`Knit::grid`]):
 /// each row's course springs and the wale springs up to the next row are computed into small
