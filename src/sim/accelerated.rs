@@ -44,14 +44,12 @@
 
 use std::time::Instant;
 
-use rayon::prelude::*;
-
 use super::evaluation::{
-    evaluate_unheld, residual_of, rest_force_floor, shortest_rest, Workspace, CHUNK,
+    evaluate_and_step, residual_of, rest_force_floor, shortest_rest, Workspace,
 };
 use super::{Constraints, ForceTerms, RelaxObserver};
 use crate::error::{Error, Result};
-use crate::knit::{Knit, Vec3};
+use crate::knit::Knit;
 
 /// Step size `s`, as a fraction of the largest step the Gershgorin bound allows without momentum
 /// (2). Below 2 by a margin, as the bound is only an estimate where springs change length fast.
@@ -112,7 +110,11 @@ pub fn relax_accelerated(
     let mut start_residual = None;
     let mut iteration = 0;
     loop {
-        let (eval, sums) = evaluate_unheld(knit, terms, &mut ws, &*constraints, &from);
+        // The step is taken with the momentum of no restart, in the same pass; the rare
+        // iteration that restarts takes it again.
+        let beta = since_restart as f64 / (since_restart as f64 + 3.0);
+        let (eval, sums) =
+            evaluate_and_step(knit, terms, &mut ws, &*constraints, &mut from, (beta, STEP));
         let residual = residual_of(knit, &sums, eval.spring_force_sq, force_floor);
         let force_step = STEP * sums.max_step() / shortest_rest;
         let max_move = sums.max_move() / shortest_rest;
@@ -147,45 +149,17 @@ pub fn relax_accelerated(
             });
         }
 
-        let restart = sums.power < 0.0;
-        if restart {
+        if sums.power < 0.0 {
             since_restart = 0;
             restarts += 1;
+            from.clone_from(&knit.particles.x);
+            evaluate_and_step(knit, terms, &mut ws, &*constraints, &mut from, (0.0, STEP));
         }
-        let beta = since_restart as f64 / (since_restart as f64 + 3.0);
-        step(knit, &ws, &mut from, beta, restart);
+        // `from` holds the new positions: swap, so that it holds where each point was.
+        std::mem::swap(&mut knit.particles.x, &mut from);
         let p = &mut knit.particles;
         constraints.constrain(&from, &mut p.x, &p.inv_mass);
         since_restart += 1;
         iteration += 1;
     }
-}
-
-/// The momentum update and the unconstrained move, on free points: the velocity is the last
-/// move (`x − from`, zero on a `restart`). The new positions are written over `from`, which is
-/// then swapped with the knit's positions, so `from` holds where each point was: one array
-/// written per point instead of two.
-fn step(knit: &mut Knit, ws: &Workspace, from: &mut Vec<Vec3>, beta: f64, restart: bool) {
-    let p = &mut knit.particles;
-    from.par_chunks_mut(CHUNK)
-        .zip(p.x.par_chunks(CHUNK))
-        .zip(p.inv_mass.par_chunks(CHUNK))
-        .zip(ws.preconditioned.par_chunks(CHUNK))
-        .zip(ws.stiffness_bound.par_chunks(CHUNK))
-        .for_each(|((((next, x), inv_mass), step), bound)| {
-            for k in 0..x.len() {
-                let velocity = if restart {
-                    Vec3::zeros()
-                } else {
-                    x[k] - next[k]
-                };
-                // A point with no springs (bound 0) stays where the constraints put it.
-                next[k] = if inv_mass[k] > 0.0 && bound[k] > 0.0 {
-                    x[k] + (velocity * beta + step[k] * STEP)
-                } else {
-                    x[k]
-                };
-            }
-        });
-    std::mem::swap(&mut p.x, from);
 }
