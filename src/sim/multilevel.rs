@@ -16,11 +16,12 @@
 //! wide and cheap to remove, and each level starts from a state close to its own rest.
 //!
 //! What it does not do (yet): keep the fine grid's work flat. Measured (README, `knitfit
-//! fit`), the finest grid still needs more iterations the finer it is (259 at 150×150 and 404 at
-//! 300×300 on the MakeHuman leg for 1e-4, though 250 at 400×1600), and tightening the coarse
-//! levels does not shorten it, so the error it removes is not the coarse solve's: its tail is a
-//! handful of points whose force step flickers above the tolerance, and the residual itself
-//! hovers just above it. (400×1600 converges since the grids became the same fabric,
+//! fit`), the finest grid still needs more iterations the finer it is (411 at 150×150 and 318 at
+//! 300×300 on the MakeHuman leg for 1e-4, 314 at 400×1600: chaotic, but never flat), and
+//! tightening the coarse levels does not shorten it (loosening them to twice the tolerance
+//! saves work, [`COARSE_TOLERANCE_FACTOR`]), so the error it removes is not the coarse solve's:
+//! its tail is a few points near the top of the thigh that oscillate against the skin while the
+//! momentum weight is near 1, until a restart damps them (README, "What is not right yet"). (400×1600 converges since the grids became the same fabric,
 //! `Knit::with_stitch_shape`, and reached 15 s to 1e-4 when the contact's plane cache stopped
 //! shrinking with the tolerance, 12 s with the row-by-row force pass.) Full multigrid would also
 //! send the fine grid's residual back down (V-cycles, FAS); a first try, with the residual
