@@ -590,3 +590,106 @@ pub(crate) fn relative_residual(
     let sums = unheld_forces(knit, ws, constraints);
     residual_of(knit, &sums, spring_force_sq, force_floor)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::knit::{Pattern, Tile};
+    use crate::sim::Unconstrained;
+
+    /// A strained, uneven 6×9 tube (9 courses: two rows per parallel chunk) with its first ring
+    /// pinned.
+    fn tube() -> Knit {
+        let (wales, courses) = (6, 9);
+        let mut knit = Knit::grid(
+            wales,
+            courses,
+            true,
+            &Tile::of(Pattern::Alternating),
+            0.8,
+            0.9,
+            |w, c| {
+                let t = std::f64::consts::TAU * w as f64 / wales as f64;
+                let wobble = 0.1 * ((3 * w + 5 * c) % 7) as f64;
+                Vec3::new(t.cos() + wobble, c as f64 + 0.3 * wobble, t.sin())
+            },
+        );
+        for w in 0..wales {
+            let i = knit.point(w, 0).index();
+            knit.particles.inv_mass[i] = 0.0;
+        }
+        knit
+    }
+
+    /// A velocity for every point, pinned ones included (the step must not use theirs).
+    fn moved_from(knit: &Knit) -> Vec<Vec3> {
+        let x = &knit.particles.x;
+        (0..x.len())
+            .map(|i| x[i] - Vec3::new(0.01, -0.02, 0.005) * (1 + i % 3) as f64)
+            .collect()
+    }
+
+    #[test]
+    fn the_fused_step_is_the_evaluation_followed_by_a_momentum_step() {
+        let knit = tube();
+        let terms = ForceTerms {
+            stiffness: [1.0, 10.0],
+            connection_factor: Some(0.3),
+        };
+        let (beta, step) = (0.7, 1.5);
+        let from = moved_from(&knit);
+        let mut next = from.clone();
+        let mut ws = Workspace::new(&knit);
+        let (_, sums) = evaluate_and_step(
+            &knit,
+            &terms,
+            &mut ws,
+            &Unconstrained,
+            &mut next,
+            (beta, step),
+        );
+
+        let mut plain = Workspace::new(&knit);
+        evaluate(&knit, &terms, &mut plain);
+        let mut power = 0.0;
+        for i in 0..knit.len() {
+            let x = knit.particles.x[i];
+            let expected = if knit.particles.inv_mass[i] == 0.0 {
+                x
+            } else {
+                let velocity = x - from[i];
+                power += plain.force[i].dot(&velocity);
+                x + velocity * beta + plain.force[i] / plain.stiffness_bound[i] * step
+            };
+            assert!(
+                (next[i] - expected).norm() < 1e-12,
+                "point {i}: {} against {}",
+                next[i],
+                expected
+            );
+        }
+        assert!((sums.power - power).abs() < 1e-12 * power.abs().max(1.0));
+        assert_eq!(sums.free, knit.len() - knit.wales);
+    }
+
+    #[test]
+    fn a_point_with_no_stiffness_does_not_coast_on_its_velocity() {
+        let knit = tube();
+        let terms = ForceTerms {
+            stiffness: [0.0, 0.0],
+            connection_factor: None,
+        };
+        let mut next = moved_from(&knit);
+        let mut ws = Workspace::new(&knit);
+        evaluate_and_step(
+            &knit,
+            &terms,
+            &mut ws,
+            &Unconstrained,
+            &mut next,
+            (0.9, 1.5),
+        );
+        assert!(ws.stiffness_bound.iter().all(|&b| b == 0.0));
+        assert_eq!(next, knit.particles.x);
+    }
+}

@@ -21,9 +21,10 @@
 //! tightening the coarse levels does not shorten it (loosening them to twice the tolerance
 //! saves work, [`COARSE_TOLERANCE_FACTOR`]), so the error it removes is not the coarse solve's:
 //! its tail is a few points near the top of the thigh that oscillate against the skin while the
-//! momentum weight is near 1, until a restart damps them (README, "What is not right yet"). (400×1600 converges since the grids became the same fabric,
-//! `Knit::with_stitch_shape`, and reached 15 s to 1e-4 when the contact's plane cache stopped
-//! shrinking with the tolerance, 12 s with the row-by-row force pass.) Full multigrid would also
+//! momentum weight is near 1, until a restart damps them (README, "What is not right yet").
+//! (400×1600 converges since the grids became the same fabric, `Knit::with_stitch_shape`, and
+//! reached 15 s to 1e-4 when the contact's plane cache stopped shrinking with the tolerance,
+//! 12 s with the row-by-row force pass.) Full multigrid would also
 //! send the fine grid's residual back down (V-cycles, FAS); a first try, with the residual
 //! restricted by the transpose of the interpolation, did not lower the fine residual (closing
 //! note).
