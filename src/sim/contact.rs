@@ -23,10 +23,10 @@
 //!   until the plane expired and that whole force came back in one iteration. Those points kept
 //!   the solver's max-norm stop above the tolerance for hundreds of iterations; without them the
 //!   300×300 MakeHuman fit's finest level takes 316 iterations instead of 404, and the 15-fit
-//!   sweep of the README 7,094 fine-grid iterations instead of 7,913. It has a cost: the few
+//!   sweep of the README 7,094 fine-grid iterations instead of 7,913. It has a cost: the
 //!   points at the top of that thigh which used to hover, held, now oscillate against the skin
-//!   until a restart damps them, and the same fit to 1e-3 takes 435 finest-level iterations
-//!   instead of 69 (README, "What is not right yet").
+//!   until a restart damps them. The solver's stall test (`accelerated.rs`) restarts for them;
+//!   without it the same fit to 1e-3 took 435 finest-level iterations instead of 69.
 //!
 //! The plane cache is also what lets tight tolerances converge. An exact query on a faceted leg
 //! can put a point on another facet's plane, a jump the forces then have to settle again; the

@@ -166,6 +166,19 @@ pub(crate) fn evaluate(knit: &Knit, terms: &ForceTerms, ws: &mut Workspace) -> E
     eval
 }
 
+/// One momentum step of the fast solver, as [`evaluate_and_step`] takes it.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct MomentumStep {
+    /// Weight of the velocity (the last move).
+    pub beta: f64,
+    /// Step size, as a fraction of `unheld / bound`.
+    pub step: f64,
+    /// A point whose plain step `|unheld| / bound` is longer than this, metres, is *unsettled*:
+    /// it still holds the force-step stop, and its power goes to
+    /// [`UnheldSums::unsettled_power`] as well.
+    pub unsettled_above: f64,
+}
+
 /// The fast solver's whole iteration but the constraints, in one pass over the points: the
 /// evaluation, the unheld forces, and the momentum step
 /// `next = x + beta (x − from) + step · unheld / bound` on free points with springs (others stay
@@ -182,8 +195,14 @@ pub(crate) fn evaluate_and_step(
     ws: &mut Workspace,
     constraints: &dyn Constraints,
     from: &mut [Vec3],
-    (beta, step): (f64, f64),
+    momentum: MomentumStep,
 ) -> (Evaluation, UnheldSums) {
+    let MomentumStep {
+        beta,
+        step,
+        unsettled_above,
+    } = momentum;
+    let unsettled_above_sq = unsettled_above * unsettled_above;
     let (x, inv_mass) = (&knit.particles.x, &knit.particles.inv_mass);
     let (eval, partial) = force_pass(
         knit,
@@ -200,7 +219,9 @@ pub(crate) fn evaluate_and_step(
                 }
                 let inv_bound = if bound > 0.0 { 1.0 / bound } else { 0.0 };
                 let velocity = x - *from;
-                sums.add(unheld, inv_bound, Some(&velocity));
+                if sums.add(unheld, inv_bound, Some(&velocity)) > unsettled_above_sq {
+                    sums.unsettled_power += unheld.dot(&velocity);
+                }
                 // A point with no springs (bound 0) stays where the constraints put it.
                 *from = if bound > 0.0 {
                     x + (velocity * beta + (unheld * inv_bound) * step)
@@ -486,6 +507,9 @@ pub(crate) struct UnheldSums {
     max_step_sq: f64,
     /// Square of the largest last move over free points.
     max_move_sq: f64,
+    /// [`UnheldSums::power`] over the unsettled points alone ([`MomentumStep::unsettled_above`];
+    /// 0 without motion).
+    pub unsettled_power: f64,
 }
 
 impl UnheldSums {
@@ -499,6 +523,7 @@ impl UnheldSums {
                 power: a.power + b.power,
                 max_step_sq: a.max_step_sq.max(b.max_step_sq),
                 max_move_sq: a.max_move_sq.max(b.max_move_sq),
+                unsettled_power: a.unsettled_power + b.unsettled_power,
             })
     }
 
@@ -515,8 +540,9 @@ impl UnheldSums {
 
     /// Adds a free point's unheld force `u`, with 1 over its stiffness bound (0 where the bound
     /// is 0) and its velocity or last move, `motion`, for the power and the largest move.
+    /// Returns the square of the point's plain step `|u| / bound`.
     #[inline(always)]
-    fn add(&mut self, u: &Vec3, inv_bound: f64, motion: Option<&Vec3>) {
+    fn add(&mut self, u: &Vec3, inv_bound: f64, motion: Option<&Vec3>) -> f64 {
         let u_sq = u.norm_squared();
         self.sum_sq += u_sq;
         self.free += 1;
@@ -525,7 +551,9 @@ impl UnheldSums {
             self.power += u.dot(v);
             self.max_move_sq = self.max_move_sq.max(v_sq);
         }
-        self.max_step_sq = self.max_step_sq.max(u_sq * (inv_bound * inv_bound));
+        let step_sq = u_sq * (inv_bound * inv_bound);
+        self.max_step_sq = self.max_step_sq.max(step_sq);
+        step_sq
     }
 }
 
@@ -638,20 +666,28 @@ mod tests {
         };
         let (beta, step) = (0.7, 1.5);
         let from = moved_from(&knit);
-        let mut next = from.clone();
-        let mut ws = Workspace::new(&knit);
-        let (_, sums) = evaluate_and_step(
-            &knit,
-            &terms,
-            &mut ws,
-            &Unconstrained,
-            &mut next,
-            (beta, step),
-        );
-
         let mut plain = Workspace::new(&knit);
         evaluate(&knit, &terms, &mut plain);
-        let mut power = 0.0;
+        let plain_step = |i: usize| plain.force[i].norm() / plain.stiffness_bound[i];
+        // Half the free points, or about, are unsettled: those stepping further than the median.
+        let mut steps: Vec<f64> = (0..knit.len())
+            .filter(|&i| knit.particles.inv_mass[i] > 0.0)
+            .map(plain_step)
+            .collect();
+        steps.sort_by(f64::total_cmp);
+        let unsettled_above = steps[steps.len() / 2];
+
+        let mut next = from.clone();
+        let mut ws = Workspace::new(&knit);
+        let momentum = MomentumStep {
+            beta,
+            step,
+            unsettled_above,
+        };
+        let (_, sums) =
+            evaluate_and_step(&knit, &terms, &mut ws, &Unconstrained, &mut next, momentum);
+
+        let (mut power, mut unsettled_power) = (0.0, 0.0);
         for i in 0..knit.len() {
             let x = knit.particles.x[i];
             let expected = if knit.particles.inv_mass[i] == 0.0 {
@@ -659,6 +695,9 @@ mod tests {
             } else {
                 let velocity = x - from[i];
                 power += plain.force[i].dot(&velocity);
+                if plain_step(i) > unsettled_above {
+                    unsettled_power += plain.force[i].dot(&velocity);
+                }
                 x + velocity * beta + plain.force[i] / plain.stiffness_bound[i] * step
             };
             assert!(
@@ -669,6 +708,9 @@ mod tests {
             );
         }
         assert!((sums.power - power).abs() < 1e-12 * power.abs().max(1.0));
+        assert!(unsettled_power != 0.0 && unsettled_power != power);
+        let tolerance = 1e-12 * unsettled_power.abs().max(1.0);
+        assert!((sums.unsettled_power - unsettled_power).abs() < tolerance);
         assert_eq!(sums.free, knit.len() - knit.wales);
     }
 
@@ -687,7 +729,11 @@ mod tests {
             &mut ws,
             &Unconstrained,
             &mut next,
-            (0.9, 1.5),
+            MomentumStep {
+                beta: 0.9,
+                step: 1.5,
+                unsettled_above: 0.0,
+            },
         );
         assert!(ws.stiffness_bound.iter().all(|&b| b == 0.0));
         assert_eq!(next, knit.particles.x);
