@@ -16,7 +16,7 @@
 //! wide and cheap to remove, and each level starts from a state close to its own rest.
 //!
 //! What it does not do (yet): keep the fine grid's work flat. Measured (README, `knitfit
-//! fit`), the finest grid still needs more iterations the finer it is (411 at 150×150 and 318 at
+//! fit`), the finest grid still needs more iterations the finer it is (235 at 150×150 and 295 at
 //! 300×300 on the MakeHuman leg for 1e-4, 314 at 400×1600: chaotic, but never flat), and
 //! tightening the coarse levels does not shorten it (loosening them to twice the tolerance
 //! saves work, [`COARSE_TOLERANCE_FACTOR`]), so the error it removes is not the coarse solve's:
@@ -50,7 +50,8 @@ pub const COARSE_LEVEL_ITERATIONS: usize = 2000;
 /// 2 → 8,217, 3 → 8,140, 4 → 7,897, 10 → 9,255. But at the real count (MakeHuman 400×1600,
 /// 1e-4), 1 → 364, 2 → 371, 3 → 418, 4 → 476: with five levels, a loose second-finest level
 /// leaves smooth error for the 640,000-point grid. 2 gains on the first and is neutral on the
-/// second (also at 1e-3 and 1e-2: 87 → 88 and 44 → 42).
+/// second (also at 1e-3 and 1e-2: 87 → 88 and 44 → 42). Measured before the accelerated
+/// iteration's stall test.
 pub const COARSE_TOLERANCE_FACTOR: f64 = 2.0;
 
 /// How the caller makes the knit and constraints of each level: the solver knows grids, the
