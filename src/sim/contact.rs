@@ -22,8 +22,9 @@
 //!   distance: the force that pressed it back was held while momentum carried it further off,
 //!   until the plane expired and that whole force came back in one iteration. Those points kept
 //!   the solver's max-norm stop above the tolerance for hundreds of iterations; without them the
-//!   300×300 MakeHuman fit's finest level takes 316 iterations instead of 404, and the 15-fit
-//!   sweep of the README 7,094 fine-grid iterations instead of 7,913. It has a cost: the
+//!   300×300 MakeHuman fit's finest level took 316 iterations instead of 404, and 15 fits at 1e-4
+//!   (three legs, 100×100 to 200×200) 7,094 fine-grid-equivalent iterations instead of 7,913
+//!   (measured before the solver's stall test). It has a cost: the
 //!   points at the top of that thigh which used to hover, held, now oscillate against the skin
 //!   until a restart damps them. The solver's stall test (`accelerated.rs`) restarts for them;
 //!   without it the same fit to 1e-3 took 435 finest-level iterations instead of 69.

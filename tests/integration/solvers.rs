@@ -133,10 +133,6 @@ fn the_default_tolerance_does_not_stall_on_points_that_hover_at_the_top_of_the_t
     assert_eq!(finest["converged"], true, "{finest}");
     assert!(finest["stall_restarts"].as_u64().unwrap() >= 1, "{finest}");
     assert!(finest["iterations"].as_u64().unwrap() <= 200, "{finest}");
-    let restarts = |l: &serde_json::Value| l["restarts"].as_u64().unwrap();
-    assert!(levels
-        .iter()
-        .all(|l| l["stall_restarts"].as_u64().unwrap() <= restarts(l)));
 }
 
 #[test]
