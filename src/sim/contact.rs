@@ -24,10 +24,10 @@
 //!   the solver's max-norm stop above the tolerance for hundreds of iterations; without them the
 //!   300×300 MakeHuman fit's finest level took 316 iterations instead of 404, and 15 fits at 1e-4
 //!   (three legs, 100×100 to 200×200) 7,094 fine-grid-equivalent iterations instead of 7,913
-//!   (measured before the solver's stall test). It has a cost: the
-//!   points at the top of that thigh which used to hover, held, now oscillate against the skin
-//!   until a restart damps them. The solver's stall test (`accelerated.rs`) restarts for them;
-//!   without it the same fit to 1e-3 took 435 finest-level iterations instead of 69.
+//!   (measured before the solver's stall test). It has a cost: the points at the top of that
+//!   thigh which used to hover, held, now oscillate against the skin until a restart damps them.
+//!   The solver's stall test (`accelerated.rs`) restarts for them; without it the same fit to
+//!   1e-3 took 435 finest-level iterations instead of 69.
 //!
 //! The plane cache is also what lets tight tolerances converge. An exact query on a faceted leg
 //! can put a point on another facet's plane, a jump the forces then have to settle again; the
