@@ -5,6 +5,7 @@
 //! [`render`], with [`report`] collecting timings and metrics. [`run`] holds one function per
 //! command that strings the stages together. See ARCHITECTURE.md.
 
+pub mod base;
 pub mod error;
 pub mod export;
 pub mod knit;

@@ -2,7 +2,7 @@
 //! and the ordered stages, each with the reason it is there. Nothing outside the plan runs, and
 //! the report lists the stages that did.
 
-use crate::knit::YarnKind;
+use crate::base::YarnKind;
 use crate::scene::{Effect, Output, RenderMode, Scene, SolverMethod};
 use crate::sim::multilevel::grid_sizes;
 use crate::sim::ForceTerms;

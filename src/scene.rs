@@ -9,8 +9,9 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+use crate::base::YarnKind;
 use crate::error::{Error, Result};
-use crate::knit::{Pattern, YarnKind};
+use crate::knit::Pattern;
 
 /// The scene bundled with the binary (`samples/scene.json`), used when no scene file is given.
 pub const BUNDLED_SCENE: &str = include_str!("../samples/scene.json");

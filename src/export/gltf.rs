@@ -14,9 +14,8 @@ use json::validation::{Checked::Valid, USize64};
 use json::Index;
 
 use super::ply::{check_surface_mesh, check_yarn_geometry};
-use super::{SurfaceMesh, YarnGeometry};
+use crate::base::{SurfaceMesh, YarnGeometry, YarnKind};
 use crate::error::{Error, Result};
-use crate::knit::YarnKind;
 
 /// One root node of a GLB file.
 pub enum GlbNode<'a> {
@@ -383,7 +382,7 @@ impl GlbBuilder {
 mod tests {
     use super::*;
 
-    use crate::export::sample_geometry as part;
+    use crate::base::yarn::sample_geometry as part;
 
     const COLOURS: [[f64; 3]; 2] = [[0.5, 0.25, 0.125], [0.2, 0.4, 0.6]];
 

@@ -8,9 +8,8 @@ use ply_rs_bw::ply::{
 };
 use ply_rs_bw::writer::Writer;
 
-use super::{SurfaceMesh, YarnGeometry};
+use crate::base::{Direction, SurfaceMesh, YarnGeometry};
 use crate::error::{Error, Result};
-use crate::knit::Direction;
 
 /// Vertex properties [`write_ply`] writes itself, so no point attribute may take their names.
 const YARN_VERTEX_PROPERTIES: [&str; 4] = ["x", "y", "z", "part"];
@@ -316,7 +315,7 @@ pub fn write_mesh_ply(mesh: &SurfaceMesh, comments: &[String]) -> Result<Vec<u8>
         for k in 0..3 {
             let channel = colours
                 .iter()
-                .map(|c| crate::render::colormap::linear_to_srgb8(c[k]));
+                .map(|c| crate::base::colour::linear_to_srgb8(c[k]));
             vertex.add(
                 ["red", "green", "blue"][k],
                 Column::UChar(channel.collect()),
@@ -458,7 +457,7 @@ mod tests {
     use super::*;
     use ply_rs_bw::ply::{DefaultElement, Property};
 
-    use crate::export::sample_geometry as part;
+    use crate::base::yarn::sample_geometry as part;
 
     fn parse(bytes: &[u8]) -> Ply<DefaultElement> {
         ply_rs_bw::parser::Parser::<DefaultElement>::new()

@@ -1,10 +1,10 @@
 //! The knit: pattern (yarn kinds, point classes), the mass-spring model, and the shapes it is
-//! built in (a flat patch now; the tube for fitting later).
+//! built in: the flat patch of the paper's experiment and the tube a fit starts from.
 
 pub mod model;
 pub mod patch;
 pub mod pattern;
 pub mod tube;
 
-pub use model::{Connection, Incident, Knit, Particles, PointId, Spring, Vec3};
-pub use pattern::{Direction, Pattern, Tile, YarnKind};
+pub use model::{Connection, Incident, Knit, Particles, PointId, Spring};
+pub use pattern::{Pattern, Tile};

@@ -6,12 +6,10 @@
 //! same neighbours from the grid layout instead of reading the lists; a property test holds the
 //! two together, and the lists serve the fields computed after the fit.
 
-use nalgebra::Vector3;
+use std::collections::BTreeMap;
 
-use super::pattern::{Direction, Tile, YarnKind};
-
-/// 3-vector of `f64`, in metres unless a name says otherwise.
-pub type Vec3 = Vector3<f64>;
+use super::pattern::Tile;
+use crate::base::{Direction, Segment, Vec3, YarnGeometry, YarnKind};
 
 /// Index of a mass point: `course * wales + wale`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -312,6 +310,46 @@ impl Knit {
     /// Indices of points that are free to move.
     pub fn is_free(&self, p: PointId) -> bool {
         self.particles.inv_mass[p.index()] > 0.0
+    }
+
+    /// The knit as yarn geometry, placed at `offset_m`: every point with its `course`, `wale`,
+    /// `class` and `yarn_kind` (the yarn of its course), every spring as a segment.
+    pub fn yarn_geometry(&self, name: &str, offset_m: [f64; 3]) -> YarnGeometry {
+        let n = self.len();
+        let mut course = Vec::with_capacity(n);
+        let mut wale = Vec::with_capacity(n);
+        for i in 0..n {
+            let (w, c) = self.grid_coords(PointId(i as u32));
+            course.push(c as f32);
+            wale.push(w as f32);
+        }
+        let mut point_attributes = BTreeMap::new();
+        point_attributes.insert("course".to_string(), course);
+        point_attributes.insert("wale".to_string(), wale);
+        point_attributes.insert(
+            "class".to_string(),
+            self.class.iter().map(|&c| c as f32).collect(),
+        );
+        point_attributes.insert(
+            "yarn_kind".to_string(),
+            self.course_yarn.iter().map(|k| k.index() as f32).collect(),
+        );
+        YarnGeometry {
+            name: name.to_string(),
+            offset_m,
+            positions: self.particles.x.iter().map(|p| [p.x, p.y, p.z]).collect(),
+            point_attributes,
+            segments: self
+                .springs
+                .iter()
+                .map(|s| Segment {
+                    a: s.a.0,
+                    b: s.b.0,
+                    yarn: s.yarn,
+                    direction: s.direction,
+                })
+                .collect(),
+        }
     }
 }
 

@@ -5,7 +5,8 @@
 //! The patch starts at its rest shape; only the held edges are moved, by `factor` about the
 //! centre. Relaxation then lets the free points follow.
 
-use super::{Knit, Pattern, Tile, Vec3};
+use super::{Knit, Pattern, Tile};
+use crate::base::Vec3;
 use crate::scene::{Stretch, StretchAxis};
 
 /// Size, pattern and rest spacing of a flat patch.

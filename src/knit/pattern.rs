@@ -8,36 +8,7 @@
 
 use serde::{Deserialize, Serialize};
 
-/// A yarn material. Index into [`crate::scene::Yarns`] order: nylon first, support second.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum YarnKind {
-    /// Plain nylon yarn (paper: c1 = 1).
-    Nylon,
-    /// Support yarn: polyurethane core wrapped in nylon, stiffer and more elastic (paper: c1 = 10).
-    Support,
-}
-
-impl YarnKind {
-    /// Both kinds, in index order.
-    pub const ALL: [YarnKind; 2] = [YarnKind::Nylon, YarnKind::Support];
-
-    /// 0 for nylon, 1 for support: the value written to `yarn_kind` / `_YARN_KIND` attributes.
-    pub fn index(self) -> u8 {
-        match self {
-            YarnKind::Nylon => 0,
-            YarnKind::Support => 1,
-        }
-    }
-
-    /// Lower-case name, as in scene files.
-    pub fn name(self) -> &'static str {
-        match self {
-            YarnKind::Nylon => "nylon",
-            YarnKind::Support => "support",
-        }
-    }
-}
+use crate::base::{Direction, YarnKind};
 
 /// The knit patterns a scene can ask for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -48,25 +19,6 @@ pub enum Pattern {
     /// 交編: nylon and support yarn knitted in alternate courses, as in the paper (Fig. 2b, 3).
     #[default]
     Alternating,
-}
-
-/// Direction of a spring in the knit grid.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Direction {
-    /// Along a course (row): joins wale `w` to wale `w + 1`. The yarn is continuous this way.
-    Course,
-    /// Along a wale (column): joins course `c` to course `c + 1`.
-    Wale,
-}
-
-impl Direction {
-    /// 0 for course, 1 for wale: the index of per-direction arrays.
-    pub fn index(self) -> usize {
-        match self {
-            Direction::Course => 0,
-            Direction::Wale => 1,
-        }
-    }
 }
 
 /// A periodic tile of yarn kinds, `width` wales × `height` courses.

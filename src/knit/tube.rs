@@ -17,7 +17,8 @@
 
 use nalgebra::{Point3, Vector3};
 
-use super::{Knit, Pattern, Tile, Vec3};
+use super::{Knit, Pattern, Tile};
+use crate::base::{perpendicular_frame, Vec3};
 use crate::leg::{section, Axis};
 
 /// Gap kept between the leg and a ring before the fit, as a fraction of the ring radius.
@@ -53,18 +54,6 @@ pub struct Tube {
     pub end_ring: Vec<bool>,
     /// Orthonormal frame: `u`, `v` across the axis.
     pub frame: (Vector3<f64>, Vector3<f64>),
-}
-
-/// Two unit vectors perpendicular to `a` and to each other, with `u × v = a`.
-pub fn perpendicular_frame(a: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
-    let helper = if a.x.abs() < 0.9 {
-        Vector3::x()
-    } else {
-        Vector3::y()
-    };
-    let u = a.cross(&helper).normalize();
-    let v = a.cross(&u);
-    (u, v)
 }
 
 /// Builds the tube around the leg (world-space `leg_vertices` and the `leg_triangles` that

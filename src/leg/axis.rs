@@ -21,10 +21,9 @@ use std::collections::{BTreeMap, HashMap};
 use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 use serde::Serialize;
 
-use super::section;
 use super::weld::{welded_ids, welded_triangle};
-use super::Leg;
-use crate::knit::tube::perpendicular_frame;
+use super::{section, Leg};
+use crate::base::perpendicular_frame;
 
 /// Fraction of the leg's length kept free at each end by a detected axis.
 pub const END_INSET: f64 = 0.03;

@@ -14,7 +14,7 @@ use std::collections::HashMap;
 use nalgebra::{Point3, Vector3};
 
 use super::weld::{welded_ids, welded_triangle};
-use crate::knit::tube::perpendicular_frame;
+use crate::base::perpendicular_frame;
 
 /// For each of `heights` (metres along the unit vector `a` from `origin`, ascending), the
 /// largest distance from the axis of any vertex of the triangles whose cut by that plane makes

@@ -24,7 +24,9 @@ use std::collections::HashMap;
 
 use nalgebra::Point3;
 
-use crate::knit::{Direction, Knit, PointId, Vec3};
+use crate::knit::{Knit, PointId};
+
+use crate::base::{Direction, Vec3};
 use crate::sim::ForceTerms;
 
 /// Square metres per square centimetre.
@@ -109,7 +111,7 @@ pub fn stretch(knit: &Knit) -> (Vec<f64>, Vec<f64>) {
 }
 
 /// Coverage at every point (see module docs); `radius_m` is the yarn radius per
-/// [`YarnKind::index`](crate::knit::YarnKind::index), metres.
+/// [`YarnKind::index`](crate::base::YarnKind::index), metres.
 pub fn coverage(knit: &Knit, radius_m: [f64; 2]) -> Vec<f64> {
     (0..knit.len())
         .map(|i| {
@@ -139,7 +141,7 @@ struct LocalSpacing {
     rest: [f64; 2],
     count: [u32; 2],
     /// The yarn of the point's wale springs (the first one met).
-    wale_yarn: Option<crate::knit::YarnKind>,
+    wale_yarn: Option<crate::base::YarnKind>,
 }
 
 fn local_spacing(knit: &Knit, p: PointId) -> LocalSpacing {

@@ -33,8 +33,7 @@ use nalgebra::Point3;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use crate::export::{Segment, YarnGeometry};
-use crate::knit::Vec3;
+use crate::base::{Segment, Vec3, YarnGeometry};
 use crate::leg::{Closest, Collider};
 
 /// Attributes interpolated along a repaired segment; others come from the nearer end.
@@ -371,7 +370,7 @@ mod tests {
     use std::collections::BTreeMap;
 
     use super::*;
-    use crate::knit::{Direction, YarnKind};
+    use crate::base::{Direction, YarnKind};
     use crate::leg::Leg;
     use crate::scene::{ContactMethod, Units, UpAxis};
 

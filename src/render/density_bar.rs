@@ -8,8 +8,8 @@ use embedded_graphics::prelude::{Drawable, Point};
 use embedded_graphics::text::{Alignment, Baseline, Text, TextStyleBuilder};
 use image::{Rgb, RgbImage};
 
-use super::colormap::{heat, linear_to_srgb8};
 use super::density_picture::{font_for, nice_ticks, ImageTarget, NO_YARN_LABEL, UNIT_LABEL};
+use crate::base::colour::{heat, linear_to_srgb8};
 
 /// sRGB of text and outlines.
 const INK: [u8; 3] = [40, 40, 40];

@@ -42,7 +42,7 @@ use embedded_graphics::prelude::{
 use embedded_graphics::text::{Alignment, Baseline, Text, TextStyle, TextStyleBuilder};
 use image::{Rgb, RgbImage};
 
-use super::colormap::{heat, linear_to_srgb8};
+use crate::base::colour::{heat, linear_to_srgb8};
 
 /// How the density picture looks.
 #[derive(Clone, Debug, PartialEq)]

@@ -7,7 +7,6 @@ use crate::error::{Error, Result};
 
 pub mod bench_plot;
 pub mod camera;
-pub mod colormap;
 pub mod density_bar;
 pub mod density_picture;
 pub mod patch_picture;

@@ -12,9 +12,8 @@
 
 use image::RgbImage;
 
-use super::colormap::linear_to_srgb8;
-use crate::export::YarnGeometry;
-use crate::knit::Direction;
+use crate::base::colour::linear_to_srgb8;
+use crate::base::{Direction, YarnGeometry};
 
 /// One patch to draw.
 #[derive(Clone, Copy, Debug)]
@@ -406,8 +405,7 @@ impl Canvas {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::export::Segment;
-    use crate::knit::YarnKind;
+    use crate::base::{Segment, YarnKind};
     use std::collections::BTreeMap;
 
     fn geometry(positions: Vec<[f64; 3]>, segments: Vec<Segment>) -> YarnGeometry {

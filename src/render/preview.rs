@@ -30,12 +30,11 @@ use parry3d_f64::shape::{FeatureId, TriMesh};
 use rayon::prelude::*;
 
 use super::camera::Camera;
-use super::colormap::{heat, linear_to_srgb8};
 use super::shading::{self, Lights};
 use super::yarn_lookup::YarnIndex;
+use crate::base::colour::{heat, linear_to_srgb8};
+use crate::base::{SurfaceMesh, YarnGeometry, YarnKind};
 use crate::error::{Error, Result};
-use crate::export::{SurfaceMesh, YarnGeometry};
-use crate::knit::YarnKind;
 use crate::scene::{RenderMode, RenderSettings, Scene};
 
 /// The seed every preview sample is derived from.

@@ -13,9 +13,8 @@ use std::path::Path;
 
 use nalgebra::{Matrix3, Matrix4, Point3, Vector3};
 
+use crate::base::{vertex_normals, Direction, Segment, SurfaceMesh, YarnGeometry, YarnKind};
 use crate::error::{Error, Result};
-use crate::export::{vertex_normals, Segment, SurfaceMesh, YarnGeometry};
-use crate::knit::{Direction, YarnKind};
 
 /// The leg and yarns of a `stocking.glb`, world space, metres.
 #[derive(Clone, Debug)]

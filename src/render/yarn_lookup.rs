@@ -24,8 +24,7 @@ use std::hash::{BuildHasherDefault, Hasher};
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 
-use crate::export::YarnGeometry;
-use crate::knit::YarnKind;
+use crate::base::{YarnGeometry, YarnKind};
 
 /// One yarn segment as the renderer sees it: a capsule.
 #[derive(Clone, Copy, Debug, PartialEq)]

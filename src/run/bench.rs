@@ -14,9 +14,9 @@ use std::path::{Path, PathBuf};
 
 use super::fit::{measure_fields, solve_fit, FitInputs, SolvedFit};
 use super::{NoProgress, Progress};
+use crate::base::YarnKind;
 use crate::error::Result;
 use crate::export;
-use crate::knit::YarnKind;
 use crate::leg::AxisSource;
 use crate::limits::{peak_memory, reset_peak_memory};
 use crate::plan::Plan;
@@ -278,7 +278,7 @@ pub struct ReferenceRun {
 /// What a case is compared with.
 struct Reference {
     density: Vec<f64>,
-    positions: Vec<crate::knit::Vec3>,
+    positions: Vec<crate::base::Vec3>,
 }
 
 impl Reference {

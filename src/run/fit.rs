@@ -10,11 +10,13 @@ use nalgebra::Point3;
 use serde_json::json;
 
 use super::{Progress, RunPaths, StepProgress};
+use crate::base::colour;
+use crate::base::{Direction, SurfaceMesh, YarnGeometry, YarnKind};
 use crate::error::{Error, Result};
+use crate::export;
 use crate::export::gltf::GlbNode;
-use crate::export::{self, SurfaceMesh, YarnGeometry};
 use crate::knit::tube::{build_tube, end_rings, TubeSpec};
-use crate::knit::{Direction, Knit, YarnKind};
+use crate::knit::Knit;
 use crate::leg::{
     decode_leg, detect_axis, leaves_mesh, read_leg_file, Axis, AxisSource, Collider, Leg,
 };
@@ -23,8 +25,8 @@ use crate::plan::Plan;
 use crate::post::fields::{self, KnitFields};
 use crate::post::penetration::fix_penetrations;
 use crate::post::stitches::{bunched_courses, MAX_BUNCHED_FRACTION};
+use crate::render;
 use crate::render::density_picture::{self, DensityPictureStyle};
-use crate::render::{self, colormap};
 use crate::report::{Metrics, Report, StageClock};
 use crate::scene::{Effect, Output, Scene, SolverMethod, RELAXED_LENGTH_FRACTION};
 use crate::sim::contact::{ContactCounters, LegContact};
@@ -98,7 +100,7 @@ pub fn run_fit(
     };
     let tension = fields::tension(&knit, &plan.forces);
 
-    let mut yarns = YarnGeometry::from_knit("yarns", &knit, [0.0; 3]);
+    let mut yarns = knit.yarn_geometry("yarns", [0.0; 3]);
     yarns.point_attributes.insert(
         "tension".into(),
         tension.iter().map(|&t| t as f32).collect(),
@@ -633,7 +635,7 @@ fn leg_surface(leg: &Leg, fields: &KnitFields) -> SurfaceMesh {
             .iter()
             .map(|&d| {
                 if d > 0.0 {
-                    colormap::heat(if hi > lo { (d - lo) / (hi - lo) } else { 0.5 })
+                    colour::heat(if hi > lo { (d - lo) / (hi - lo) } else { 0.5 })
                 } else {
                     uncovered
                 }

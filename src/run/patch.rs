@@ -7,8 +7,9 @@ use std::path::PathBuf;
 use serde_json::json;
 
 use super::{Progress, RunPaths, StepProgress};
+use crate::base::YarnGeometry;
 use crate::error::Result;
-use crate::export::{self, YarnGeometry};
+use crate::export;
 use crate::knit::patch::{build_patch, PatchSpec};
 use crate::knit::Knit;
 use crate::plan::Plan;
@@ -171,11 +172,10 @@ fn side_by_side(runs: &[Relaxed]) -> Vec<YarnGeometry> {
         if i > 0 {
             offset_x += width / 2.0;
         }
-        out.push(YarnGeometry::from_knit(
-            &format!("patch {}", run.stretch),
-            &run.knit,
-            [offset_x, 0.0, 0.0],
-        ));
+        out.push(
+            run.knit
+                .yarn_geometry(&format!("patch {}", run.stretch), [offset_x, 0.0, 0.0]),
+        );
         offset_x += width / 2.0 + width / 4.0;
     }
     out

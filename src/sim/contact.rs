@@ -44,7 +44,7 @@ use nalgebra::Point3;
 use rayon::prelude::*;
 
 use super::Constraints;
-use crate::knit::Vec3;
+use crate::base::Vec3;
 use crate::leg::{Closest, Collider};
 
 /// How many in-plane pushes a held end-ring point gets before it is pushed along the normal.

@@ -14,38 +14,15 @@
 
 use rayon::prelude::*;
 
-use super::Constraints;
-use crate::knit::{Direction, Knit, Vec3, YarnKind};
+use super::{Constraints, ForceTerms};
+use crate::base::{Direction, Vec3, YarnKind};
+use crate::knit::Knit;
 
 /// Points per parallel chunk (the force pass takes whole rows of about this many). Fixed, so that
 /// sums do not depend on the thread count.
 pub(crate) const CHUNK: usize = 4096;
 /// A strain this small is rest: it sets the floor of the residual's denominator.
 const REST_STRAIN: f64 = 1e-9;
-
-/// Which force terms run, with their coefficients. Built by the plan from the scene's effects.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ForceTerms {
-    /// Spring stiffness c1 per yarn kind (indexed by `YarnKind::index()`). Equal entries when the
-    /// scene does not ask for `alternating_yarns`.
-    pub stiffness: [f64; 2],
-    /// Connection factor c2 of eq. (2), or `None` when `yarn_connection` is off.
-    pub connection_factor: Option<f64>,
-}
-
-impl ForceTerms {
-    /// c1 of a spring of the knit: its yarn's stiffness, times the knit's factor for its
-    /// direction ([`Knit::stiffness_scale`]).
-    pub(crate) fn c1(&self, knit: &Knit, spring: u32) -> f64 {
-        let s = &knit.springs[spring as usize];
-        self.c1_of(knit, s.yarn, s.direction)
-    }
-
-    /// c1 of a spring of `yarn` along `direction` in the knit.
-    pub(crate) fn c1_of(&self, knit: &Knit, yarn: YarnKind, direction: Direction) -> f64 {
-        self.stiffness[yarn.index() as usize] * knit.stiffness_scale[direction.index()]
-    }
-}
 
 /// Gershgorin contribution of one spring to the stiffness bound of each of its ends: `2 c1`
 /// scaled by the spring's geometric stiffness `|1 − l/len|` where that exceeds 1 (a spring

@@ -13,7 +13,7 @@
 //!
 //! Coincident points have no direction: the kernels return zero there rather than NaN.
 
-use crate::knit::Vec3;
+use crate::base::Vec3;
 
 /// Unit vector from `from` to `to` and the distance, or `None` when the points coincide.
 pub fn direction(from: &Vec3, to: &Vec3) -> Option<(Vec3, f64)> {

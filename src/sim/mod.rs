@@ -1,6 +1,10 @@
 //! Simulation: force kernels (pure functions), one force evaluation every solver shares, and the
 //! solvers that loop over it: the paper's explicit relaxation (the reference) and the fast
 //! multilevel one.
+//!
+//! What every solver shares lives here, at the root: the force terms a plan switches on
+//! ([`ForceTerms`]), the constraints a fit adds ([`Constraints`]: contact with the leg, held end
+//! rings) and the observer a progress display listens through ([`RelaxObserver`]).
 
 pub mod accelerated;
 pub mod contact;
@@ -13,7 +17,75 @@ pub mod relax;
 
 pub use accelerated::{relax_accelerated, LevelStats};
 pub use multilevel::{relax_multilevel, Levels, MultilevelStats};
-pub use relax::{
-    relax, relax_constrained, stability_limit, Constraints, ForceTerms, RelaxObserver, RelaxStats,
-    Unconstrained,
-};
+pub use relax::{relax, relax_constrained, stability_limit, RelaxStats};
+
+use crate::base::{Direction, Vec3, YarnKind};
+use crate::knit::Knit;
+
+/// Which force terms run, with their coefficients. Built by the plan from the scene's effects.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ForceTerms {
+    /// Spring stiffness c1 per yarn kind (indexed by `YarnKind::index()`). Equal entries when the
+    /// scene does not ask for `alternating_yarns`.
+    pub stiffness: [f64; 2],
+    /// Connection factor c2 of eq. (2), or `None` when `yarn_connection` is off.
+    pub connection_factor: Option<f64>,
+}
+
+impl ForceTerms {
+    /// c1 of a spring of the knit: its yarn's stiffness, times the knit's factor for its
+    /// direction ([`Knit::stiffness_scale`]).
+    pub(crate) fn c1(&self, knit: &Knit, spring: u32) -> f64 {
+        let s = &knit.springs[spring as usize];
+        self.c1_of(knit, s.yarn, s.direction)
+    }
+
+    /// c1 of a spring of `yarn` along `direction` in the knit.
+    pub(crate) fn c1_of(&self, knit: &Knit, yarn: YarnKind, direction: Direction) -> f64 {
+        self.stiffness[yarn.index() as usize] * knit.stiffness_scale[direction.index()]
+    }
+}
+
+/// Limits on where points may go, applied after each sub-step's unconstrained update (the
+/// paper's "modified move", §6.2), and the forces those limits hold.
+pub trait Constraints: Sync {
+    /// Moves each free point from `from[i]` towards `x[i]` as far as the constraints allow,
+    /// writing the allowed position into `x[i]`.
+    fn constrain(&mut self, from: &[Vec3], x: &mut [Vec3], inv_mass: &[f64]);
+    /// The part of the force `f` on point `i` that the constraints do not hold (a contact's
+    /// reaction and a locked direction removed), so the residual measures only what can still
+    /// move points.
+    fn unheld_force(&self, i: usize, f: &Vec3) -> Vec3;
+    /// [`Constraints::unheld_force`] of the points `first..first + forces.len()`, in place: the
+    /// force pass asks once per row of the grid rather than once per point. Pinned points may be
+    /// among them; the caller ignores what they get.
+    fn unheld_forces_from(&self, first: usize, forces: &mut [Vec3]) {
+        for (k, f) in forces.iter_mut().enumerate() {
+            *f = self.unheld_force(first + k, f);
+        }
+    }
+    /// Puts every free point where the constraints allow it to rest, with no move to follow:
+    /// for a start from positions that were not reached by constrained moves (interpolated from
+    /// a coarser grid, say), which may break the constraints. Default: nothing to do.
+    fn settle(&mut self, _x: &mut [Vec3], _inv_mass: &[f64]) {}
+}
+
+/// No constraints: points go wherever the forces take them.
+pub struct Unconstrained;
+
+impl Constraints for Unconstrained {
+    fn constrain(&mut self, _from: &[Vec3], _x: &mut [Vec3], _inv_mass: &[f64]) {}
+    fn unheld_force(&self, _i: usize, f: &Vec3) -> Vec3 {
+        *f
+    }
+}
+
+/// Told about each step, e.g. to drive a progress bar. The library itself prints nothing.
+pub trait RelaxObserver {
+    /// Called after each residual evaluation, with the step number and the residual.
+    fn on_step(&mut self, step: usize, residual: f64);
+}
+
+impl RelaxObserver for () {
+    fn on_step(&mut self, _step: usize, _residual: f64) {}
+}

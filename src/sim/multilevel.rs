@@ -31,8 +31,9 @@
 
 use super::accelerated::{relax_accelerated, LevelStats};
 use super::{Constraints, ForceTerms, RelaxObserver};
+use crate::base::Vec3;
 use crate::error::Result;
-use crate::knit::{Knit, Vec3};
+use crate::knit::Knit;
 
 /// Coarsening stops before a grid would have fewer than this many wales or courses. Coarser
 /// rings are polygons whose corners catch on the leg (a point of a 19-wale ring spans 2 cm of

@@ -12,11 +12,11 @@ mod prop_config;
 use nalgebra::{DMatrix, Matrix3};
 use proptest::prelude::*;
 
-use super::evaluation::{
-    connection_stiffness_bound, evaluate, spring_stiffness_bound, ForceTerms, Workspace,
-};
+use super::evaluation::{connection_stiffness_bound, evaluate, spring_stiffness_bound, Workspace};
 use super::forces::{connection_force, spring_force, spring_tension};
-use crate::knit::{Knit, Pattern, PointId, Tile, Vec3};
+use super::ForceTerms;
+use crate::base::Vec3;
+use crate::knit::{Knit, Pattern, PointId, Tile};
 
 /// A small knit, as the numbers it is built from (so a failing case prints short).
 #[derive(Clone, Debug)]

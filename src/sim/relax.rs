@@ -23,12 +23,13 @@
 
 use rayon::prelude::*;
 
-pub use super::evaluation::ForceTerms;
 use super::evaluation::{
     evaluate, relative_residual, rest_force_floor, shortest_rest, Workspace, CHUNK,
 };
+use super::{Constraints, ForceTerms, RelaxObserver, Unconstrained};
+use crate::base::Vec3;
 use crate::error::{Error, Result};
-use crate::knit::{Knit, Vec3};
+use crate::knit::Knit;
 use crate::scene::{OnUnstable, SolverSettings};
 
 /// Energy growth over the starting energy that counts as divergence.
@@ -49,50 +50,6 @@ pub struct RelaxStats {
     pub max_move: f64,
     /// True when both residual and max_move went below the tolerance.
     pub converged: bool,
-}
-
-/// Limits on where points may go, applied after each sub-step's unconstrained update (the
-/// paper's "modified move", §6.2), and the forces those limits hold.
-pub trait Constraints: Sync {
-    /// Moves each free point from `from[i]` towards `x[i]` as far as the constraints allow,
-    /// writing the allowed position into `x[i]`.
-    fn constrain(&mut self, from: &[Vec3], x: &mut [Vec3], inv_mass: &[f64]);
-    /// The part of the force `f` on point `i` that the constraints do not hold (a contact's
-    /// reaction and a locked direction removed), so the residual measures only what can still
-    /// move points.
-    fn unheld_force(&self, i: usize, f: &Vec3) -> Vec3;
-    /// [`Constraints::unheld_force`] of the points `first..first + forces.len()`, in place: the
-    /// force pass asks once per row of the grid rather than once per point. Pinned points may be
-    /// among them; the caller ignores what they get.
-    fn unheld_forces_from(&self, first: usize, forces: &mut [Vec3]) {
-        for (k, f) in forces.iter_mut().enumerate() {
-            *f = self.unheld_force(first + k, f);
-        }
-    }
-    /// Puts every free point where the constraints allow it to rest, with no move to follow:
-    /// for a start from positions that were not reached by constrained moves (interpolated from
-    /// a coarser grid, say), which may break the constraints. Default: nothing to do.
-    fn settle(&mut self, _x: &mut [Vec3], _inv_mass: &[f64]) {}
-}
-
-/// No constraints: points go wherever the forces take them.
-pub struct Unconstrained;
-
-impl Constraints for Unconstrained {
-    fn constrain(&mut self, _from: &[Vec3], _x: &mut [Vec3], _inv_mass: &[f64]) {}
-    fn unheld_force(&self, _i: usize, f: &Vec3) -> Vec3 {
-        *f
-    }
-}
-
-/// Told about each step, e.g. to drive a progress bar. The library itself prints nothing.
-pub trait RelaxObserver {
-    /// Called after each residual evaluation, with the step number and the residual.
-    fn on_step(&mut self, step: usize, residual: f64);
-}
-
-impl RelaxObserver for () {
-    fn on_step(&mut self, _step: usize, _residual: f64) {}
 }
 
 /// The explicit stability limit on the time step for `knit` under `terms` (see module docs).

@@ -10,9 +10,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::OnceLock;
 
+use knitfit::base::{Direction, Segment, SurfaceMesh, YarnGeometry, YarnKind};
 use knitfit::export::ply::{write_mesh_ply, write_ply};
-use knitfit::export::{Segment, SurfaceMesh, YarnGeometry};
-use knitfit::knit::{Direction, YarnKind};
 use knitfit::leg::load::PLAUSIBLE_HEIGHT_M;
 use knitfit::leg::{load_leg, Collider, Leg};
 use knitfit::scene::{ContactMethod, Units, UpAxis};

@@ -10,8 +10,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
+use knitfit::base::SurfaceMesh;
 use knitfit::export::gltf::{write_nodes_glb, GlbNode};
-use knitfit::export::SurfaceMesh;
 use knitfit::leg::{load_leg, Collider, Leg};
 use knitfit::scene::{ContactMethod, Units, UpAxis};
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
@@ -807,7 +807,7 @@ fn a_tube_started_partly_inside_the_leg_ends_outside_with_its_rings_in_order() {
     contact.finish(&mut knit.particles.x, &knit.particles.inv_mass);
     println!("started inside: {started_inside} points; {stats:?}");
     assert!(stats.converged, "{stats:?}");
-    let (u, v) = knitfit::knit::tube::perpendicular_frame(&a);
+    let (u, v) = knitfit::base::perpendicular_frame(&a);
     for c in 0..courses {
         let mut previous = None;
         let mut turned = 0.0;

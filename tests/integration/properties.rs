@@ -10,7 +10,7 @@
 use std::f64::consts::{PI, TAU};
 use std::sync::OnceLock;
 
-use knitfit::knit::Vec3;
+use knitfit::base::Vec3;
 use knitfit::leg::{load_leg, Collider, Leg};
 use knitfit::scene::{ContactMethod, Units, UpAxis};
 use knitfit::sim::contact::LegContact;

@@ -4,8 +4,7 @@
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
-use knitfit::export::{Segment, SurfaceMesh, YarnGeometry};
-use knitfit::knit::{Direction, YarnKind};
+use knitfit::base::{Direction, Segment, SurfaceMesh, YarnGeometry, YarnKind};
 use knitfit::render::preview::{render_preview, PreviewBuffers, PreviewInput};
 use knitfit::render::stocking_glb::read_stocking_glb;
 use knitfit::scene::{CameraSettings, RenderSettings, Scene};
@@ -191,7 +190,7 @@ fn broken_geometry_renders_finite_pixels_without_panicking() {
     stocking
         .yarns
         .segments
-        .push(knitfit::export::Segment { b: s.a, ..s });
+        .push(knitfit::base::Segment { b: s.a, ..s });
     stocking.leg.triangles.push([0, 0, 0]);
     stocking.leg.triangles.push([0, 1, u32::MAX]);
     stocking.leg.normals[5] = [0.0, 0.0, 0.0];

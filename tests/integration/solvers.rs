@@ -1,7 +1,7 @@
 //! The two solvers: the multilevel one (the default) reaches the paper's rest state, and the
 //! run says which solver ran and what it did.
 
-use knitfit::knit::Direction;
+use knitfit::base::Direction;
 use knitfit::leg::AxisSource;
 use knitfit::plan::Plan;
 use knitfit::report::StageClock;

@@ -120,8 +120,8 @@ pub fn write_tube_leg(
     along: usize,
     ring_point: impl Fn(f64, f64) -> [f64; 3],
 ) -> PathBuf {
+    use knitfit::base::SurfaceMesh;
     use knitfit::export::gltf::{write_nodes_glb, GlbNode};
-    use knitfit::export::SurfaceMesh;
     let mut positions = Vec::new();
     for j in 0..=along {
         for i in 0..around {

@@ -1,0 +1,71 @@
+//! Triangle surfaces as the writers and the preview take them: the leg, and the fitted stocking
+//! as a surface.
+
+use std::collections::BTreeMap;
+
+/// A triangle surface to write: the leg, or the fitted stocking as a surface.
+///
+/// Positions in metres, Y up; triangles counter-clockwise seen from outside. Point attributes
+/// follow the same naming rule as [`YarnGeometry`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct SurfaceMesh {
+    /// Node and mesh name.
+    pub name: String,
+    /// Vertex positions, metres.
+    pub positions: Vec<[f64; 3]>,
+    /// Triangles as vertex indices.
+    pub triangles: Vec<[u32; 3]>,
+    /// Unit vertex normals.
+    pub normals: Vec<[f32; 3]>,
+    /// Texture coordinates (`TEXCOORD_0`), if any.
+    pub texcoords: Option<Vec<[f32; 2]>>,
+    /// Linear-RGB vertex colours 0–1 (`COLOR_0`), if any.
+    pub colours: Option<Vec<[f32; 3]>>,
+    /// Per-vertex attributes, one value per position.
+    pub point_attributes: BTreeMap<String, Vec<f32>>,
+}
+
+impl SurfaceMesh {
+    /// A surface with area-weighted vertex normals and no attributes yet.
+    pub fn new(name: &str, positions: Vec<[f64; 3]>, triangles: Vec<[u32; 3]>) -> SurfaceMesh {
+        let normals = vertex_normals(&positions, &triangles);
+        SurfaceMesh {
+            name: name.to_string(),
+            positions,
+            triangles,
+            normals,
+            texcoords: None,
+            colours: None,
+            point_attributes: BTreeMap::new(),
+        }
+    }
+}
+
+/// Area-weighted vertex normals; a vertex on no triangle (or on only degenerate ones) gets +Y, so
+/// every normal is a unit vector as glTF requires. A triangle with an index past the last
+/// position is skipped: the writers refuse such a mesh with a message, rather than panic here.
+pub fn vertex_normals(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f32; 3]> {
+    use nalgebra::Vector3;
+    let mut sum = vec![Vector3::<f64>::zeros(); positions.len()];
+    for t in triangles {
+        if t.iter().any(|&i| i as usize >= positions.len()) {
+            continue;
+        }
+        let [a, b, c] = t.map(|i| Vector3::from(positions[i as usize]));
+        let n = (b - a).cross(&(c - a));
+        for &i in t {
+            sum[i as usize] += n;
+        }
+    }
+    sum.iter()
+        .map(|n| {
+            let len = n.norm();
+            if len > 0.0 && len.is_finite() {
+                let u = n / len;
+                [u.x as f32, u.y as f32, u.z as f32]
+            } else {
+                [0.0, 1.0, 0.0]
+            }
+        })
+        .collect()
+}

@@ -1,0 +1,11 @@
+//! The shared vocabulary at the bottom of the layers: vectors and frames, yarn kinds and yarn
+//! geometry, triangle surfaces, colours. Every stage may use it; it uses no stage.
+
+pub mod colour;
+pub mod frame;
+pub mod mesh;
+pub mod yarn;
+
+pub use frame::{perpendicular_frame, Vec3};
+pub use mesh::{vertex_normals, SurfaceMesh};
+pub use yarn::{Direction, Segment, YarnGeometry, YarnKind};

@@ -1,0 +1,120 @@
+//! The yarn vocabulary every stage shares: the two yarn kinds, the two directions a yarn runs in
+//! the knit, and [`YarnGeometry`], the one list of yarn points and segments that the
+//! penetration fix, the writers and the renderers take.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+/// A yarn material. Indexes per-yarn arrays: nylon first, support second.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum YarnKind {
+    /// Plain nylon yarn (paper: c1 = 1).
+    Nylon,
+    /// Support yarn: polyurethane core wrapped in nylon, stiffer and more elastic (paper: c1 = 10).
+    Support,
+}
+
+impl YarnKind {
+    /// Both kinds, in index order.
+    pub const ALL: [YarnKind; 2] = [YarnKind::Nylon, YarnKind::Support];
+
+    /// 0 for nylon, 1 for support: the value written to `yarn_kind` / `_YARN_KIND` attributes.
+    pub fn index(self) -> u8 {
+        match self {
+            YarnKind::Nylon => 0,
+            YarnKind::Support => 1,
+        }
+    }
+
+    /// Lower-case name, as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            YarnKind::Nylon => "nylon",
+            YarnKind::Support => "support",
+        }
+    }
+}
+
+/// Direction of a spring in the knit grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Direction {
+    /// Along a course (row): joins wale `w` to wale `w + 1`. The yarn is continuous this way.
+    Course,
+    /// Along a wale (column): joins course `c` to course `c + 1`.
+    Wale,
+}
+
+impl Direction {
+    /// 0 for course, 1 for wale: the index of per-direction arrays.
+    pub fn index(self) -> usize {
+        match self {
+            Direction::Course => 0,
+            Direction::Wale => 1,
+        }
+    }
+}
+
+/// Yarn points, the segments between them and per-point attributes, ready to write.
+///
+/// Positions are in metres, glTF convention (Y up). Attribute names are written as-is to PLY
+/// (`course`) and upper-cased with a `_` prefix to glTF (`_COURSE`). A `BTreeMap` keeps the
+/// order, and so the bytes, deterministic.
+#[derive(Clone, Debug, PartialEq)]
+pub struct YarnGeometry {
+    /// Name of this part (a glTF node name, a PLY comment).
+    pub name: String,
+    /// Where the part is placed for viewing, metres: a glTF node translation; added to the PLY
+    /// positions (and said so in the PLY header), as PLY has no transforms.
+    pub offset_m: [f64; 3],
+    /// Point positions, metres.
+    pub positions: Vec<[f64; 3]>,
+    /// Per-point attributes, one value per position: `course`, `wale`, `class`, `yarn_kind`, ….
+    pub point_attributes: BTreeMap<String, Vec<f32>>,
+    /// Yarn segments (springs).
+    pub segments: Vec<Segment>,
+}
+
+/// One yarn segment between two points of a [`YarnGeometry`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Segment {
+    /// Index of the first point.
+    pub a: u32,
+    /// Index of the second point.
+    pub b: u32,
+    /// The yarn this segment belongs to.
+    pub yarn: YarnKind,
+    /// Along the course or along the wale.
+    pub direction: Direction,
+}
+
+/// A three-point, two-segment geometry (one nylon course segment, one support wale segment)
+/// with `course`, `wale` and `yarn_kind` attributes, for the writers' tests.
+#[cfg(test)]
+pub(crate) fn sample_geometry(name: &str, offset_x: f64) -> YarnGeometry {
+    let mut point_attributes = BTreeMap::new();
+    point_attributes.insert("course".to_string(), vec![0.0, 0.0, 1.0]);
+    point_attributes.insert("wale".to_string(), vec![0.0, 1.0, 0.0]);
+    point_attributes.insert("yarn_kind".to_string(), vec![0.0, 0.0, 1.0]);
+    YarnGeometry {
+        name: name.into(),
+        offset_m: [offset_x, 0.0, 0.0],
+        positions: vec![[0.0, 0.0, 0.0], [0.001, 0.0, 0.0], [0.0, 0.002, 0.0]],
+        point_attributes,
+        segments: vec![
+            Segment {
+                a: 0,
+                b: 1,
+                yarn: YarnKind::Nylon,
+                direction: Direction::Course,
+            },
+            Segment {
+                a: 0,
+                b: 2,
+                yarn: YarnKind::Support,
+                direction: Direction::Wale,
+            },
+        ],
+    }
+}
