@@ -6,11 +6,39 @@
 //! the figures are beside each constant. The limit is the scene's `limits.memory_gib`, else what
 //! the system says is available, else [`FALLBACK_LIMIT_GIB`].
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
+use crate::base::settings::Invalid;
 use crate::error::{Error, Result};
-use crate::plan::Plan;
-use crate::scene::{Output, Scene};
+use crate::export::Output;
+
+/// The memory a fit may use. A fit whose estimate is over it is refused before the leg is
+/// decoded or the knit allocated .
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields, default)]
+pub struct Limits {
+    /// Memory the fit may use, GiB; absent means what the system has available (`MemAvailable`
+    /// in `/proc/meminfo`, or the cgroup's limit when lower), or
+    /// [`FALLBACK_LIMIT_GIB`] where neither can be read (default: absent).
+    /// `--memory-limit` overrides it.
+    pub memory_gib: Option<f64>,
+    /// Run the fit even when its estimate is over the limit: the check is skipped
+    /// (default: false). `--allow-large` sets it.
+    pub allow_large: bool,
+}
+
+impl Limits {
+    /// Checks every value; the error names the field under `limits`.
+    pub fn validate(&self) -> std::result::Result<(), Invalid> {
+        match self.memory_gib {
+            Some(gib) if !(gib.is_finite() && gib > 0.0) => Err(Invalid::new(
+                "memory_gib",
+                format!("must be a positive number of GiB, got {gib}"),
+            )),
+            _ => Ok(()),
+        }
+    }
+}
 
 const MIB: f64 = 1024.0 * 1024.0;
 const GIB: f64 = 1024.0 * MIB;
@@ -72,9 +100,25 @@ const PREVIEW_BYTES_PER_TRIANGLE: f64 = 200.0;
 /// GiB: a laptop's.
 pub const FALLBACK_LIMIT_GIB: f64 = 8.0;
 
+/// What a fit's memory grows with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FitSize<'a> {
+    /// Tube points around and along (`tube.wales`, `tube.courses`).
+    pub tube: [usize; 2],
+    /// Triangles the leg file declares.
+    pub leg_triangles: usize,
+    /// The outputs that write files (a fit's plan has them).
+    pub outputs: &'a [Output],
+    /// Pixels of the preview (`render.width × render.height`), if one is written.
+    pub preview_pixels: u64,
+}
+
 /// The peak memory a fit is estimated to need, by part, in bytes.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct MemoryEstimate {
+    /// Tube size, wales × courses (for messages).
+    #[serde(skip)]
+    pub tube: [usize; 2],
     /// Tube points (wales × courses).
     pub tube_points: u64,
     /// Triangles the leg file declares.
@@ -92,11 +136,11 @@ pub struct MemoryEstimate {
 }
 
 impl MemoryEstimate {
-    /// The estimate for the fit `plan` of `scene` on a leg of `leg_triangles` triangles.
-    pub fn fit(scene: &Scene, plan: &Plan, leg_triangles: usize) -> MemoryEstimate {
-        let points = scene.tube.wales as f64 * scene.tube.courses as f64;
-        let triangles = leg_triangles as f64;
-        let writes = |output| plan.files.iter().any(|(o, _)| *o == output);
+    /// The estimate for a fit of this size.
+    pub fn fit(size: &FitSize) -> MemoryEstimate {
+        let points = size.tube[0] as f64 * size.tube[1] as f64;
+        let triangles = size.leg_triangles as f64;
+        let writes = |output| size.outputs.contains(&output);
         let mut tube = SOLVE_BYTES_PER_POINT;
         let mut leg = LEG_BYTES_PER_TRIANGLE;
         if writes(Output::Glb) {
@@ -111,8 +155,7 @@ impl MemoryEstimate {
             leg += LEG_PICTURE_BYTES_PER_TRIANGLE;
         }
         let preview = if writes(Output::Preview) {
-            let pixels = scene.render.width as f64 * scene.render.height as f64;
-            pixels * PREVIEW_BYTES_PER_PIXEL
+            size.preview_pixels as f64 * PREVIEW_BYTES_PER_PIXEL
                 + points * PREVIEW_BYTES_PER_POINT
                 + triangles * PREVIEW_BYTES_PER_TRIANGLE
         } else {
@@ -122,8 +165,9 @@ impl MemoryEstimate {
         let (base_bytes, tube_bytes) = (BASE_BYTES as u64, (points * tube) as u64);
         let (leg_bytes, preview_bytes) = ((triangles * leg) as u64, preview as u64);
         MemoryEstimate {
+            tube: size.tube,
             tube_points: points as u64,
-            leg_triangles: leg_triangles as u64,
+            leg_triangles: size.leg_triangles as u64,
             base_bytes,
             tube_bytes,
             leg_bytes,
@@ -174,8 +218,8 @@ pub struct MemoryLimit {
 
 impl MemoryLimit {
     /// The scene's limit, else the system's available memory, else the fallback.
-    pub fn of(scene: &Scene) -> MemoryLimit {
-        if let Some(gib) = scene.limits.memory_gib {
+    pub fn of(limits: &Limits) -> MemoryLimit {
+        if let Some(gib) = limits.memory_gib {
             return MemoryLimit {
                 bytes: (gib * GIB) as u64,
                 source: LimitSource::Scene,
@@ -240,12 +284,12 @@ pub struct MemoryCheck {
 }
 
 impl MemoryCheck {
-    /// The check of the fit `plan` of `scene` on a leg of `leg_triangles` triangles.
-    pub fn fit(scene: &Scene, plan: &Plan, leg_triangles: usize) -> MemoryCheck {
+    /// The check of a fit of this size against `limits`.
+    pub fn fit(size: &FitSize, limits: &Limits) -> MemoryCheck {
         MemoryCheck {
-            estimate: MemoryEstimate::fit(scene, plan, leg_triangles),
-            limit: MemoryLimit::of(scene),
-            allow_large: scene.limits.allow_large,
+            estimate: MemoryEstimate::fit(size),
+            limit: MemoryLimit::of(limits),
+            allow_large: limits.allow_large,
         }
     }
 
@@ -277,7 +321,7 @@ impl MemoryCheck {
 
     /// Refuses a fit over its limit, unless `allow_large`: [`Error::TooLarge`] naming the tube
     /// and the leg (`leg_name`) and saying how to go on.
-    pub fn enforce(&self, scene: &Scene, leg_name: &str) -> Result<()> {
+    pub fn enforce(&self, leg_name: &str) -> Result<()> {
         if self.allow_large || self.fits() {
             return Ok(());
         }
@@ -290,7 +334,7 @@ impl MemoryCheck {
         Err(Error::TooLarge {
             what: format!(
                 "a fit of {}×{} points on {leg_name} ({} triangles)",
-                scene.tube.wales, scene.tube.courses, e.leg_triangles
+                e.tube[0], e.tube[1], e.leg_triangles
             ),
             estimate: human_bytes(e.total_bytes),
             available: human_bytes(self.limit.bytes),
@@ -332,52 +376,61 @@ pub fn peak_memory() -> Option<u64> {
 mod tests {
     use super::*;
 
-    fn scene(outputs: Vec<Output>) -> Scene {
-        let mut scene = Scene::load(None).unwrap();
-        scene.outputs = outputs;
-        scene
+    fn size(outputs: &[Output]) -> FitSize<'_> {
+        FitSize {
+            tube: [150, 150],
+            leg_triangles: 10_000,
+            outputs,
+            preview_pixels: 768 * 768,
+        }
     }
 
     #[test]
     fn the_estimate_grows_with_the_tube_the_leg_and_the_outputs() {
-        let bare = scene(vec![]);
-        let small = MemoryEstimate::fit(&bare, &Plan::fit(&bare), 10_000);
-        let mut big = bare.clone();
-        big.tube.wales *= 2;
-        let larger_tube = MemoryEstimate::fit(&big, &Plan::fit(&big), 10_000);
+        let small = MemoryEstimate::fit(&size(&[]));
+        let larger_tube = MemoryEstimate::fit(&FitSize {
+            tube: [300, 150],
+            ..size(&[])
+        });
         assert_eq!(larger_tube.tube_bytes, 2 * small.tube_bytes);
-        let larger_leg = MemoryEstimate::fit(&bare, &Plan::fit(&bare), 20_000);
+        let larger_leg = MemoryEstimate::fit(&FitSize {
+            leg_triangles: 20_000,
+            ..size(&[])
+        });
         assert_eq!(larger_leg.leg_bytes, 2 * small.leg_bytes);
-        let ply = scene(vec![Output::Ply]);
-        assert!(MemoryEstimate::fit(&ply, &Plan::fit(&ply), 10_000).tube_bytes > small.tube_bytes);
+        assert!(MemoryEstimate::fit(&size(&[Output::Ply])).tube_bytes > small.tube_bytes);
         assert_eq!(small.preview_bytes, 0);
-        let preview = scene(vec![Output::Preview]);
-        assert!(MemoryEstimate::fit(&preview, &Plan::fit(&preview), 10_000).preview_bytes > 0);
+        assert!(MemoryEstimate::fit(&size(&[Output::Preview])).preview_bytes > 0);
     }
 
     #[test]
     fn an_absurd_tube_saturates_instead_of_overflowing() {
-        let mut s = scene(vec![Output::Ply]);
-        s.tube.wales = usize::MAX / 2;
-        s.tube.courses = usize::MAX / 2;
-        let e = MemoryEstimate::fit(&s, &Plan::fit(&s), usize::MAX);
+        let e = MemoryEstimate::fit(&FitSize {
+            tube: [usize::MAX / 2, usize::MAX / 2],
+            leg_triangles: usize::MAX,
+            ..size(&[Output::Ply])
+        });
         assert_eq!(e.total_bytes, u64::MAX);
     }
 
     #[test]
     fn the_scene_limit_wins_and_allow_large_skips_the_refusal() {
-        let mut s = scene(vec![]);
-        s.limits.memory_gib = Some(0.001);
-        let check = MemoryCheck::fit(&s, &Plan::fit(&s), 41_000);
+        let mut limits = Limits {
+            memory_gib: Some(0.001),
+            allow_large: false,
+        };
+        let fit = FitSize {
+            leg_triangles: 41_000,
+            ..size(&[])
+        };
+        let check = MemoryCheck::fit(&fit, &limits);
         assert_eq!(check.limit.source, LimitSource::Scene);
         assert!(!check.fits());
-        let err = check.enforce(&s, "leg.glb").unwrap_err().to_string();
+        let err = check.enforce("leg.glb").unwrap_err().to_string();
         assert!(err.contains("--allow-large"), "{err}");
         assert!(err.contains("1 MiB available"), "{err}");
-        s.limits.allow_large = true;
-        assert!(MemoryCheck::fit(&s, &Plan::fit(&s), 41_000)
-            .enforce(&s, "leg.glb")
-            .is_ok());
+        limits.allow_large = true;
+        assert!(MemoryCheck::fit(&fit, &limits).enforce("leg.glb").is_ok());
     }
 
     #[test]

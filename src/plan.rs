@@ -1,19 +1,215 @@
 //! From a scene to the work a run will do: the effects that run, the force terms they switch on,
-//! and the ordered stages, each with the reason it is there. Nothing outside the plan runs, and
-//! the report lists the stages that did.
+//! the ordered [`Stage`]s with the reason for each, what is left out and why, and the files.
+//! The run executes exactly these stages (its clock records each against the plan) and the
+//! report lists them, so nothing runs that the scene did not ask for.
+
+use std::fmt;
+
+use serde::Serialize;
 
 use crate::base::YarnKind;
-use crate::scene::{Effect, Output, RenderMode, Scene, SolverMethod};
+use crate::export::Output;
+use crate::knit::Stretch;
+use crate::render::RenderMode;
+use crate::scene::{Effect, Scene};
 use crate::sim::multilevel::grid_sizes;
-use crate::sim::ForceTerms;
+use crate::sim::{ForceTerms, SolverMethod};
+
+/// One step of a run: what the plan lists, the run executes and the report records.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Stage {
+    /// Read the leg file and check the fit's memory estimate before decoding it.
+    LoadLeg,
+    /// Convert the given axis to world space, or detect it.
+    FindAxis,
+    /// Build the contact queries' structure over the leg.
+    BuildCollider,
+    /// The paper's solver only: knit the tube at the asked-for size (the multilevel solver knits
+    /// each of its grids inside [`Stage::Fit`]).
+    KnitTube,
+    /// Relax the tube onto the leg with sliding contact.
+    Fit,
+    /// Move out any point a cached tangent plane let dip below the offset.
+    ExactContactPass,
+    /// Measure the deepest yarn point inside the leg against the exact triangles.
+    CheckPenetration,
+    /// Stitch density, stretch and coverage per leg vertex.
+    LegAttributes,
+    /// Reroute yarn segments that cut through the leg over the skin (paper §6.3).
+    PenetrationFix,
+    /// Build a fresh patch for one stretch of the patch experiment.
+    KnitPatch(Stretch),
+    /// Relax that patch with its edges held.
+    RelaxPatch(Stretch),
+    /// Stitch shapes of every relaxed patch.
+    MeasureStitches,
+    /// `knitfit render`: read a fit's `stocking.glb`.
+    ReadStocking,
+    /// Encode one file in memory.
+    Encode(File),
+    /// Ray-trace the yarn-level preview and encode it.
+    RenderPreview,
+    /// Write every file, each to a temporary name then renamed.
+    WriteFiles,
+}
+
+impl fmt::Display for Stage {
+    /// The stage's name, as in `knitfit plan` and `report.json` (`relax course=1.5`).
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Stage::LoadLeg => f.write_str("load leg"),
+            Stage::FindAxis => f.write_str("find axis"),
+            Stage::BuildCollider => f.write_str("build collider"),
+            Stage::KnitTube => f.write_str("knit tube"),
+            Stage::Fit => f.write_str("fit"),
+            Stage::ExactContactPass => f.write_str("exact contact pass"),
+            Stage::CheckPenetration => f.write_str("check penetration"),
+            Stage::LegAttributes => f.write_str("leg attributes"),
+            Stage::PenetrationFix => f.write_str("penetration fix"),
+            Stage::KnitPatch(stretch) => write!(f, "knit {stretch}"),
+            Stage::RelaxPatch(stretch) => write!(f, "relax {stretch}"),
+            Stage::MeasureStitches => f.write_str("measure stitches"),
+            Stage::ReadStocking => f.write_str("read stocking.glb"),
+            Stage::Encode(file) => write!(f, "encode {}", file.name()),
+            Stage::RenderPreview => f.write_str("render preview"),
+            Stage::WriteFiles => f.write_str("write files"),
+        }
+    }
+}
+
+impl Serialize for Stage {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_str(self)
+    }
+}
+
+/// A file a fit encodes (the preview is rendered in [`Stage::RenderPreview`] instead).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FitFile {
+    /// `stocking.glb`: the leg, the yarns and the stocking surface.
+    StockingGlb,
+    /// `stocking.ply`: the yarn points and segments.
+    StockingPly,
+    /// `leg.ply`: the leg with its attributes.
+    LegPly,
+    /// `density.png`: the leg coloured by stitch density.
+    DensityPicture,
+}
+
+/// A file the patch experiment encodes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PatchFile {
+    /// `patch.ply`: the relaxed patches' yarns.
+    Ply,
+    /// `patch.glb`: the same as glTF lines.
+    Glb,
+    /// `patch.png`: the stitch picture.
+    Picture,
+}
+
+/// The files a fit can encode, in the order it writes them, with the output that asks for
+/// each: the one table from output kind to file (the writers are `run::fit`'s).
+pub const FIT_FILES: [(Output, FitFile); 4] = [
+    (Output::Glb, FitFile::StockingGlb),
+    (Output::Ply, FitFile::StockingPly),
+    (Output::Ply, FitFile::LegPly),
+    (Output::Picture, FitFile::DensityPicture),
+];
+
+/// The files the patch experiment can encode, as [`FIT_FILES`].
+pub const PATCH_FILES: [(Output, PatchFile); 3] = [
+    (Output::Ply, PatchFile::Ply),
+    (Output::Glb, PatchFile::Glb),
+    (Output::Picture, PatchFile::Picture),
+];
+
+/// The preview's file name in a fit's output directory.
+pub const PREVIEW_FILE: &str = "preview.png";
+/// The report's file name.
+pub const REPORT_FILE: &str = "report.json";
+
+/// A file one of the commands encodes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum File {
+    /// A fit's.
+    Fit(FitFile),
+    /// The patch experiment's.
+    Patch(PatchFile),
+}
+
+impl File {
+    /// The file's name in the output directory.
+    pub fn name(self) -> &'static str {
+        match self {
+            File::Fit(FitFile::StockingGlb) => "stocking.glb",
+            File::Fit(FitFile::StockingPly) => "stocking.ply",
+            File::Fit(FitFile::LegPly) => "leg.ply",
+            File::Fit(FitFile::DensityPicture) => "density.png",
+            File::Patch(PatchFile::Ply) => "patch.ply",
+            File::Patch(PatchFile::Glb) => "patch.glb",
+            File::Patch(PatchFile::Picture) => "patch.png",
+        }
+    }
+}
+
+impl FitFile {
+    /// The file's name in the output directory.
+    pub fn name(self) -> &'static str {
+        File::Fit(self).name()
+    }
+}
+
+impl PatchFile {
+    /// The file's name in the output directory.
+    pub fn name(self) -> &'static str {
+        File::Patch(self).name()
+    }
+}
+
+/// The files a fit of `scene` encodes, in order.
+pub fn fit_files(scene: &Scene) -> Vec<FitFile> {
+    FIT_FILES
+        .iter()
+        .filter(|(output, _)| scene.wants(*output))
+        .map(|&(_, file)| file)
+        .collect()
+}
+
+/// The files the patch experiment of `scene` encodes, in order.
+pub fn patch_files(scene: &Scene) -> Vec<PatchFile> {
+    PATCH_FILES
+        .iter()
+        .filter(|(output, _)| scene.wants(*output))
+        .map(|&(_, file)| file)
+        .collect()
+}
 
 /// One stage a run will execute, and why.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PlannedStage {
-    /// Stage name, as in the report (`relax course=1.5`).
-    pub name: String,
+    /// The stage.
+    #[serde(rename = "name")]
+    pub stage: Stage,
     /// What in the scene or command asks for it.
     pub why: String,
+}
+
+/// Something a scene could ask for that will not run, and why not.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct LeftOut {
+    /// What is left out (`render preview`, `effect contact`).
+    pub name: String,
+    /// Why.
+    pub why: String,
+}
+
+/// A file a run will write besides its report.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PlannedFile {
+    /// Its name in the output directory.
+    pub name: String,
+    /// The output of the scene that asks for it.
+    pub output: Output,
 }
 
 /// The work of one run.
@@ -27,11 +223,59 @@ pub struct Plan {
     pub forces: ForceTerms,
     /// Stages in execution order.
     pub stages: Vec<PlannedStage>,
-    /// Stages and effects that will not run although a scene could ask for them, each with
-    /// why not (`why`).
-    pub left_out: Vec<PlannedStage>,
-    /// Files to write besides `report.json`, in order.
-    pub files: Vec<(Output, &'static str)>,
+    /// Stages and effects that will not run although a scene could ask for them.
+    pub left_out: Vec<LeftOut>,
+    /// Files to write besides the report, in order.
+    pub files: Vec<PlannedFile>,
+    /// The report's file name.
+    pub report: String,
+}
+
+impl Plan {
+    /// True when the plan has this stage.
+    pub fn has(&self, stage: Stage) -> bool {
+        self.stages.iter().any(|s| s.stage == stage)
+    }
+
+    /// True when the plan writes a file for `output`.
+    pub fn writes(&self, output: Output) -> bool {
+        self.files.iter().any(|f| f.output == output)
+    }
+
+    /// Every file the run writes, its report last.
+    pub fn file_names(&self) -> Vec<&str> {
+        self.files
+            .iter()
+            .map(|f| f.name.as_str())
+            .chain([self.report.as_str()])
+            .collect()
+    }
+
+    fn add(&mut self, stage: Stage, why: impl Into<String>) {
+        self.stages.push(PlannedStage {
+            stage,
+            why: why.into(),
+        });
+    }
+
+    fn leave_out(&mut self, name: impl Into<String>, why: impl Into<String>) {
+        self.left_out.push(LeftOut {
+            name: name.into(),
+            why: why.into(),
+        });
+    }
+
+    fn new(command: &'static str, scene: &Scene, effects: Vec<Effect>) -> Plan {
+        Plan {
+            command,
+            forces: force_terms(scene, &effects),
+            effects,
+            stages: Vec::new(),
+            left_out: Vec::new(),
+            files: Vec::new(),
+            report: REPORT_FILE.to_string(),
+        }
+    }
 }
 
 impl Plan {
@@ -39,68 +283,57 @@ impl Plan {
     /// then measure stitches and encode the asked-for files.
     pub fn patch(scene: &Scene) -> Plan {
         // A flat patch has no leg to touch or cut through.
+        let without_leg = [Effect::Contact, Effect::PenetrationFix];
         let mut effects = dedup(&scene.effects);
-        let mut left_out = Vec::new();
-        for effect in [Effect::Contact, Effect::PenetrationFix] {
-            if effects.contains(&effect) {
-                left_out.push(PlannedStage {
-                    name: format!("effect {}", effect.name()),
-                    why: "a flat patch has no leg".into(),
+        let dropped: Vec<Effect> = effects
+            .iter()
+            .copied()
+            .filter(|e| without_leg.contains(e))
+            .collect();
+        effects.retain(|e| !without_leg.contains(e));
+        let mut plan = Plan::new("patch", scene, effects);
+        for effect in dropped {
+            plan.leave_out(
+                format!("effect {}", effect.name()),
+                "a flat patch has no leg",
+            );
+        }
+        plan.leave_out(Stage::LoadLeg.to_string(), "a flat patch has no leg");
+        let terms = match plan.forces.connection_factor {
+            Some(c2) => format!("spring force (eq. 1) + yarn connection (eq. 2, c2 = {c2})"),
+            None => "spring force (eq. 1) only".to_string(),
+        };
+        for &stretch in &scene.patch.stretch {
+            plan.add(
+                Stage::KnitPatch(stretch),
+                format!("patch.stretch asks for {stretch}"),
+            );
+            plan.add(Stage::RelaxPatch(stretch), terms.clone());
+        }
+        plan.add(
+            Stage::MeasureStitches,
+            "report.json: stitch shapes per stretch",
+        );
+        for (output, file) in PATCH_FILES {
+            if scene.wants(output) {
+                plan.add(
+                    Stage::Encode(File::Patch(file)),
+                    format!("outputs lists \"{}\"", output.name()),
+                );
+                plan.files.push(PlannedFile {
+                    name: file.name().to_string(),
+                    output,
                 });
             }
         }
-        left_out.push(PlannedStage {
-            name: "load leg".into(),
-            why: "a flat patch has no leg".into(),
-        });
-        effects.retain(|&e| e != Effect::Contact && e != Effect::PenetrationFix);
-        let forces = force_terms(scene, &effects);
-        let mut stages = Vec::new();
-        let mut add = |name: String, why: String| stages.push(PlannedStage { name, why });
-        for stretch in &scene.patch.stretch {
-            add(
-                format!("knit {stretch}"),
-                format!("patch.stretch asks for {stretch}"),
-            );
-            let terms = match forces.connection_factor {
-                Some(c2) => format!("spring force (eq. 1) + yarn connection (eq. 2, c2 = {c2})"),
-                None => "spring force (eq. 1) only".to_string(),
-            };
-            add(format!("relax {stretch}"), terms);
-        }
-        add(
-            "measure stitches".into(),
-            "report.json: stitch shapes per stretch".into(),
-        );
-        let mut files = Vec::new();
-        for (output, file) in [
-            (Output::Ply, "patch.ply"),
-            (Output::Glb, "patch.glb"),
-            (Output::Picture, "patch.png"),
-        ] {
-            if scene.wants(output) {
-                add(
-                    format!("encode {file}"),
-                    format!("outputs lists \"{}\"", output_name(output)),
-                );
-                files.push((output, file));
-            }
-        }
         if scene.wants(Output::Preview) {
-            left_out.push(PlannedStage {
-                name: PREVIEW_STAGE.into(),
-                why: "a flat patch has no leg to preview".into(),
-            });
+            plan.leave_out(
+                Stage::RenderPreview.to_string(),
+                "a flat patch has no leg to preview",
+            );
         }
-        add("write files".into(), "every run writes report.json".into());
-        Plan {
-            command: "patch",
-            effects,
-            forces,
-            stages,
-            left_out,
-            files,
-        }
+        plan.add(Stage::WriteFiles, "every run writes report.json");
+        plan
     }
 }
 
@@ -117,51 +350,44 @@ impl Plan {
         // shows them, there is nothing for it to do.
         let yarn_preview = scene.wants(Output::Preview) && scene.render.mode == RenderMode::Yarn;
         let polylines = scene.wants(Output::Glb) || scene.wants(Output::Ply) || yarn_preview;
-        let mut left_out = Vec::new();
-        if !polylines && effects.contains(&Effect::PenetrationFix) {
+        let skip_fix = !polylines && effects.contains(&Effect::PenetrationFix);
+        if skip_fix {
             effects.retain(|&e| e != Effect::PenetrationFix);
-            left_out.push(PlannedStage {
-                name: "penetration fix".into(),
-                why: "effects lists \"penetration_fix\", but no output draws a yarn polyline \
-                      (glb, ply or a yarn preview)"
-                    .into(),
-            });
         }
-        let forces = force_terms(scene, &effects);
-        let mut stages = Vec::new();
-        let mut add = |name: &str, why: String| {
-            stages.push(PlannedStage {
-                name: name.to_string(),
-                why,
-            })
-        };
-        add(
-            "load leg",
+        let mut plan = Plan::new("fit", scene, effects);
+        if skip_fix {
+            plan.leave_out(
+                Stage::PenetrationFix.to_string(),
+                "effects lists \"penetration_fix\", but no output draws a yarn polyline \
+                 (glb, ply or a yarn preview)",
+            );
+        }
+        plan.add(
+            Stage::LoadLeg,
             "the leg file (leg.file, or --leg): its declared triangles and the tube are checked \
-             against the memory limit before anything is decoded"
-                .into(),
+             against the memory limit before anything is decoded",
         );
-        add(
-            "find axis",
+        plan.add(
+            Stage::FindAxis,
             match scene.leg.axis {
-                Some(_) => "leg.axis is given: convert it to world space".into(),
-                None => "leg.axis is absent: detect the principal axis".into(),
+                Some(_) => "leg.axis is given: convert it to world space",
+                None => "leg.axis is absent: detect the principal axis",
             },
         );
-        add(
-            "build collider",
+        plan.add(
+            Stage::BuildCollider,
             format!("contact ({} queries)", scene.contact.method.name()),
         );
         let (wales, courses) = (scene.tube.wales, scene.tube.courses);
-        let terms = match forces.connection_factor {
+        let terms = match plan.forces.connection_factor {
             Some(c2) => format!("spring force + yarn connection (c2 = {c2}) + sliding contact"),
             None => "spring force + sliding contact".to_string(),
         };
         match scene.solver.method {
             SolverMethod::Paper => {
-                add("knit tube", format!("tube {wales}×{courses}"));
-                add(
-                    "fit",
+                plan.add(Stage::KnitTube, format!("tube {wales}×{courses}"));
+                plan.add(
+                    Stage::Fit,
                     format!("{terms}; solver.method \"paper\": explicit damped steps"),
                 );
             }
@@ -170,8 +396,8 @@ impl Plan {
                     .iter()
                     .map(|(w, c)| format!("{w}×{c}"))
                     .collect();
-                add(
-                    "fit",
+                plan.add(
+                    Stage::Fit,
                     format!(
                         "{terms}; solver.method \"multilevel\": tubes knitted and relaxed \
                          coarse to fine on grids {}",
@@ -180,82 +406,94 @@ impl Plan {
                 );
             }
         }
-        add(
-            "exact contact pass",
-            "contact: move out any point a cached tangent plane let dip below the offset".into(),
+        plan.add(
+            Stage::ExactContactPass,
+            "contact: move out any point a cached tangent plane let dip below the offset",
         );
-        add(
-            "check penetration",
-            "report.json: max_penetration_m against the exact triangles".into(),
+        plan.add(
+            Stage::CheckPenetration,
+            "report.json: max_penetration_m against the exact triangles",
         );
-        let mut files = Vec::new();
         let density_preview =
             scene.wants(Output::Preview) && scene.render.mode == RenderMode::Density;
         let leg_files = scene.wants(Output::Glb) || scene.wants(Output::Ply);
         if leg_files || scene.wants(Output::Picture) || density_preview {
-            add(
-                "leg attributes",
-                "stitch density, stretch and coverage per leg vertex, for the leg in the \
-                 files and the density pictures"
-                    .into(),
+            plan.add(
+                Stage::LegAttributes,
+                "stitch density, stretch and coverage per leg vertex, for the leg in the files \
+                 and the density pictures",
             );
         } else {
-            left_out.push(PlannedStage {
-                name: "leg attributes".into(),
-                why: "no output holds the leg (glb, ply, picture or a density preview)".into(),
-            });
-        }
-        if effects.contains(&Effect::PenetrationFix) {
-            add(
-                "penetration fix",
-                "effect penetration_fix, for the yarn polylines written".into(),
+            plan.leave_out(
+                Stage::LegAttributes.to_string(),
+                "no output holds the leg (glb, ply, picture or a density preview)",
             );
         }
-        for (output, file) in [
-            (Output::Glb, "stocking.glb"),
-            (Output::Ply, "stocking.ply"),
-            (Output::Ply, "leg.ply"),
-            (Output::Picture, "density.png"),
-            (Output::Preview, "preview.png"),
-        ] {
+        if plan.effects.contains(&Effect::PenetrationFix) {
+            plan.add(
+                Stage::PenetrationFix,
+                "effect penetration_fix, for the yarn polylines written",
+            );
+        }
+        for (output, file) in FIT_FILES {
             if !scene.wants(output) {
-                if output == Output::Preview {
-                    left_out.push(PlannedStage {
-                        name: PREVIEW_STAGE.into(),
-                        why: "outputs does not list \"preview\": no BVH, yarn grid or camera \
-                              is built"
-                            .into(),
-                    });
-                }
                 continue;
             }
-            if output == Output::Preview {
-                add(PREVIEW_STAGE, preview_reason(scene));
-            } else {
-                add(
-                    &format!("encode {file}"),
-                    format!("outputs lists \"{}\"", output_name(output)),
-                );
-            }
-            files.push((output, file));
+            plan.add(
+                Stage::Encode(File::Fit(file)),
+                format!("outputs lists \"{}\"", output.name()),
+            );
+            plan.files.push(PlannedFile {
+                name: file.name().to_string(),
+                output,
+            });
         }
-        add("write files", "every run writes report.json".into());
-        Plan {
-            command: "fit",
-            effects,
-            forces,
-            stages,
-            left_out,
-            files,
+        if scene.wants(Output::Preview) {
+            plan.add(
+                Stage::RenderPreview,
+                preview_reason(scene, "outputs lists \"preview\""),
+            );
+            plan.files.push(PlannedFile {
+                name: PREVIEW_FILE.to_string(),
+                output: Output::Preview,
+            });
+        } else {
+            plan.leave_out(
+                Stage::RenderPreview.to_string(),
+                "outputs does not list \"preview\": no BVH, yarn grid or camera is built",
+            );
         }
+        plan.add(Stage::WriteFiles, "every run writes report.json");
+        plan
     }
 }
 
-/// The stage that ray-traces and encodes `preview.png`.
-pub const PREVIEW_STAGE: &str = "render preview";
+impl Plan {
+    /// The plan of `knitfit render`: read a fit's `stocking.glb` (`input`), ray-trace and encode
+    /// the preview as `picture` with its report `report` beside it. No solver, no forces.
+    pub fn render(scene: &Scene, input: &str, picture: &str, report: &str) -> Plan {
+        let mut plan = Plan::new("render", scene, Vec::new());
+        plan.forces = ForceTerms {
+            stiffness: [0.0; 2],
+            connection_factor: None,
+        };
+        plan.report = report.to_string();
+        plan.add(Stage::ReadStocking, format!("the leg and yarns of {input}"));
+        plan.add(
+            Stage::RenderPreview,
+            preview_reason(scene, "knitfit render"),
+        );
+        plan.files.push(PlannedFile {
+            name: picture.to_string(),
+            output: Output::Preview,
+        });
+        plan.add(Stage::WriteFiles, "the picture and its report");
+        plan
+    }
+}
 
-/// Why the preview is rendered, and how.
-fn preview_reason(scene: &Scene) -> String {
+/// Why the preview is rendered (`asked_by`), and how.
+fn preview_reason(scene: &Scene, asked_by: &str) -> String {
     let r = &scene.render;
     let camera = if r.camera.is_some() {
         "scene camera".to_string()
@@ -263,55 +501,12 @@ fn preview_reason(scene: &Scene) -> String {
         format!("{} view", r.view.name())
     };
     format!(
-        "outputs lists \"preview\": {} mode, {}×{}, {} spp, {camera}",
+        "{asked_by}: {} mode, {}×{}, {} spp, {camera}",
         r.mode.name(),
         r.width,
         r.height,
         r.spp
     )
-}
-
-impl Plan {
-    /// The plan of `knitfit render`: read a fit's `stocking.glb`, ray-trace and encode the
-    /// preview, write it. No solver, no forces.
-    pub fn render(scene: &Scene, input: &str) -> Plan {
-        let stages = vec![
-            PlannedStage {
-                name: "read stocking.glb".into(),
-                why: format!("the leg and yarns of {input}"),
-            },
-            PlannedStage {
-                name: PREVIEW_STAGE.into(),
-                why: preview_reason(scene).replacen(
-                    "outputs lists \"preview\"",
-                    "knitfit render",
-                    1,
-                ),
-            },
-            PlannedStage {
-                name: "write files".into(),
-                why: "the picture and report.json".into(),
-            },
-        ];
-        Plan {
-            command: "render",
-            effects: Vec::new(),
-            forces: ForceTerms {
-                stiffness: [0.0; 2],
-                connection_factor: None,
-            },
-            stages,
-            left_out: Vec::new(),
-            files: vec![(Output::Preview, "preview.png")],
-        }
-    }
-}
-
-impl Plan {
-    /// True when the plan has a stage of this name.
-    pub fn has_stage(&self, name: &str) -> bool {
-        self.stages.iter().any(|s| s.name == name)
-    }
 }
 
 /// The force terms the effects switch on.
@@ -340,19 +535,13 @@ fn dedup(effects: &[Effect]) -> Vec<Effect> {
     out
 }
 
-/// Name of an output as written in scene files.
-pub fn output_name(output: Output) -> &'static str {
-    match output {
-        Output::Ply => "ply",
-        Output::Glb => "glb",
-        Output::Picture => "picture",
-        Output::Preview => "preview",
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn names(plan: &Plan) -> Vec<String> {
+        plan.stages.iter().map(|s| s.stage.to_string()).collect()
+    }
 
     #[test]
     fn connection_off_removes_the_connection_term() {
@@ -374,15 +563,13 @@ mod tests {
     fn the_penetration_fix_runs_only_for_written_polylines() {
         let mut scene = Scene::load(None).unwrap();
         scene.effects = vec![Effect::PenetrationFix];
-        let stage_names =
-            |plan: &Plan| -> Vec<String> { plan.stages.iter().map(|s| s.name.clone()).collect() };
         let fit = Plan::fit(&scene);
         assert!(fit.effects.contains(&Effect::PenetrationFix));
-        assert!(stage_names(&fit).contains(&"penetration fix".to_string()));
+        assert!(fit.has(Stage::PenetrationFix));
         scene.outputs = vec![Output::Picture];
         let fit = Plan::fit(&scene);
         assert!(!fit.effects.contains(&Effect::PenetrationFix));
-        assert!(!stage_names(&fit).contains(&"penetration fix".to_string()));
+        assert!(!fit.has(Stage::PenetrationFix));
         assert!(!Plan::patch(&scene)
             .effects
             .contains(&Effect::PenetrationFix));
@@ -392,12 +579,17 @@ mod tests {
     fn the_multilevel_fit_knits_each_grid_inside_the_fit_stage() {
         let mut scene = Scene::load(None).unwrap();
         let fit = Plan::fit(&scene);
-        assert!(!fit.has_stage("knit tube"));
-        let why = &fit.stages.iter().find(|s| s.name == "fit").unwrap().why;
+        assert!(!fit.has(Stage::KnitTube));
+        let why = &fit
+            .stages
+            .iter()
+            .find(|s| s.stage == Stage::Fit)
+            .unwrap()
+            .why;
         assert!(why.contains("38×39 → 75×76 → 150×150"), "{why}");
         scene.solver.method = SolverMethod::Paper;
         let fit = Plan::fit(&scene);
-        assert!(fit.has_stage("knit tube"));
+        assert!(fit.has(Stage::KnitTube));
     }
 
     #[test]
@@ -405,14 +597,14 @@ mod tests {
         let mut scene = Scene::load(None).unwrap();
         scene.outputs = vec![Output::Glb, Output::Picture];
         let plan = Plan::fit(&scene);
-        assert!(!plan.has_stage(PREVIEW_STAGE));
-        assert!(!plan.files.iter().any(|(o, _)| *o == Output::Preview));
+        assert!(!plan.has(Stage::RenderPreview));
+        assert!(!plan.writes(Output::Preview));
         scene.outputs.push(Output::Preview);
         let plan = Plan::fit(&scene);
         let stage = plan
             .stages
             .iter()
-            .find(|s| s.name == PREVIEW_STAGE)
+            .find(|s| s.stage == Stage::RenderPreview)
             .unwrap();
         assert!(
             stage.why.contains("outputs lists \"preview\""),
@@ -420,7 +612,7 @@ mod tests {
             stage.why
         );
         assert!(stage.why.contains("yarn mode"), "{}", stage.why);
-        assert_eq!(plan.files.last(), Some(&(Output::Preview, "preview.png")));
+        assert_eq!(plan.files.last().unwrap().name, PREVIEW_FILE);
     }
 
     #[test]
@@ -429,15 +621,15 @@ mod tests {
         scene.outputs = vec![Output::Preview];
         let plan = Plan::fit(&scene);
         assert!(
-            plan.has_stage("penetration fix"),
+            plan.has(Stage::PenetrationFix),
             "yarns drawn must follow the skin"
         );
-        assert!(!plan.has_stage("leg attributes"));
+        assert!(!plan.has(Stage::LegAttributes));
         scene.render.mode = RenderMode::Density;
         let plan = Plan::fit(&scene);
-        assert!(!plan.has_stage("penetration fix"));
+        assert!(!plan.has(Stage::PenetrationFix));
         assert!(
-            plan.has_stage("leg attributes"),
+            plan.has(Stage::LegAttributes),
             "the density mode colours by them"
         );
     }
@@ -447,8 +639,32 @@ mod tests {
         let mut scene = Scene::load(None).unwrap();
         scene.outputs = vec![Output::Glb];
         let plan = Plan::patch(&scene);
-        let names: Vec<_> = plan.stages.iter().map(|s| s.name.as_str()).collect();
-        assert!(names.contains(&"encode patch.glb"));
+        let names = names(&plan);
+        assert!(names.contains(&"encode patch.glb".to_string()));
         assert!(!names.iter().any(|n| n.contains("ply") || n.contains("png")));
+        assert_eq!(plan.file_names(), ["patch.glb", "report.json"]);
+    }
+
+    #[test]
+    fn every_file_table_entry_is_encoded_in_its_own_stage_in_table_order() {
+        let scene = Scene::load(None).unwrap();
+        let plan = Plan::fit(&scene);
+        let encoded: Vec<String> = plan
+            .stages
+            .iter()
+            .filter_map(|s| match s.stage {
+                Stage::Encode(file) => Some(file.name().to_string()),
+                _ => None,
+            })
+            .collect();
+        let files: Vec<String> = plan.files.iter().map(|f| f.name.clone()).collect();
+        assert_eq!(encoded, files);
+        assert_eq!(
+            fit_files(&scene)
+                .iter()
+                .map(|f| f.name())
+                .collect::<Vec<_>>(),
+            files
+        );
     }
 }

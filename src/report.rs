@@ -1,15 +1,30 @@
-//! `report.json`: what ran, how long each stage took, how accurate the result is, and which
-//! files were written. Every command writes one.
+//! `report.json`: what ran, why, how long each stage took, how accurate the result is, and which
+//! files were written. Every command writes one; its `details` are the command's own typed
+//! record ([`FitDetails`], [`PatchDetails`], [`RenderDetails`]), so what a report holds is
+//! written down here, once.
 
 use std::time::Instant;
 
 use serde::Serialize;
 
-/// Wall time of one stage.
+use crate::knit::{Pattern, Stretch};
+use crate::leg::Axis;
+use crate::limits::MemoryCheck;
+use crate::plan::{Plan, PlannedStage, Stage};
+use crate::post::penetration::PenetrationStats;
+use crate::post::StitchStats;
+use crate::render::preview::PreviewStats;
+use crate::scene::Effect;
+use crate::sim::contact::ContactCounters;
+use crate::sim::LevelStats;
+
+/// One stage as it ran.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct StageTime {
-    /// Stage name, as in the plan.
-    pub name: String,
+pub struct StageRecord {
+    /// The stage, by name (`relax course=1.5`).
+    pub name: Stage,
+    /// Why it ran, as the plan said.
+    pub why: String,
     /// Wall-clock seconds.
     pub seconds: f64,
 }
@@ -36,33 +51,33 @@ pub struct Metrics {
     /// triangles, metres (0 when none is inside).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub max_penetration_m: Option<f64>,
-    /// Fit only: triangles of the leg mesh.
+    /// Fit and render: triangles of the leg mesh.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub leg_triangles: Option<usize>,
 }
 
-/// The report of one run.
+/// The report of one run; `D` is the command's details.
 #[derive(Clone, Debug, PartialEq, Serialize)]
-pub struct Report {
+pub struct Report<D> {
     /// The command that ran (`patch`).
-    pub command: String,
+    pub command: &'static str,
     /// The scene file (or the bundled one).
     pub scene: String,
-    /// Effects that ran, by scene name.
-    pub effects: Vec<String>,
+    /// Effects that ran.
+    pub effects: Vec<Effect>,
     /// Stages in the order they ran.
-    pub stages: Vec<StageTime>,
+    pub stages: Vec<StageRecord>,
     /// Accuracy and size.
     pub metrics: Metrics,
-    /// Command-specific details (e.g. per-stretch results of `patch`).
-    pub details: serde_json::Value,
-    /// Files written, by name, including `report.json`.
+    /// What this command measured beyond the metrics.
+    pub details: D,
+    /// Files written, by name, the report last.
     pub outputs: Vec<String>,
     /// Wall-clock seconds of the whole run.
     pub wall_seconds: f64,
 }
 
-impl Report {
+impl<D: Serialize> Report<D> {
     /// Pretty JSON, newline-terminated.
     pub fn to_json(&self) -> Vec<u8> {
         let mut bytes = serde_json::to_vec_pretty(self).expect("a report always serialises");
@@ -71,37 +86,240 @@ impl Report {
     }
 }
 
-/// Times stages as they run.
+/// `details` of a fit.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FitDetails {
+    /// The leg as loaded.
+    pub leg: LegDetails,
+    /// The axis the tube was stretched along, world space.
+    pub axis: Axis,
+    /// The tube asked for and where it came to rest.
+    pub tube: TubeDetails,
+    /// What the solver did.
+    pub solver: SolverDetails,
+    /// Contact settings and counters over every level.
+    pub contact: ContactDetails,
+    /// The penetration fix's counters; `null` when it did not run.
+    pub penetration_fix: Option<PenetrationStats>,
+    /// The preview's counters; `null` when no preview was rendered.
+    pub preview: Option<PreviewStats>,
+    /// The memory estimate checked before the leg was decoded, and the peak measured.
+    pub memory: MemoryDetails,
+    /// Stitch density over the leg's vertices that yarn covers.
+    pub stitch_density_per_cm2: DensityRange,
+}
+
+/// The leg of a fit.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LegDetails {
+    /// The leg file.
+    pub file: String,
+    /// Units the file was read in (`m`).
+    pub units: &'static str,
+    /// The file's up axis (`+y`).
+    pub up_axis: &'static str,
+    /// Triangles whose winding was flipped to face outwards.
+    pub reoriented_triangles: usize,
+    /// Bounds in world space, metres.
+    pub bounds_m: Bounds,
+}
+
+/// An axis-aligned box, metres.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Bounds {
+    /// Lowest corner.
+    pub min: [f64; 3],
+    /// Highest corner.
+    pub max: [f64; 3],
+}
+
+/// The tube of a fit.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct TubeDetails {
+    /// Points around.
+    pub wales: usize,
+    /// Rings along.
+    pub courses: usize,
+    /// Rest length of a course spring, metres.
+    pub rest_course_spacing_m: f64,
+    /// Rest length of a wale spring, metres.
+    pub rest_wale_spacing_m: f64,
+    /// Relaxed length between the axis points, metres.
+    pub relaxed_length_m: f64,
+    /// Relaxed circumference, metres.
+    pub relaxed_circumference_m: f64,
+    /// The springs' stiffness factors for the stitch's shape.
+    pub stiffness_scale: PerDirection,
+    /// Lowest and highest yarn point along the axis, metres from the bottom point.
+    pub axial_range_m: [f64; 2],
+    /// Courses that came to rest below a course before them.
+    pub bunched_courses: usize,
+}
+
+/// A value per knit direction.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct PerDirection {
+    /// Along the course.
+    pub course: f64,
+    /// Along the wale.
+    pub wale: f64,
+}
+
+/// The solver of a fit.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "method", rename_all = "snake_case")]
+pub enum SolverDetails {
+    /// The paper's explicit steps.
+    Paper {
+        /// `solver.tolerance`.
+        tolerance: f64,
+        /// `solver.time_step`.
+        time_step: f64,
+        /// The explicit stability limit, solver time units.
+        time_step_limit: f64,
+        /// Sub-steps per step.
+        substeps_per_step: usize,
+    },
+    /// The multilevel solver.
+    Multilevel {
+        /// `solver.tolerance`.
+        tolerance: f64,
+        /// Iterations weighted by each level's size over the finest's.
+        fine_grid_equivalent_iterations: f64,
+        /// Each level, coarsest first.
+        levels: Vec<LevelStats>,
+    },
+}
+
+/// The contact of a fit.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ContactDetails {
+    /// `bvh` or `brute`.
+    pub method: &'static str,
+    /// Distance kept between yarn centre line and skin, metres.
+    pub offset_m: f64,
+    /// Counters over every level.
+    #[serde(flatten)]
+    pub counters: ContactCounters,
+}
+
+/// The memory of a fit.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MemoryDetails {
+    /// The estimate against the limit, checked before the leg was decoded.
+    pub check: MemoryCheck,
+    /// Peak resident set of the process, bytes (`null` where the system does not say).
+    pub peak_resident_bytes: Option<u64>,
+}
+
+/// The range of the stitch density over the covered leg vertices.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct DensityRange {
+    /// Leg vertices with yarn near them.
+    pub leg_vertices_covered: usize,
+    /// All leg vertices.
+    pub leg_vertices: usize,
+    /// Lowest density, stitches per cm² (`null` when nothing is covered).
+    pub min: f64,
+    /// Highest density, stitches per cm².
+    pub max: f64,
+}
+
+/// `details` of the patch experiment.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PatchDetails {
+    /// `patch.size`, `[wales, courses]`.
+    pub size: [usize; 2],
+    /// `knit.pattern`.
+    pub pattern: Pattern,
+    /// One entry per stretch, in the scene's order.
+    pub patches: Vec<PatchRun>,
+    /// Course-over-wale anisotropy when a square patch was stretched by the same factor both
+    /// ways (`crate::post::anisotropy`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub anisotropy: Option<f64>,
+}
+
+/// One relaxed patch.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct PatchRun {
+    /// The stretch applied.
+    pub stretch: Stretch,
+    /// Points.
+    pub points: usize,
+    /// Steps taken.
+    pub steps: usize,
+    /// Sub-steps per step.
+    pub substeps_per_step: usize,
+    /// The explicit stability limit, solver time units.
+    pub time_step_limit: f64,
+    /// Final relative residual.
+    pub residual: f64,
+    /// Final largest move per step over the shortest rest length.
+    pub max_move: f64,
+    /// Whether it converged.
+    pub converged: bool,
+    /// Stitch shapes (`null` for a patch too small to measure).
+    pub stitches: Option<StitchStats>,
+}
+
+/// `details` of `knitfit render`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RenderDetails {
+    /// The `stocking.glb` rendered.
+    pub input: String,
+    /// The render's counters.
+    pub render: PreviewStats,
+    /// Samples that hit yarn over samples that hit the leg.
+    pub yarn_covered_fraction: f64,
+}
+
+/// Times the stages of a plan as they run.
 #[derive(Debug)]
 pub struct StageClock {
     started: Instant,
-    stages: Vec<StageTime>,
-}
-
-impl Default for StageClock {
-    fn default() -> Self {
-        StageClock {
-            started: Instant::now(),
-            stages: Vec::new(),
-        }
-    }
+    planned: Vec<PlannedStage>,
+    records: Vec<StageRecord>,
 }
 
 impl StageClock {
-    /// Runs `f` as stage `name` and records its wall time.
-    pub fn time<T>(&mut self, name: &str, f: impl FnOnce() -> T) -> T {
+    /// A clock for the stages of `plan`, started now.
+    pub fn new(plan: &Plan) -> StageClock {
+        StageClock {
+            started: Instant::now(),
+            planned: plan.stages.clone(),
+            records: Vec::new(),
+        }
+    }
+
+    /// Runs `work` as `stage` and records its wall time with the plan's reason. A stage the plan
+    /// does not list is a bug in the run, not in its input.
+    pub fn time<T>(&mut self, stage: Stage, work: impl FnOnce() -> T) -> T {
+        let planned = self.planned.iter().find(|p| p.stage == stage);
+        debug_assert!(planned.is_some(), "stage {stage} runs but is not planned");
+        let why = planned.map(|p| p.why.clone()).unwrap_or_default();
         let start = Instant::now();
-        let out = f();
-        self.stages.push(StageTime {
-            name: name.to_string(),
+        let out = work();
+        self.records.push(StageRecord {
+            name: stage,
+            why,
             seconds: start.elapsed().as_secs_f64(),
         });
         out
     }
 
-    /// The stages recorded so far.
-    pub fn stages(&self) -> &[StageTime] {
-        &self.stages
+    /// The stages recorded so far, in order.
+    pub fn records(&self) -> &[StageRecord] {
+        &self.records
+    }
+
+    /// Seconds spent in `stages`, summed.
+    pub fn seconds_in(&self, stages: &[Stage]) -> f64 {
+        self.records
+            .iter()
+            .filter(|r| stages.contains(&r.name))
+            .map(|r| r.seconds)
+            .sum()
     }
 
     /// Seconds since the clock started.

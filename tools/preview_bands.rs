@@ -56,7 +56,7 @@ fn main() {
         .fold((f32::MAX, f32::MIN), |(lo, hi), p| {
             (lo.min(p[1] as f32), hi.max(p[1] as f32))
         });
-    let input = PreviewInput::from_scene(&stocking.leg, &stocking.yarns, &scene);
+    let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
     let preview = match render_preview(input, &scene.render, "preview") {
         Ok(p) => p,
         Err(e) => {

@@ -4,6 +4,7 @@
 pub mod colour;
 pub mod frame;
 pub mod mesh;
+pub mod settings;
 pub mod yarn;
 
 pub use frame::{perpendicular_frame, Vec3};

@@ -4,7 +4,12 @@
 pub mod model;
 pub mod patch;
 pub mod pattern;
+pub mod settings;
 pub mod tube;
 
 pub use model::{Connection, Incident, Knit, Particles, PointId, Spring};
 pub use pattern::{Pattern, Tile};
+pub use settings::{
+    KnitSettings, PatchSettings, Stretch, StretchAxis, TubeSettings, Yarn, Yarns,
+    RELAXED_LENGTH_FRACTION,
+};

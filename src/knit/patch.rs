@@ -7,7 +7,7 @@
 
 use super::{Knit, Pattern, Tile};
 use crate::base::Vec3;
-use crate::scene::{Stretch, StretchAxis};
+use crate::knit::{Stretch, StretchAxis};
 
 /// Size, pattern and rest spacing of a flat patch.
 #[derive(Clone, Copy, Debug, PartialEq)]

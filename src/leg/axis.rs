@@ -226,7 +226,7 @@ fn cut_vertices(leg: &Leg, centre: &Point3<f64>, dir: &Vector3<f64>) -> Vec<u32>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Units, UpAxis};
+    use crate::leg::{Units, UpAxis};
 
     /// An open tube of radius 5 cm from y = 0 to y = 0.5, cut square to Y at both ends but
     /// leaning by `lean` in x per metre of height, like a thigh.

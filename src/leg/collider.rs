@@ -12,7 +12,7 @@ use parry3d_f64::shape::{TriMesh, TriMeshFlags, TrianglePointLocation};
 
 use super::Leg;
 use crate::error::{Error, Result};
-use crate::scene::ContactMethod;
+use crate::leg::ContactMethod;
 
 /// The closest point of the leg to a query point.
 #[derive(Clone, Copy, Debug, PartialEq)]

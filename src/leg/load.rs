@@ -11,7 +11,7 @@ use nalgebra::{Matrix4, Point3};
 
 use super::orient::orient_outward;
 use crate::error::{Error, Result};
-use crate::scene::{Units, UpAxis};
+use crate::leg::{Units, UpAxis};
 
 /// A leg mesh in world space: metres, Y up.
 #[derive(Clone, Debug)]

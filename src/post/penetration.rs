@@ -371,8 +371,7 @@ mod tests {
 
     use super::*;
     use crate::base::{Direction, YarnKind};
-    use crate::leg::Leg;
-    use crate::scene::{ContactMethod, Units, UpAxis};
+    use crate::leg::{ContactMethod, Leg, Units, UpAxis};
 
     /// A closed prism along Y with a sharp ridge on +Z, like a shin: its cross-section is a
     /// square of half-width `w` with a triangular ridge of height `h` on top; as few triangles

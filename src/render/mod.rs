@@ -5,12 +5,15 @@ use image::{ImageEncoder, RgbImage};
 
 use crate::error::{Error, Result};
 
+pub use settings::{CameraSettings, RenderMode, RenderSettings, View};
+
 pub mod bench_plot;
 pub mod camera;
 pub mod density_bar;
 pub mod density_picture;
 pub mod patch_picture;
 pub mod preview;
+pub mod settings;
 pub mod shading;
 pub mod stocking_glb;
 pub mod yarn_lookup;

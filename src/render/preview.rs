@@ -35,7 +35,8 @@ use super::yarn_lookup::YarnIndex;
 use crate::base::colour::{heat, linear_to_srgb8};
 use crate::base::{SurfaceMesh, YarnGeometry, YarnKind};
 use crate::error::{Error, Result};
-use crate::scene::{RenderMode, RenderSettings, Scene};
+use crate::knit::Yarns;
+use crate::render::{RenderMode, RenderSettings};
 
 /// The seed every preview sample is derived from.
 pub const SEED: u64 = 0x6b6e_6974_6669_7421;
@@ -57,36 +58,31 @@ pub struct PreviewInput<'a> {
 }
 
 impl<'a> PreviewInput<'a> {
-    /// The input for `leg` and `yarns` with the scene's yarn radii and colours.
-    pub fn from_scene(
+    /// The input for `leg` and `yarns` with the radii and colours of `materials`.
+    pub fn new(
         leg: &'a SurfaceMesh,
         yarns: &'a YarnGeometry,
-        scene: &Scene,
+        materials: &Yarns,
     ) -> PreviewInput<'a> {
         PreviewInput {
             leg,
             yarns,
-            radius_m: YarnKind::ALL.map(|k| scene.yarns.get(k).radius_m),
-            yarn_colour: YarnKind::ALL.map(|k| scene.yarns.get(k).colour),
+            radius_m: YarnKind::ALL.map(|k| materials.get(k).radius_m),
+            yarn_colour: YarnKind::ALL.map(|k| materials.get(k).colour),
         }
     }
 }
 
-/// Renders `preview.png` of a fit as the scene's `render` settings ask, and encodes it; returns
-/// the bytes and the render's counters.
+/// Renders the preview of `input` as `settings` ask, and encodes it as the PNG file `name`;
+/// returns the bytes and the render's counters.
 ///
 /// Errors: [`Error::Encode`] naming `name` when the leg has no triangle or PNG encoding fails.
 pub fn encode_preview(
-    leg: &SurfaceMesh,
-    yarns: &YarnGeometry,
-    scene: &Scene,
+    input: PreviewInput,
+    settings: &RenderSettings,
     name: &str,
 ) -> Result<(Vec<u8>, PreviewStats)> {
-    let preview = render_preview(
-        PreviewInput::from_scene(leg, yarns, scene),
-        &scene.render,
-        name,
-    )?;
+    let preview = render_preview(input, settings, name)?;
     Ok((super::encode_png(&preview.image, name)?, preview.stats))
 }
 

@@ -19,10 +19,11 @@ use crate::error::Result;
 use crate::export;
 use crate::leg::AxisSource;
 use crate::limits::{peak_memory, reset_peak_memory};
-use crate::plan::Plan;
+use crate::plan::{Plan, Stage};
 use crate::render::bench_plot::{self, Curve};
 use crate::report::StageClock;
-use crate::scene::{Scene, SolverMethod, BUNDLED_SCENE_DIR};
+use crate::scene::{Scene, BUNDLED_SCENE_DIR};
+use crate::sim::SolverMethod;
 
 /// Tolerance of the reference fits: a hundred times tighter than the tightest swept.
 pub const REFERENCE_TOLERANCE: f64 = 1e-6;
@@ -241,7 +242,7 @@ fn fit_case(base: &Scene, case: &BenchCase) -> Result<(SolvedFit, f64, Option<u6
         axis_source: AxisSource::Scene,
     };
     reset_peak_memory();
-    let mut clock = StageClock::default();
+    let mut clock = StageClock::new(&plan);
     let fit = solve_fit(
         &scene,
         &plan,
@@ -250,12 +251,7 @@ fn fit_case(base: &Scene, case: &BenchCase) -> Result<(SolvedFit, f64, Option<u6
         &mut clock,
         &mut NoProgress,
     )?;
-    let seconds = clock
-        .stages()
-        .iter()
-        .filter(|s| s.name == "fit" || s.name == "exact contact pass")
-        .map(|s| s.seconds)
-        .sum();
+    let seconds = clock.seconds_in(&[Stage::Fit, Stage::ExactContactPass]);
     Ok((fit, seconds, peak_memory()))
 }
 

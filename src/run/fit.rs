@@ -7,31 +7,34 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use nalgebra::Point3;
-use serde_json::json;
 
-use super::{Progress, RunPaths, StepProgress};
-use crate::base::colour;
-use crate::base::{Direction, SurfaceMesh, YarnGeometry, YarnKind};
+use super::{Outcome, Progress, Run, StepProgress};
+use crate::base::{colour, Direction, SurfaceMesh, YarnGeometry, YarnKind};
 use crate::error::{Error, Result};
 use crate::export;
 use crate::export::gltf::GlbNode;
 use crate::knit::tube::{build_tube, end_rings, TubeSpec};
-use crate::knit::Knit;
+use crate::knit::{Knit, RELAXED_LENGTH_FRACTION};
 use crate::leg::{
     decode_leg, detect_axis, leaves_mesh, read_leg_file, Axis, AxisSource, Collider, Leg,
 };
-use crate::limits::{peak_memory, MemoryCheck};
-use crate::plan::Plan;
+use crate::limits::{peak_memory, FitSize, MemoryCheck};
+use crate::plan::{fit_files, File, FitFile, Plan, Stage, PREVIEW_FILE};
 use crate::post::fields::{self, KnitFields};
-use crate::post::penetration::fix_penetrations;
+use crate::post::penetration::{fix_penetrations, PenetrationStats};
 use crate::post::stitches::{bunched_courses, MAX_BUNCHED_FRACTION};
 use crate::render;
 use crate::render::density_picture::{self, DensityPictureStyle};
-use crate::report::{Metrics, Report, StageClock};
-use crate::scene::{Effect, Output, Scene, SolverMethod, RELAXED_LENGTH_FRACTION};
+use crate::render::preview::{PreviewInput, PreviewStats};
+use crate::report::{
+    Bounds, ContactDetails, DensityRange, FitDetails, LegDetails, MemoryDetails, Metrics,
+    PerDirection, SolverDetails, StageClock, TubeDetails,
+};
+use crate::scene::{LoadedScene, Scene};
 use crate::sim::contact::{ContactCounters, LegContact};
 use crate::sim::{
     relax_constrained, relax_multilevel, Constraints, Levels, MultilevelStats, RelaxStats,
+    SolverMethod,
 };
 
 /// Where the leg comes from and who chose the axis.
@@ -43,171 +46,164 @@ pub struct FitInputs {
     pub axis_source: AxisSource,
 }
 
-/// The result of a fit.
-#[derive(Debug)]
-pub struct FitOutcome {
-    /// The report, as written to `report.json`.
-    pub report: Report,
-    /// Every file written, report included.
-    pub written: Vec<PathBuf>,
+impl FitInputs {
+    /// The leg and axis source of a loaded scene: `leg.file` (or `--leg`), and `--axis` when
+    /// that flag set the axis.
+    pub fn of(scene: &LoadedScene) -> FitInputs {
+        FitInputs {
+            leg: scene.leg_path(),
+            axis_source: match scene.set_by("leg.axis") {
+                Some(_) => AxisSource::CommandLine,
+                None => AxisSource::Scene,
+            },
+        }
+    }
 }
 
-/// Runs the fit of `scene` and writes its files into `paths.out_dir`.
+/// Runs the fit of `loaded` and writes its files into `out_dir`.
+///
+/// Nothing is written unless every stage succeeds. A fit that reaches the step limit without
+/// converging still writes its files; its report says `"converged": false`.
 pub fn run_fit(
-    scene: &Scene,
-    inputs: &FitInputs,
-    paths: &RunPaths,
+    loaded: &LoadedScene,
+    out_dir: &Path,
     progress: &mut dyn Progress,
-) -> Result<FitOutcome> {
+) -> Result<Outcome<FitDetails>> {
+    let scene = &loaded.scene;
     let plan = Plan::fit(scene);
-    let mut clock = StageClock::default();
-    let mut all_inputs = paths.inputs.clone();
+    let inputs = FitInputs::of(loaded);
+    let mut all_inputs = loaded.inputs();
     all_inputs.push(inputs.leg.clone());
-    let file_names: Vec<&str> = plan
-        .files
-        .iter()
-        .map(|(_, name)| *name)
-        .chain(["report.json"])
-        .collect();
-    export::atomic::prepare_dir(&paths.out_dir, &file_names, &all_inputs)?;
+    let mut run = Run::new(&plan, out_dir, all_inputs);
+    run.prepare()?;
 
-    let SolvedFit {
-        leg,
-        axis,
-        collider,
-        spec,
-        offset,
-        knit,
-        solver,
-        counters,
-        max_penetration_m: max_penetration,
-        axial_range_m: axial_range,
-        bunched_courses,
-        memory,
-    } = solve_fit(
+    let fit = solve_fit(
         scene,
         &plan,
-        inputs,
-        &paths.scene_name,
-        &mut clock,
+        &inputs,
+        &loaded.name,
+        &mut run.clock,
         progress,
     )?;
     let radius_m = YarnKind::ALL.map(|k| scene.yarns.get(k).radius_m);
-    let (knit_fields, leg_fields) = if plan.has_stage("leg attributes") {
-        clock.time("leg attributes", || measure_fields(&knit, &leg, radius_m))
+    let (knit_fields, leg_fields) = if plan.has(Stage::LegAttributes) {
+        run.stage(Stage::LegAttributes, || {
+            measure_fields(&fit.knit, &fit.leg, radius_m)
+        })
     } else {
         (KnitFields::default(), KnitFields::default())
     };
-    let tension = fields::tension(&knit, &plan.forces);
-
-    let mut yarns = knit.yarn_geometry("yarns", [0.0; 3]);
+    let tension = fields::tension(&fit.knit, &plan.forces);
+    let mut yarns = fit.knit.yarn_geometry("yarns", [0.0; 3]);
     yarns.point_attributes.insert(
         "tension".into(),
         tension.iter().map(|&t| t as f32).collect(),
     );
     let mut penetration_fix = None;
-    if plan.effects.contains(&Effect::PenetrationFix) {
-        let (fixed, stats) = clock.time("penetration fix", || {
-            fix_penetrations(&yarns, &collider, offset)
+    if plan.has(Stage::PenetrationFix) {
+        let (fixed, stats) = run.stage(Stage::PenetrationFix, || {
+            fix_penetrations(&yarns, &fit.collider, fit.offset)
         });
         yarns = fixed;
         penetration_fix = Some(stats);
     }
-    let leg_mesh = leg_surface(&leg, &leg_fields);
-    let mut files = Vec::new();
+    let products = FitProducts {
+        scene,
+        knit: &fit.knit,
+        knit_fields: &knit_fields,
+        yarns: &yarns,
+        leg_mesh: leg_surface(&fit.leg, &leg_fields),
+    };
+    for file in fit_files(scene) {
+        run.encode(Stage::Encode(File::Fit(file)), file.name(), || {
+            products.encode(file)
+        })?;
+    }
     // The preview's counters go to the report: they exist only where its structures were built.
     let mut preview = None;
-    for &(output, name) in &plan.files {
-        let bytes = if output == Output::Preview {
-            let (bytes, stats) = clock.time(crate::plan::PREVIEW_STAGE, || {
-                render::preview::encode_preview(&leg_mesh, &yarns, scene, name)
-            })?;
-            preview = Some(stats);
-            bytes
-        } else {
-            clock.time(&format!("encode {name}"), || {
-                encode(output, name, scene, &knit, &knit_fields, &yarns, &leg_mesh)
-            })?
-        };
-        files.push((name.to_string(), bytes));
+    if plan.has(Stage::RenderPreview) {
+        let (bytes, stats) = run.stage(Stage::RenderPreview, || {
+            let input = PreviewInput::new(&products.leg_mesh, &yarns, &scene.yarns);
+            render::preview::encode_preview(input, &scene.render, PREVIEW_FILE)
+        })?;
+        run.keep(PREVIEW_FILE, bytes);
+        preview = Some(stats);
     }
-
-    let density = &leg_fields.stitch_density;
-    let covered: Vec<f64> = density.iter().copied().filter(|&d| d > 0.0).collect();
     let metrics = Metrics {
-        points: knit.len(),
-        steps: solver.steps(),
-        residual: solver.residual(),
-        max_move: solver.max_move(),
-        force_step: solver.force_step(),
-        converged: solver.converged(),
-        max_penetration_m: Some(max_penetration),
-        leg_triangles: Some(leg.triangles.len()),
+        points: fit.knit.len(),
+        steps: fit.solver.steps(),
+        residual: fit.solver.residual(),
+        max_move: fit.solver.max_move(),
+        force_step: fit.solver.force_step(),
+        converged: fit.solver.converged(),
+        max_penetration_m: Some(fit.max_penetration_m),
+        leg_triangles: Some(fit.leg.triangles.len()),
     };
-    let details = json!({
-        "leg": {
-            "file": leg.path.display().to_string(),
-            "units": leg.units.name(),
-            "up_axis": leg.up_axis.name(),
-            "reoriented_triangles": leg.reoriented_triangles,
-            "bounds_m": { "min": leg.bounds().0.coords.as_slice(), "max": leg.bounds().1.coords.as_slice() },
+    let details = fit_details(scene, &fit, &leg_fields, penetration_fix, preview);
+    run.finish(&loaded.name, metrics, details)
+}
+
+/// The report's details of a finished fit.
+fn fit_details(
+    scene: &Scene,
+    fit: &SolvedFit,
+    leg_fields: &KnitFields,
+    penetration_fix: Option<PenetrationStats>,
+    preview: Option<PreviewStats>,
+) -> FitDetails {
+    let (leg, spec, knit) = (&fit.leg, &fit.spec, &fit.knit);
+    let covered: Vec<f64> = leg_fields
+        .stitch_density
+        .iter()
+        .copied()
+        .filter(|&d| d > 0.0)
+        .collect();
+    let (min, max) = leg.bounds();
+    FitDetails {
+        leg: LegDetails {
+            file: leg.path.display().to_string(),
+            units: leg.units.name(),
+            up_axis: leg.up_axis.name(),
+            reoriented_triangles: leg.reoriented_triangles,
+            bounds_m: Bounds {
+                min: min.coords.into(),
+                max: max.coords.into(),
+            },
         },
-        "axis": axis,
-        "tube": {
-            "wales": spec.wales,
-            "courses": spec.courses,
-            "rest_course_spacing_m": spec.relaxed_circumference_m / spec.wales as f64,
-            "rest_wale_spacing_m": spec.relaxed_length_m / (spec.courses - 1) as f64,
-            "relaxed_length_m": spec.relaxed_length_m,
-            "relaxed_circumference_m": spec.relaxed_circumference_m,
-            "stiffness_scale": { "course": knit.stiffness_scale[0], "wale": knit.stiffness_scale[1] },
-            "axial_range_m": axial_range,
-            "bunched_courses": bunched_courses,
+        axis: fit.axis,
+        tube: TubeDetails {
+            wales: spec.wales,
+            courses: spec.courses,
+            rest_course_spacing_m: spec.relaxed_circumference_m / spec.wales as f64,
+            rest_wale_spacing_m: spec.relaxed_length_m / (spec.courses - 1) as f64,
+            relaxed_length_m: spec.relaxed_length_m,
+            relaxed_circumference_m: spec.relaxed_circumference_m,
+            stiffness_scale: PerDirection {
+                course: knit.stiffness_scale[0],
+                wale: knit.stiffness_scale[1],
+            },
+            axial_range_m: fit.axial_range_m,
+            bunched_courses: fit.bunched_courses,
         },
-        "solver": solver.details(scene),
-        "contact": {
-            "method": scene.contact.method.name(),
-            "offset_m": offset,
-            "closest_queries": counters.closest_queries,
-            "slides": counters.slides,
-            "pushed_out": counters.pushed_out,
-            "finished_out": counters.finished_out,
-            "settled_out": counters.settled_out,
+        solver: fit.solver.details(scene),
+        contact: ContactDetails {
+            method: scene.contact.method.name(),
+            offset_m: fit.offset,
+            counters: fit.counters,
         },
-        "penetration_fix": penetration_fix,
-        "preview": preview,
-        "memory": {
-            "check": memory,
-            "peak_resident_bytes": peak_memory(),
+        penetration_fix,
+        preview,
+        memory: MemoryDetails {
+            check: fit.memory.clone(),
+            peak_resident_bytes: peak_memory(),
         },
-        "stitch_density_per_cm2": {
-            "leg_vertices_covered": covered.len(),
-            "leg_vertices": leg.positions.len(),
-            "min": covered.iter().copied().fold(f64::INFINITY, f64::min),
-            "max": covered.iter().copied().fold(0.0, f64::max),
+        stitch_density_per_cm2: DensityRange {
+            leg_vertices_covered: covered.len(),
+            leg_vertices: leg.positions.len(),
+            min: covered.iter().copied().fold(f64::INFINITY, f64::min),
+            max: covered.iter().copied().fold(0.0, f64::max),
         },
-    });
-    let mut report = Report {
-        command: plan.command.to_string(),
-        scene: paths.scene_name.clone(),
-        effects: plan.effects.iter().map(|e| e.name().to_string()).collect(),
-        stages: Vec::new(),
-        metrics,
-        details,
-        outputs: file_names.iter().map(|s| s.to_string()).collect(),
-        wall_seconds: 0.0,
-    };
-    let mut written = clock.time("write files", || {
-        export::atomic::write_all(&paths.out_dir, &files, &all_inputs)
-    })?;
-    report.stages = clock.stages().to_vec();
-    report.wall_seconds = clock.wall_seconds();
-    written.extend(export::atomic::write_all(
-        &paths.out_dir,
-        &[("report.json".to_string(), report.to_json())],
-        &all_inputs,
-    )?);
-    Ok(FitOutcome { report, written })
+    }
 }
 
 /// A fitted knit on its leg, before any post-processing or file: what `fit` goes on to write
@@ -241,8 +237,8 @@ pub struct SolvedFit {
 }
 
 /// Loads the leg, finds its axis, builds the collider and fits the tube with the scene's solver,
-/// then the exact contact pass and the penetration check: the stages of `plan` up to "check
-/// penetration", timed on `clock`.
+/// then the exact contact pass and the penetration check: the stages of `plan` up to
+/// [`Stage::CheckPenetration`], timed on `clock`.
 pub fn solve_fit(
     scene: &Scene,
     plan: &Plan,
@@ -251,18 +247,18 @@ pub fn solve_fit(
     clock: &mut StageClock,
     progress: &mut dyn Progress,
 ) -> Result<SolvedFit> {
-    let (leg, memory) = clock.time("load leg", || -> Result<_> {
+    let (leg, memory) = clock.time(Stage::LoadLeg, || -> Result<_> {
         let file = read_leg_file(&inputs.leg)?;
         // Refuse a fit too large for memory before the leg is decoded or the knit allocated.
-        let memory = MemoryCheck::fit(scene, plan, file.declared_triangles());
-        memory.enforce(scene, &inputs.leg.display().to_string())?;
+        let memory = memory_check(scene, plan, file.declared_triangles());
+        memory.enforce(&inputs.leg.display().to_string())?;
         Ok((
             decode_leg(file, scene.leg.units, scene.leg.up_axis)?,
             memory,
         ))
     })?;
-    let axis = clock.time("find axis", || choose_axis(scene, inputs, &leg))?;
-    let collider = clock.time("build collider", || {
+    let axis = clock.time(Stage::FindAxis, || choose_axis(scene, inputs, &leg))?;
+    let collider = clock.time(Stage::BuildCollider, || {
         Collider::new(&leg, scene.contact.method)
     })?;
     let relaxed_length = relaxed_length(scene, &axis, scene_name)?;
@@ -286,9 +282,9 @@ pub fn solve_fit(
     };
     let (mut knit, solver) = match scene.solver.method {
         SolverMethod::Paper => {
-            let mut knit = clock.time("knit tube", || levels.knit(spec.wales, spec.courses));
+            let mut knit = clock.time(Stage::KnitTube, || levels.knit(spec.wales, spec.courses));
             progress.begin("fit", scene.solver.max_steps as u64);
-            let stats = clock.time("fit", || {
+            let stats = clock.time(Stage::Fit, || {
                 let contact = levels.constraints(&knit);
                 relax_constrained(
                     &mut knit,
@@ -303,7 +299,7 @@ pub fn solve_fit(
         }
         SolverMethod::Multilevel => {
             progress.begin("fit", scene.solver.max_steps as u64);
-            let solved = clock.time("fit", || {
+            let solved = clock.time(Stage::Fit, || {
                 relax_multilevel(
                     &mut levels,
                     spec.wales,
@@ -323,13 +319,13 @@ pub fn solve_fit(
         .contact
         .take()
         .expect("the solver made the fine grid's contact");
-    clock.time("exact contact pass", || {
+    clock.time(Stage::ExactContactPass, || {
         contact.finish(&mut knit.particles.x, &knit.particles.inv_mass)
     });
 
     let mut counters = levels.retired;
     counters.add(&contact.counters());
-    let (max_penetration_m, axial_range_m) = clock.time("check penetration", || {
+    let (max_penetration_m, axial_range_m) = clock.time(Stage::CheckPenetration, || {
         (max_penetration(&knit, &collider), axial_range(&knit, &axis))
     });
     let (bunched, first) = bunched_courses(&knit, &axis.direction());
@@ -358,6 +354,18 @@ pub fn solve_fit(
         bunched_courses: bunched,
         memory,
     })
+}
+
+/// The fit's memory check: its tube, leg and files against the scene's limits.
+pub fn memory_check(scene: &Scene, plan: &Plan, leg_triangles: usize) -> MemoryCheck {
+    let outputs: Vec<_> = plan.files.iter().map(|file| file.output).collect();
+    let size = FitSize {
+        tube: [scene.tube.wales, scene.tube.courses],
+        leg_triangles,
+        outputs: &outputs,
+        preview_pixels: u64::from(scene.render.width) * u64::from(scene.render.height),
+    };
+    MemoryCheck::fit(&size, &scene.limits)
 }
 
 /// Per-point stitch fields of `knit` and their transfer to the leg's vertices.
@@ -462,21 +470,19 @@ impl SolverRun {
     }
 
     /// The report's `details.solver`.
-    pub fn details(&self, scene: &Scene) -> serde_json::Value {
+    pub fn details(&self, scene: &Scene) -> SolverDetails {
         match self {
-            SolverRun::Paper(stats) => json!({
-                "method": "paper",
-                "tolerance": scene.solver.tolerance,
-                "time_step": scene.solver.time_step,
-                "time_step_limit": stats.time_step_limit,
-                "substeps_per_step": stats.substeps_per_step,
-            }),
-            SolverRun::Multilevel(stats) => json!({
-                "method": "multilevel",
-                "tolerance": scene.solver.tolerance,
-                "fine_grid_equivalent_iterations": stats.fine_grid_equivalent_iterations(),
-                "levels": stats.levels,
-            }),
+            SolverRun::Paper(stats) => SolverDetails::Paper {
+                tolerance: scene.solver.tolerance,
+                time_step: scene.solver.time_step,
+                time_step_limit: stats.time_step_limit,
+                substeps_per_step: stats.substeps_per_step,
+            },
+            SolverRun::Multilevel(stats) => SolverDetails::Multilevel {
+                tolerance: scene.solver.tolerance,
+                fine_grid_equivalent_iterations: stats.fine_grid_equivalent_iterations(),
+                levels: stats.levels.clone(),
+            },
         }
     }
 }
@@ -568,49 +574,51 @@ fn mean_spacing(knit: &Knit, direction: Direction) -> f64 {
     lengths.iter().sum::<f64>() / lengths.len().max(1) as f64
 }
 
-/// Encodes one output file.
-fn encode(
-    output: Output,
-    name: &str,
-    scene: &Scene,
-    knit: &Knit,
-    knit_fields: &KnitFields,
-    yarns: &YarnGeometry,
-    leg_mesh: &SurfaceMesh,
-) -> Result<Vec<u8>> {
-    let comments = vec![format!("knitfit {} fit", env!("CARGO_PKG_VERSION"))];
-    match (output, name) {
-        (Output::Glb, _) => {
-            let stocking = stocking_surface(knit, knit_fields, yarns);
-            export::gltf::write_nodes_glb(
-                &[
-                    GlbNode::Surface(leg_mesh),
-                    GlbNode::Yarns(yarns),
-                    GlbNode::Surface(&stocking),
-                ],
-                [scene.yarns.nylon.colour, scene.yarns.support.colour],
-            )
-        }
-        (Output::Ply, "leg.ply") => export::ply::write_mesh_ply(leg_mesh, &comments),
-        (Output::Ply, _) => export::ply::write_ply(std::slice::from_ref(yarns), &comments),
-        // Rendered in its own stage, which reports its counters.
-        (Output::Preview, _) => Err(Error::Encode {
-            what: name.into(),
-            message: "the preview is rendered by its own stage".into(),
-        }),
-        (Output::Picture, _) => {
-            let density: Vec<f64> = leg_mesh
-                .point_attributes
-                .get("stitch_density")
-                .map(|d| d.iter().map(|&v| f64::from(v)).collect())
-                .unwrap_or_default();
-            let picture = density_picture::draw_density(
-                &leg_mesh.positions,
-                &leg_mesh.triangles,
-                &density,
-                &DensityPictureStyle::default(),
-            );
-            render::encode_png(&picture, name)
+/// What a fit's files are encoded from.
+struct FitProducts<'a> {
+    scene: &'a Scene,
+    knit: &'a Knit,
+    knit_fields: &'a KnitFields,
+    yarns: &'a YarnGeometry,
+    leg_mesh: SurfaceMesh,
+}
+
+impl FitProducts<'_> {
+    /// Encodes `file`.
+    fn encode(&self, file: FitFile) -> Result<Vec<u8>> {
+        let comments = || vec![format!("knitfit {} fit", env!("CARGO_PKG_VERSION"))];
+        match file {
+            FitFile::StockingGlb => {
+                let stocking = stocking_surface(self.knit, self.knit_fields, self.yarns);
+                let yarns = &self.scene.yarns;
+                export::gltf::write_nodes_glb(
+                    &[
+                        GlbNode::Surface(&self.leg_mesh),
+                        GlbNode::Yarns(self.yarns),
+                        GlbNode::Surface(&stocking),
+                    ],
+                    [yarns.nylon.colour, yarns.support.colour],
+                )
+            }
+            FitFile::StockingPly => {
+                export::ply::write_ply(std::slice::from_ref(self.yarns), &comments())
+            }
+            FitFile::LegPly => export::ply::write_mesh_ply(&self.leg_mesh, &comments()),
+            FitFile::DensityPicture => {
+                let density: Vec<f64> = self
+                    .leg_mesh
+                    .point_attributes
+                    .get("stitch_density")
+                    .map(|d| d.iter().map(|&v| f64::from(v)).collect())
+                    .unwrap_or_default();
+                let picture = density_picture::draw_density(
+                    &self.leg_mesh.positions,
+                    &self.leg_mesh.triangles,
+                    &density,
+                    &DensityPictureStyle::default(),
+                );
+                render::encode_png(&picture, file.name())
+            }
         }
     }
 }
@@ -722,12 +730,4 @@ fn stocking_surface(knit: &Knit, knit_fields: &KnitFields, yarns: &YarnGeometry)
     mesh.texcoords = Some(texcoords);
     mesh.point_attributes = attributes;
     mesh
-}
-
-/// The directory a scene's relative paths are resolved against.
-pub fn scene_dir(scene_path: Option<&Path>) -> PathBuf {
-    match scene_path {
-        Some(p) => p.parent().map(Path::to_path_buf).unwrap_or_default(),
-        None => Path::new(crate::scene::BUNDLED_SCENE_DIR).to_path_buf(),
-    }
 }

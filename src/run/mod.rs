@@ -1,6 +1,7 @@
-//! One function per command, stringing the stages of its [`crate::plan::Plan`] together:
-//! load → knit → solve → post-process → export. The library prints nothing; long stages report
-//! to a [`Progress`] the caller supplies (the CLI draws a progress bar with it).
+//! The commands: each builds its [`Plan`], runs its stages in a [`Run`] and returns what it
+//! wrote. Data flows one way, scene → load → knit → solve → post-process → encode → write →
+//! report; the library prints nothing (long stages report to a [`Progress`] the caller
+//! supplies, which the CLI draws as a progress bar).
 
 pub mod bench;
 pub mod fit;
@@ -8,13 +9,20 @@ pub mod patch;
 pub mod plan;
 pub mod render;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
 
 pub use bench::{run_bench, BenchOptions, BenchOutcome};
-pub use fit::{run_fit, FitInputs, FitOutcome};
-pub use patch::{run_patch, PatchOutcome};
+pub use fit::run_fit;
+pub use patch::run_patch;
 pub use plan::{plan_fit, plan_patch, PlanOutcome};
-pub use render::{run_render, run_spp_sweep, RenderInputs, RenderOutcome};
+pub use render::{run_render, run_spp_sweep, Sweep};
+
+use crate::error::Result;
+use crate::export::atomic;
+use crate::plan::{Plan, Stage};
+use crate::report::{Metrics, Report, StageClock};
 
 /// Receives progress of long stages.
 pub trait Progress {
@@ -44,13 +52,100 @@ impl crate::sim::RelaxObserver for StepProgress<'_> {
     }
 }
 
-/// Where a run reads from and writes to.
-#[derive(Clone, Debug)]
-pub struct RunPaths {
-    /// How the scene is named in messages and the report.
-    pub scene_name: String,
-    /// Input files, never to be overwritten by an output.
-    pub inputs: Vec<PathBuf>,
-    /// Output directory (created if missing).
-    pub out_dir: PathBuf,
+/// What a command wrote: its report (as written) and every file, the report last.
+#[derive(Debug)]
+pub struct Outcome<D> {
+    /// The report, as written.
+    pub report: Report<D>,
+    /// Every file written, in order.
+    pub written: Vec<PathBuf>,
+}
+
+/// The frame every command runs in: the plan's stages timed as they run, the output directory
+/// checked before the work starts, the files encoded in memory and written together at the end
+/// (each to a temporary name, then renamed; never over an input), then the report. A run that
+/// fails at any stage writes nothing.
+pub(crate) struct Run<'p> {
+    plan: &'p Plan,
+    out_dir: PathBuf,
+    inputs: Vec<PathBuf>,
+    /// The stages' times, against the plan.
+    pub clock: StageClock,
+    files: Vec<(String, Vec<u8>)>,
+}
+
+impl<'p> Run<'p> {
+    /// A run of `plan` writing into `out_dir`, never over one of `inputs`; its clock starts now.
+    pub fn new(plan: &'p Plan, out_dir: &Path, inputs: Vec<PathBuf>) -> Run<'p> {
+        Run {
+            plan,
+            out_dir: out_dir.to_path_buf(),
+            inputs,
+            clock: StageClock::new(plan),
+            files: Vec::new(),
+        }
+    }
+
+    /// Checks the output directory can take the plan's files (creating it if needed) before any
+    /// work is done, so a run that could not write fails at once.
+    pub fn prepare(&self) -> Result<()> {
+        atomic::prepare_dir(&self.out_dir, &self.plan.file_names(), &self.inputs)
+    }
+
+    /// Runs `work` as `stage`, timed.
+    pub fn stage<T>(&mut self, stage: Stage, work: impl FnOnce() -> T) -> T {
+        self.clock.time(stage, work)
+    }
+
+    /// Runs `work` as `stage` and keeps the bytes it makes as the file `name`.
+    pub fn encode(
+        &mut self,
+        stage: Stage,
+        name: &str,
+        work: impl FnOnce() -> Result<Vec<u8>>,
+    ) -> Result<()> {
+        let bytes = self.clock.time(stage, work)?;
+        self.keep(name, bytes);
+        Ok(())
+    }
+
+    /// Keeps `bytes` as the file `name`, to be written with the others.
+    pub fn keep(&mut self, name: &str, bytes: Vec<u8>) {
+        self.files.push((name.to_string(), bytes));
+    }
+
+    /// Writes the files (stage [`Stage::WriteFiles`]), then the report of the scene `scene`
+    /// with these `metrics` and `details`.
+    pub fn finish<D: Serialize>(
+        mut self,
+        scene: &str,
+        metrics: Metrics,
+        details: D,
+    ) -> Result<Outcome<D>> {
+        let files = std::mem::take(&mut self.files);
+        let mut written = self.clock.time(Stage::WriteFiles, || {
+            atomic::write_all(&self.out_dir, &files, &self.inputs)
+        })?;
+        let report = Report {
+            command: self.plan.command,
+            scene: scene.to_string(),
+            effects: self.plan.effects.clone(),
+            stages: self.clock.records().to_vec(),
+            metrics,
+            details,
+            outputs: self
+                .plan
+                .file_names()
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+            wall_seconds: self.clock.wall_seconds(),
+        };
+        written.extend(atomic::write_all(
+            &self.out_dir,
+            &[(self.plan.report.clone(), report.to_json())],
+            &self.inputs,
+        )?);
+        Ok(Outcome { report, written })
+    }
 }

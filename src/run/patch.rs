@@ -2,31 +2,20 @@
 //! a fresh patch is built, its two held edges pulled apart, and the rest relaxed; the relaxed
 //! patches are measured, drawn side by side and written.
 
-use std::path::PathBuf;
+use std::path::Path;
 
-use serde_json::json;
-
-use super::{Progress, RunPaths, StepProgress};
+use super::{Outcome, Progress, Run, StepProgress};
 use crate::base::YarnGeometry;
 use crate::error::Result;
 use crate::export;
 use crate::knit::patch::{build_patch, PatchSpec};
-use crate::knit::Knit;
-use crate::plan::Plan;
+use crate::knit::{Knit, Stretch, StretchAxis};
+use crate::plan::{patch_files, File, PatchFile, Plan, Stage};
 use crate::post::{measure_stitches, StitchStats};
 use crate::render::patch_picture::{self, Panel, PictureStyle};
-use crate::report::{Metrics, Report, StageClock};
-use crate::scene::{Output, Scene, Stretch, StretchAxis};
+use crate::report::{Metrics, PatchDetails, PatchRun};
+use crate::scene::{LoadedScene, Scene};
 use crate::sim::{relax, RelaxStats};
-
-/// The result of a patch run.
-#[derive(Debug)]
-pub struct PatchOutcome {
-    /// The report, as written to `report.json`.
-    pub report: Report,
-    /// Every file written, report included.
-    pub written: Vec<PathBuf>,
-}
 
 /// One relaxed patch.
 struct Relaxed {
@@ -36,24 +25,19 @@ struct Relaxed {
     stitches: Option<StitchStats>,
 }
 
-/// Runs the patch experiment of `scene` and writes its files into `paths.out_dir`.
+/// Runs the patch experiment of `loaded` and writes its files into `out_dir`.
 ///
 /// Nothing is written unless every stage succeeds. A run that reaches the step limit without
 /// converging still writes its files; its report says `"converged": false`.
 pub fn run_patch(
-    scene: &Scene,
-    paths: &RunPaths,
+    loaded: &LoadedScene,
+    out_dir: &Path,
     progress: &mut dyn Progress,
-) -> Result<PatchOutcome> {
+) -> Result<Outcome<PatchDetails>> {
+    let scene = &loaded.scene;
     let plan = Plan::patch(scene);
-    let mut clock = StageClock::default();
-    let file_names: Vec<&str> = plan
-        .files
-        .iter()
-        .map(|(_, name)| *name)
-        .chain(["report.json"])
-        .collect();
-    export::atomic::prepare_dir(&paths.out_dir, &file_names, &paths.inputs)?;
+    let mut run = Run::new(&plan, out_dir, loaded.inputs());
+    run.prepare()?;
 
     let spec = PatchSpec {
         wales: scene.patch.size[0],
@@ -64,10 +48,10 @@ pub fn run_patch(
     };
     let mut runs = Vec::new();
     for &stretch in &scene.patch.stretch {
-        let mut knit = clock.time(&format!("knit {stretch}"), || build_patch(&spec, stretch));
-        let stage = format!("relax {stretch}");
-        progress.begin(&stage, scene.solver.max_steps as u64);
-        let stats = clock.time(&stage, || {
+        let mut knit = run.stage(Stage::KnitPatch(stretch), || build_patch(&spec, stretch));
+        let stage = Stage::RelaxPatch(stretch);
+        progress.begin(&stage.to_string(), scene.solver.max_steps as u64);
+        let stats = run.stage(stage, || {
             relax(
                 &mut knit,
                 &plan.forces,
@@ -83,79 +67,59 @@ pub fn run_patch(
             stitches: None,
         });
     }
-    clock.time("measure stitches", || {
-        for run in &mut runs {
-            run.stitches = measure_stitches(&run.knit);
+    run.stage(Stage::MeasureStitches, || {
+        for r in &mut runs {
+            r.stitches = measure_stitches(&r.knit);
         }
     });
 
     let geometries = side_by_side(&runs);
-    let mut files = Vec::new();
-    for &(output, name) in &plan.files {
-        let bytes = clock.time(&format!("encode {name}"), || match output {
-            Output::Ply => export::ply::write_ply(&geometries, &ply_comments(scene)),
-            Output::Glb => export::gltf::write_glb(
-                &geometries,
-                [scene.yarns.nylon.colour, scene.yarns.support.colour],
-            ),
-            Output::Picture => {
-                let held: Vec<Vec<bool>> = runs
-                    .iter()
-                    .map(|r| {
-                        r.knit
-                            .particles
-                            .inv_mass
-                            .iter()
-                            .map(|&m| m == 0.0)
-                            .collect()
-                    })
-                    .collect();
-                let panels: Vec<Panel> = geometries
-                    .iter()
-                    .zip(&held)
-                    .map(|(geometry, held)| Panel { geometry, held })
-                    .collect();
-                let style = PictureStyle {
-                    yarn_radius_m: [scene.yarns.nylon.radius_m, scene.yarns.support.radius_m],
-                    yarn_colour: [scene.yarns.nylon.colour, scene.yarns.support.colour],
-                    ..PictureStyle::default()
-                };
-                crate::render::encode_png(&patch_picture::draw_patches(&panels, &style), name)
-            }
-            // `Plan::patch` never lists it: a flat patch has no leg to render on.
-            Output::Preview => Err(crate::error::Error::Encode {
-                what: name.into(),
-                message: "a patch has no leg to preview".into(),
-            }),
+    for file in patch_files(scene) {
+        run.encode(Stage::Encode(File::Patch(file)), file.name(), || {
+            encode(file, scene, &runs, &geometries)
         })?;
-        files.push((name.to_string(), bytes));
     }
+    run.finish(&loaded.name, metrics(&runs), details(scene, &runs))
+}
 
-    let mut report = Report {
-        command: plan.command.to_string(),
-        scene: paths.scene_name.clone(),
-        effects: plan.effects.iter().map(|e| e.name().to_string()).collect(),
-        stages: Vec::new(),
-        metrics: metrics(&runs),
-        details: details(scene, &runs),
-        outputs: files
-            .iter()
-            .map(|(name, _)| name.clone())
-            .chain(["report.json".to_string()])
-            .collect(),
-        wall_seconds: 0.0,
-    };
-    let mut written = clock.time("write files", || {
-        export::atomic::write_all(&paths.out_dir, &files, &paths.inputs)
-    })?;
-    report.stages = clock.stages().to_vec();
-    report.wall_seconds = clock.wall_seconds();
-    written.extend(export::atomic::write_all(
-        &paths.out_dir,
-        &[("report.json".to_string(), report.to_json())],
-        &paths.inputs,
-    )?);
-    Ok(PatchOutcome { report, written })
+/// Encodes one of the patch experiment's files.
+fn encode(
+    file: PatchFile,
+    scene: &Scene,
+    runs: &[Relaxed],
+    geometries: &[YarnGeometry],
+) -> Result<Vec<u8>> {
+    let yarns = &scene.yarns;
+    match file {
+        PatchFile::Ply => export::ply::write_ply(geometries, &ply_comments(scene)),
+        PatchFile::Glb => {
+            export::gltf::write_glb(geometries, [yarns.nylon.colour, yarns.support.colour])
+        }
+        PatchFile::Picture => {
+            let held: Vec<Vec<bool>> = runs
+                .iter()
+                .map(|r| {
+                    r.knit
+                        .particles
+                        .inv_mass
+                        .iter()
+                        .map(|&m| m == 0.0)
+                        .collect()
+                })
+                .collect();
+            let panels: Vec<Panel> = geometries
+                .iter()
+                .zip(&held)
+                .map(|(geometry, held)| Panel { geometry, held })
+                .collect();
+            let style = PictureStyle {
+                yarn_radius_m: [yarns.nylon.radius_m, yarns.support.radius_m],
+                yarn_colour: [yarns.nylon.colour, yarns.support.colour],
+                ..PictureStyle::default()
+            };
+            crate::render::encode_png(&patch_picture::draw_patches(&panels, &style), file.name())
+        }
+    }
 }
 
 /// The relaxed patches as yarn geometry, laid side by side along x with a gap of a quarter
@@ -205,32 +169,26 @@ fn metrics(runs: &[Relaxed]) -> Metrics {
 }
 
 /// Per-stretch results, and the anisotropy when the same factor was applied along both axes.
-fn details(scene: &Scene, runs: &[Relaxed]) -> serde_json::Value {
-    let patches: Vec<_> = runs
-        .iter()
-        .map(|r| {
-            json!({
-                "stretch": { "axis": r.stretch.axis.name(), "factor": r.stretch.factor },
-                "points": r.knit.len(),
-                "steps": r.stats.steps,
-                "substeps_per_step": r.stats.substeps_per_step,
-                "time_step_limit": r.stats.time_step_limit,
-                "residual": r.stats.residual,
-                "max_move": r.stats.max_move,
-                "converged": r.stats.converged,
-                "stitches": r.stitches,
+fn details(scene: &Scene, runs: &[Relaxed]) -> PatchDetails {
+    PatchDetails {
+        size: scene.patch.size,
+        pattern: scene.knit.pattern,
+        patches: runs
+            .iter()
+            .map(|r| PatchRun {
+                stretch: r.stretch,
+                points: r.knit.len(),
+                steps: r.stats.steps,
+                substeps_per_step: r.stats.substeps_per_step,
+                time_step_limit: r.stats.time_step_limit,
+                residual: r.stats.residual,
+                max_move: r.stats.max_move,
+                converged: r.stats.converged,
+                stitches: r.stitches.clone(),
             })
-        })
-        .collect();
-    let mut details = json!({
-        "size": scene.patch.size,
-        "pattern": scene.knit.pattern,
-        "patches": patches,
-    });
-    if let Some(a) = anisotropy(scene, runs) {
-        details["anisotropy"] = json!(a);
+            .collect(),
+        anisotropy: anisotropy(scene, runs),
     }
-    details
 }
 
 /// Anisotropy (see [`crate::post::anisotropy`]) when a square patch was stretched by the same

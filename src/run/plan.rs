@@ -3,17 +3,17 @@
 //! memory estimate against the limit ([`crate::limits`]). Reads the scene and the leg file's
 //! document (to count its triangles); simulates nothing and writes nothing.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use serde_json::json;
+use serde::Serialize;
 
-use super::fit::FitInputs;
-use super::RunPaths;
+use super::fit::{memory_check, FitInputs};
 use crate::error::Result;
 use crate::leg::read_leg_file;
-use crate::limits::MemoryCheck;
-use crate::plan::{Plan, PlannedStage};
-use crate::scene::Scene;
+use crate::limits::{MemoryCheck, MemoryEstimate, MemoryLimit};
+use crate::plan::{LeftOut, Plan, PlannedStage};
+use crate::scene::{Effect, LoadedScene};
+use crate::sim::ForceTerms;
 
 /// What `knitfit plan` shows.
 #[derive(Clone, Debug)]
@@ -30,39 +30,39 @@ pub struct PlanOutcome {
     pub files: Vec<PathBuf>,
 }
 
-/// The plan of `knitfit fit` for `scene` on `inputs.leg`.
+/// The plan of `knitfit fit` for `loaded`, writing into `out_dir`.
 ///
 /// Errors: the leg file's, as the fit would meet them (unreadable, not glTF, compressed).
-pub fn plan_fit(scene: &Scene, inputs: &FitInputs, paths: &RunPaths) -> Result<PlanOutcome> {
+pub fn plan_fit(loaded: &LoadedScene, out_dir: &Path) -> Result<PlanOutcome> {
+    let scene = &loaded.scene;
     let plan = Plan::fit(scene);
-    let triangles = read_leg_file(&inputs.leg)?.declared_triangles();
+    let leg = FitInputs::of(loaded).leg;
+    let triangles = read_leg_file(&leg)?.declared_triangles();
     Ok(PlanOutcome {
-        memory: Some(MemoryCheck::fit(scene, &plan, triangles)),
-        leg: Some((inputs.leg.clone(), triangles)),
-        files: files(&plan, paths),
-        scene: paths.scene_name.clone(),
+        memory: Some(memory_check(scene, &plan, triangles)),
+        leg: Some((leg, triangles)),
+        files: files(&plan, out_dir),
+        scene: loaded.name.clone(),
         plan,
     })
 }
 
-/// The plan of `knitfit patch` for `scene`.
-pub fn plan_patch(scene: &Scene, paths: &RunPaths) -> PlanOutcome {
-    let plan = Plan::patch(scene);
+/// The plan of `knitfit patch` for `loaded`, writing into `out_dir`.
+pub fn plan_patch(loaded: &LoadedScene, out_dir: &Path) -> PlanOutcome {
+    let plan = Plan::patch(&loaded.scene);
     PlanOutcome {
         memory: None,
         leg: None,
-        files: files(&plan, paths),
-        scene: paths.scene_name.clone(),
+        files: files(&plan, out_dir),
+        scene: loaded.name.clone(),
         plan,
     }
 }
 
-fn files(plan: &Plan, paths: &RunPaths) -> Vec<PathBuf> {
-    plan.files
-        .iter()
-        .map(|(_, name)| *name)
-        .chain(["report.json"])
-        .map(|name| paths.out_dir.join(name))
+fn files(plan: &Plan, out_dir: &Path) -> Vec<PathBuf> {
+    plan.file_names()
+        .into_iter()
+        .map(|name| out_dir.join(name))
         .collect()
 }
 
@@ -72,34 +72,27 @@ impl PlanOutcome {
     /// `memory` (`estimate` by part with `total_bytes`, `limit`, `allow_large`, `fits`; null
     /// for a patch).
     pub fn to_json(&self) -> serde_json::Value {
-        let stages = |list: &[PlannedStage]| -> Vec<serde_json::Value> {
-            list.iter()
-                .map(|s| json!({ "name": s.name, "why": s.why }))
-                .collect()
-        };
         let p = &self.plan;
-        json!({
-            "command": p.command,
-            "scene": self.scene,
-            "leg": self.leg.as_ref().map(|(file, triangles)| json!({
-                "file": file.display().to_string(),
-                "declared_triangles": triangles,
-            })),
-            "effects": p.effects.iter().map(|e| e.name()).collect::<Vec<_>>(),
-            "forces": {
-                "stiffness": p.forces.stiffness,
-                "connection_factor": p.forces.connection_factor,
-            },
-            "stages": stages(&p.stages),
-            "left_out": stages(&p.left_out),
-            "files": self.files.iter().map(|f| f.display().to_string()).collect::<Vec<_>>(),
-            "memory": self.memory.as_ref().map(|m| json!({
-                "estimate": m.estimate,
-                "limit": m.limit,
-                "allow_large": m.allow_large,
-                "fits": m.fits(),
-            })),
-        })
+        let view = PlanJson {
+            command: p.command,
+            scene: &self.scene,
+            leg: self.leg.as_ref().map(|(file, triangles)| LegJson {
+                file: file.display().to_string(),
+                declared_triangles: *triangles,
+            }),
+            effects: &p.effects,
+            forces: &p.forces,
+            stages: &p.stages,
+            left_out: &p.left_out,
+            files: self.files.iter().map(|f| f.display().to_string()).collect(),
+            memory: self.memory.as_ref().map(|m| MemoryJson {
+                estimate: &m.estimate,
+                limit: &m.limit,
+                allow_large: m.allow_large,
+                fits: m.fits(),
+            }),
+        };
+        serde_json::to_value(view).expect("a plan always serialises")
     }
 
     /// The plan as text for a person: a header, then one line per stage with why it runs.
@@ -128,13 +121,18 @@ impl PlanOutcome {
         let width = p
             .stages
             .iter()
-            .chain(&p.left_out)
-            .map(|s| s.name.chars().count())
+            .map(|s| s.stage.to_string().chars().count())
+            .chain(p.left_out.iter().map(|s| s.name.chars().count()))
             .max()
             .unwrap_or(0);
         out += "stages, in order:\n";
         for (i, s) in p.stages.iter().enumerate() {
-            out += &format!("  {:>2}. {:<width$}  {}\n", i + 1, s.name, s.why);
+            out += &format!(
+                "  {:>2}. {:<width$}  {}\n",
+                i + 1,
+                s.stage.to_string(),
+                s.why
+            );
         }
         if !p.left_out.is_empty() {
             out += "left out:\n";
@@ -149,4 +147,32 @@ impl PlanOutcome {
         }
         out
     }
+}
+
+/// `knitfit plan --json`.
+#[derive(Serialize)]
+struct PlanJson<'a> {
+    command: &'a str,
+    scene: &'a str,
+    leg: Option<LegJson>,
+    effects: &'a [Effect],
+    forces: &'a ForceTerms,
+    stages: &'a [PlannedStage],
+    left_out: &'a [LeftOut],
+    files: Vec<String>,
+    memory: Option<MemoryJson<'a>>,
+}
+
+#[derive(Serialize)]
+struct LegJson {
+    file: String,
+    declared_triangles: usize,
+}
+
+#[derive(Serialize)]
+struct MemoryJson<'a> {
+    estimate: &'a MemoryEstimate,
+    limit: &'a MemoryLimit,
+    allow_large: bool,
+    fits: bool,
 }

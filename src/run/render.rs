@@ -7,37 +7,16 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use serde_json::json;
-
+use super::{Outcome, Run};
 use crate::error::{Error, Result};
-use crate::export;
-use crate::plan::{Plan, PREVIEW_STAGE};
+use crate::plan::{Plan, Stage};
 use crate::render::preview::{render_prepared, PreparedScene, PreviewInput};
 use crate::render::stocking_glb::read_stocking_glb;
-use crate::report::{Metrics, Report, StageClock};
-use crate::scene::Scene;
+use crate::report::{Metrics, RenderDetails};
+use crate::scene::{LoadedScene, Scene};
 
-/// What `knitfit render` reads and writes.
-#[derive(Clone, Debug)]
-pub struct RenderInputs {
-    /// A fit's output directory (its `stocking.glb` is read) or a `.glb` file.
-    pub input: PathBuf,
-    /// The picture to write; `None` means `preview.png` next to the input.
-    pub out: Option<PathBuf>,
-    /// How the scene is named in the report.
-    pub scene_name: String,
-    /// Input files besides the GLB that must not be overwritten (the scene file).
-    pub inputs: Vec<PathBuf>,
-}
-
-/// The result of `knitfit render`.
-#[derive(Debug)]
-pub struct RenderOutcome {
-    /// The report, as written beside the picture.
-    pub report: Report,
-    /// Files written: the picture, then its report.
-    pub written: Vec<PathBuf>,
-}
+/// Samples per pixel of the sweep's reference.
+const REFERENCE_SPP: u32 = 64;
 
 /// One row of the accuracy/time sweep.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -75,11 +54,18 @@ pub fn glb_path(input: &Path) -> PathBuf {
     }
 }
 
-/// Renders the preview of `inputs.input` as `scene.render` asks and writes it.
-pub fn run_render(scene: &Scene, inputs: &RenderInputs) -> Result<RenderOutcome> {
-    let glb = glb_path(&inputs.input);
-    let out = match &inputs.out {
-        Some(path) => path.clone(),
+/// Renders the preview of `input` (a fit's directory or its `stocking.glb`) as the scene's
+/// `render` asks and writes it to `out` (default: `preview.png` next to the input), with its
+/// report beside it.
+pub fn run_render(
+    loaded: &LoadedScene,
+    input: &Path,
+    out: Option<&Path>,
+) -> Result<Outcome<RenderDetails>> {
+    let scene = &loaded.scene;
+    let glb = glb_path(input);
+    let out = match out {
+        Some(path) => path.to_path_buf(),
         None => glb
             .parent()
             .map(|p| p.join("preview.png"))
@@ -93,66 +79,60 @@ pub fn run_render(scene: &Scene, inputs: &RenderInputs) -> Result<RenderOutcome>
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "preview".into())
     );
-    let plan = Plan::render(scene, &glb.display().to_string());
-    let mut clock = StageClock::default();
-    // Read first: a bad input must fail before any directory is made.
-    let stocking = clock.time("read stocking.glb", || read_stocking_glb(&glb))?;
-    let mut all_inputs = inputs.inputs.clone();
+    let plan = Plan::render(scene, &glb.display().to_string(), &name, &report_name);
+    let mut all_inputs = loaded.inputs();
     all_inputs.push(glb.clone());
-    export::atomic::prepare_dir(&dir, &[&name, &report_name], &all_inputs)?;
-    let input = PreviewInput::from_scene(&stocking.leg, &stocking.yarns, scene);
-    let (bytes, stats) = clock.time(PREVIEW_STAGE, || -> Result<_> {
+    let mut run = Run::new(&plan, &dir, all_inputs);
+    // Read first: a bad input must fail before any directory is made.
+    let stocking = run.stage(Stage::ReadStocking, || read_stocking_glb(&glb))?;
+    run.prepare()?;
+    let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
+    let (bytes, stats) = run.stage(Stage::RenderPreview, || -> Result<_> {
         let prepared = PreparedScene::new(input, &name)?;
         let preview = render_prepared(&prepared, &scene.render);
         let bytes = crate::render::encode_png(&preview.image, &name)?;
         Ok((bytes, preview.stats))
     })?;
-    let mut written = clock.time("write files", || {
-        export::atomic::write_all(&dir, &[(name.clone(), bytes)], &all_inputs)
-    })?;
-    let report = Report {
-        command: plan.command.to_string(),
-        scene: inputs.scene_name.clone(),
-        effects: Vec::new(),
-        stages: clock.stages().to_vec(),
-        metrics: Metrics {
-            points: stocking.yarns.positions.len(),
-            steps: 0,
-            residual: 0.0,
-            max_move: 0.0,
-            force_step: None,
-            converged: true,
-            max_penetration_m: None,
-            leg_triangles: Some(stocking.leg.triangles.len()),
-        },
-        details: json!({
-            "input": glb.display().to_string(),
-            "render": stats,
-            "yarn_covered_fraction": if stats.leg_samples > 0 {
-                stats.yarn_samples as f64 / stats.leg_samples as f64
-            } else {
-                0.0
-            },
-        }),
-        outputs: vec![name.clone(), report_name.clone()],
-        wall_seconds: clock.wall_seconds(),
+    run.keep(&name, bytes);
+    let metrics = Metrics {
+        points: stocking.yarns.positions.len(),
+        steps: 0,
+        residual: 0.0,
+        max_move: 0.0,
+        force_step: None,
+        converged: true,
+        max_penetration_m: None,
+        leg_triangles: Some(stocking.leg.triangles.len()),
     };
-    written.extend(export::atomic::write_all(
-        &dir,
-        &[(report_name, report.to_json())],
-        &all_inputs,
-    )?);
-    Ok(RenderOutcome { report, written })
+    let details = RenderDetails {
+        input: glb.display().to_string(),
+        yarn_covered_fraction: if stats.leg_samples > 0 {
+            stats.yarn_samples as f64 / stats.leg_samples as f64
+        } else {
+            0.0
+        },
+        render: stats,
+    };
+    run.finish(&loaded.name, metrics, details)
 }
 
 /// Renders the input at 1, 4 and 16 samples per pixel and at a 64-sample reference, timing
 /// each, and measures each against the reference. Writes nothing.
+///
+/// Errors: [`Error::InvalidArgument`] when the reference's samples are over the render budget.
 pub fn run_spp_sweep(scene: &Scene, input: &Path) -> Result<Sweep> {
+    scene
+        .render
+        .check_budget(REFERENCE_SPP)
+        .map_err(|e| Error::InvalidArgument {
+            flag: "--spp-sweep".into(),
+            message: e.message,
+        })?;
     let glb = glb_path(input);
     let start = Instant::now();
     let stocking = read_stocking_glb(&glb)?;
     let prepared = PreparedScene::new(
-        PreviewInput::from_scene(&stocking.leg, &stocking.yarns, scene),
+        PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns),
         "preview",
     )?;
     let prepare_seconds = start.elapsed().as_secs_f64();
@@ -163,7 +143,7 @@ pub fn run_spp_sweep(scene: &Scene, input: &Path) -> Result<Sweep> {
         let preview = render_prepared(&prepared, &settings);
         (preview, start.elapsed().as_secs_f64())
     };
-    let (reference, reference_seconds) = timed(64);
+    let (reference, reference_seconds) = timed(REFERENCE_SPP);
     let leg: Vec<bool> = reference.buffers.leg.iter().map(|&f| f > 0.0).collect();
     let leg_pixels = leg.iter().filter(|&&b| b).count();
     let mut rows = Vec::new();
@@ -192,7 +172,7 @@ pub fn run_spp_sweep(scene: &Scene, input: &Path) -> Result<Sweep> {
     }
     Ok(Sweep {
         prepare_seconds,
-        reference_spp: 64,
+        reference_spp: REFERENCE_SPP,
         reference_seconds,
         leg_pixels,
         rows,

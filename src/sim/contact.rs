@@ -81,7 +81,7 @@ struct PointContact {
 }
 
 /// Counters for the report.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct ContactCounters {
     /// Exact closest-point queries made.
     pub closest_queries: u64,
@@ -507,8 +507,7 @@ impl LegContact<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::leg::Leg;
-    use crate::scene::{ContactMethod, Units, UpAxis};
+    use crate::leg::{ContactMethod, Leg, Units, UpAxis};
 
     /// A capped rod of radius `r` along Y, counter-clockwise outside.
     fn rod(r: f64) -> Leg {

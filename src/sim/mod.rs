@@ -14,16 +14,18 @@ pub mod multilevel;
 #[cfg(test)]
 mod properties;
 pub mod relax;
+pub mod settings;
 
 pub use accelerated::{relax_accelerated, LevelStats};
 pub use multilevel::{relax_multilevel, Levels, MultilevelStats};
 pub use relax::{relax, relax_constrained, stability_limit, RelaxStats};
+pub use settings::{ContactSettings, OnUnstable, SolverMethod, SolverSettings};
 
 use crate::base::{Direction, Vec3, YarnKind};
 use crate::knit::Knit;
 
 /// Which force terms run, with their coefficients. Built by the plan from the scene's effects.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct ForceTerms {
     /// Spring stiffness c1 per yarn kind (indexed by `YarnKind::index()`). Equal entries when the
     /// scene does not ask for `alternating_yarns`.

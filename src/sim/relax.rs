@@ -30,7 +30,7 @@ use super::{Constraints, ForceTerms, RelaxObserver, Unconstrained};
 use crate::base::Vec3;
 use crate::error::{Error, Result};
 use crate::knit::Knit;
-use crate::scene::{OnUnstable, SolverSettings};
+use crate::sim::{OnUnstable, SolverSettings};
 
 /// Energy growth over the starting energy that counts as divergence.
 const DIVERGENCE_ENERGY_GROWTH: f64 = 1e3;

@@ -225,7 +225,7 @@ fn bad_stretch_flag_is_refused() {
     refused(
         &["patch", "--stretch", "diagonal=2"],
         &[],
-        "--stretch: axis must be course or wale",
+        "--stretch: unknown variant `diagonal`, expected `course` or `wale`",
     );
     refused(
         &["patch", "--stretch", "course=-1"],

@@ -3,8 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use knitfit::leg::{load_leg, Collider};
-use knitfit::scene::{ContactMethod, Units, UpAxis};
+use knitfit::leg::{load_leg, Collider, ContactMethod, Units, UpAxis};
 use nalgebra::Point3;
 
 use crate::util::{

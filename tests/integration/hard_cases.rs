@@ -12,8 +12,7 @@ use std::process::Output;
 
 use knitfit::base::SurfaceMesh;
 use knitfit::export::gltf::{write_nodes_glb, GlbNode};
-use knitfit::leg::{load_leg, Collider, Leg};
-use knitfit::scene::{ContactMethod, Units, UpAxis};
+use knitfit::leg::{load_leg, Collider, ContactMethod, Leg, Units, UpAxis};
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
 use serde_json::{json, Value};
 
@@ -396,7 +395,7 @@ fn fit_time_step_limit(ratio: f64, circumference_m: f64) -> f64 {
         courses: 24,
         pattern: scene.knit.pattern,
         relaxed_circumference_m: circumference_m,
-        relaxed_length_m: knitfit::scene::RELAXED_LENGTH_FRACTION * axis.length(),
+        relaxed_length_m: knitfit::knit::RELAXED_LENGTH_FRACTION * axis.length(),
         stitch_m: [scene.knit.course_spacing_m, scene.knit.wale_spacing_m],
     };
     let knit = build_tube(&spec, &axis, &leg.positions, &leg.triangles).knit;
@@ -770,7 +769,7 @@ fn a_tube_started_partly_inside_the_leg_ends_outside_with_its_rings_in_order() {
         courses,
         pattern: scene.knit.pattern,
         relaxed_circumference_m: scene.tube.relaxed_circumference_m,
-        relaxed_length_m: knitfit::scene::RELAXED_LENGTH_FRACTION * axis.length(),
+        relaxed_length_m: knitfit::knit::RELAXED_LENGTH_FRACTION * axis.length(),
         stitch_m: [scene.knit.course_spacing_m, scene.knit.wale_spacing_m],
     };
     let mut knit = build_tube(&spec, &axis, &leg.positions, &leg.triangles).knit;
@@ -790,8 +789,8 @@ fn a_tube_started_partly_inside_the_leg_ends_outside_with_its_rings_in_order() {
     assert!(started_inside > wales * courses / 4, "{started_inside}");
     let offset = scene.contact.offset(&scene.yarns);
     let mut contact = LegContact::new(&collider, offset, 0.02, a, end_rings(&knit));
-    let settings = knitfit::scene::SolverSettings {
-        method: knitfit::scene::SolverMethod::Paper,
+    let settings = knitfit::sim::SolverSettings {
+        method: knitfit::sim::SolverMethod::Paper,
         ..scene.solver.clone()
     };
     let p = &mut knit.particles;

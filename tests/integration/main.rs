@@ -5,6 +5,7 @@ mod cli;
 mod fit;
 mod fuzz;
 mod hard_cases;
+mod layers;
 mod limits;
 mod physics;
 mod plan;

@@ -1,10 +1,9 @@
 //! The physics of the paper's patch experiment (§5), through the library.
 
 use knitfit::knit::patch::{build_patch, PatchSpec};
-use knitfit::knit::{Knit, Pattern};
+use knitfit::knit::{Knit, Pattern, Stretch, StretchAxis};
 use knitfit::post::{anisotropy, measure_stitches, StitchStats};
-use knitfit::scene::{OnUnstable, SolverSettings, Stretch, StretchAxis};
-use knitfit::sim::{relax, stability_limit, ForceTerms, RelaxStats};
+use knitfit::sim::{relax, stability_limit, ForceTerms, OnUnstable, RelaxStats, SolverSettings};
 use knitfit::Error;
 
 const PAPER_TERMS: ForceTerms = ForceTerms {

@@ -11,8 +11,7 @@ use std::f64::consts::{PI, TAU};
 use std::sync::OnceLock;
 
 use knitfit::base::Vec3;
-use knitfit::leg::{load_leg, Collider, Leg};
-use knitfit::scene::{ContactMethod, Units, UpAxis};
+use knitfit::leg::{load_leg, Collider, ContactMethod, Leg, Units, UpAxis};
 use knitfit::sim::contact::LegContact;
 use knitfit::sim::forces::{
     connection_force, direction, spring_energy, spring_force, spring_tension,

@@ -7,7 +7,8 @@ use std::sync::OnceLock;
 use knitfit::base::{Direction, Segment, SurfaceMesh, YarnGeometry, YarnKind};
 use knitfit::render::preview::{render_preview, PreviewBuffers, PreviewInput};
 use knitfit::render::stocking_glb::read_stocking_glb;
-use knitfit::scene::{CameraSettings, RenderSettings, Scene};
+use knitfit::render::{CameraSettings, RenderSettings};
+use knitfit::scene::Scene;
 
 use crate::util::{
     files_in, knitfit, knitfit_env, procedural_leg, report, stage_names, stderr, write,
@@ -53,7 +54,7 @@ fn thick_fit() -> &'static (tempfile::TempDir, PathBuf, Scene) {
 fn buffers(settings: &RenderSettings) -> PreviewBuffers {
     let (_, glb, scene) = thick_fit();
     let stocking = read_stocking_glb(glb).unwrap();
-    let input = PreviewInput::from_scene(&stocking.leg, &stocking.yarns, scene);
+    let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
     render_preview(input, settings, "test").unwrap().buffers
 }
 
@@ -194,7 +195,7 @@ fn broken_geometry_renders_finite_pixels_without_panicking() {
     stocking.leg.triangles.push([0, 0, 0]);
     stocking.leg.triangles.push([0, 1, u32::MAX]);
     stocking.leg.normals[5] = [0.0, 0.0, 0.0];
-    let input = PreviewInput::from_scene(&stocking.leg, &stocking.yarns, scene);
+    let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
     let settings = RenderSettings {
         width: 64,
         height: 128,
@@ -236,7 +237,7 @@ fn bad_render_arguments_are_refused_by_name_and_write_nothing() {
     for (args, expect) in [
         (
             &["stocking.glb", "--view", "top"][..],
-            "--view: must be front, side, back or three-quarter",
+            "--view: unknown variant `top`, expected one of `front`, `side`, `back`, `three-quarter`",
         ),
         (
             &["stocking.glb", "--spp", "0"][..],
@@ -248,7 +249,7 @@ fn bad_render_arguments_are_refused_by_name_and_write_nothing() {
         ),
         (
             &["stocking.glb", "--mode", "xray"][..],
-            "--mode: must be yarn or density",
+            "--mode: unknown variant `xray`, expected `yarn` or `density`",
         ),
         (
             &["stocking.glb", "--out", "p.jpg"][..],
@@ -473,9 +474,9 @@ fn yarn_finer_than_a_pixel_averages_to_the_true_coverage_without_moire() {
 fn density_mode_draws_the_denser_ankle_hotter_than_the_thigh_with_a_colour_bar() {
     let (_, glb, scene) = thick_fit();
     let stocking = read_stocking_glb(glb).unwrap();
-    let input = PreviewInput::from_scene(&stocking.leg, &stocking.yarns, scene);
+    let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
     let settings = RenderSettings {
-        mode: knitfit::scene::RenderMode::Density,
+        mode: knitfit::render::RenderMode::Density,
         ..tall_settings()
     };
     let preview = render_preview(input, &settings, "test").unwrap();

@@ -7,7 +7,8 @@ use knitfit::plan::Plan;
 use knitfit::report::StageClock;
 use knitfit::run::fit::{measure_fields, solve_fit, FitInputs, SolvedFit};
 use knitfit::run::NoProgress;
-use knitfit::scene::{Scene, SolverMethod};
+use knitfit::scene::Scene;
+use knitfit::sim::SolverMethod;
 
 use crate::util::{fit, sample_legs};
 
@@ -34,12 +35,13 @@ fn solve_scene(leg: &std::path::Path, scene: Scene) -> (SolvedFit, Scene) {
         leg: leg.to_path_buf(),
         axis_source: AxisSource::Scene,
     };
+    let plan = Plan::fit(&scene);
     let fit = solve_fit(
         &scene,
-        &Plan::fit(&scene),
+        &plan,
         &inputs,
         "test",
-        &mut StageClock::default(),
+        &mut StageClock::new(&plan),
         &mut NoProgress,
     )
     .unwrap();
@@ -172,7 +174,7 @@ fn a_bad_solver_or_tolerance_flag_is_refused_before_any_work() {
     for (args, expect) in [
         (
             &["--solver", "fast"][..],
-            "--solver: must be multilevel or paper",
+            "--solver: unknown variant `fast`, expected `multilevel` or `paper`",
         ),
         (&["--tolerance", "0"][..], "--tolerance: must be in (0, 1)"),
         (&["--tolerance", "2"][..], "--tolerance: must be in (0, 1)"),

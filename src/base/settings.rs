@@ -1,0 +1,92 @@
+//! What every stage's settings share: the error a `validate()` returns (the field, as a dotted
+//! path relative to the settings checked, and what is wrong with it) and the common checks.
+//!
+//! Each stage owns its settings type (`leg::LegSettings`, `sim::SolverSettings`, …) with its
+//! defaults and units; the scene only composes them and prefixes the field path
+//! ([`Invalid::within`]), so a message names the field as the scene file spells it.
+
+/// A settings value the run cannot use.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Invalid {
+    /// The field, as a dotted path (`yarns.support.stiffness`, `patch.stretch[0].factor`).
+    pub field: String,
+    /// What is wrong, and the value found.
+    pub message: String,
+}
+
+impl Invalid {
+    /// `field` cannot be used, because of `message`.
+    pub fn new(field: impl Into<String>, message: impl Into<String>) -> Invalid {
+        Invalid {
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+
+    /// The same error seen from settings that hold these under `prefix` (`"knit"`).
+    pub fn within(self, prefix: &str) -> Invalid {
+        let field = if self.field.is_empty() {
+            prefix.to_string()
+        } else if self.field.starts_with('[') {
+            format!("{prefix}{}", self.field)
+        } else {
+            format!("{prefix}.{}", self.field)
+        };
+        Invalid { field, ..self }
+    }
+}
+
+/// Checks that `value` is a finite number above zero.
+pub fn positive(field: &str, value: f64) -> Result<(), Invalid> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(Invalid::new(
+            field,
+            format!("must be a positive number, got {value}"),
+        ))
+    }
+}
+
+/// Checks that `value` is a finite number, zero or above.
+pub fn non_negative(field: &str, value: f64) -> Result<(), Invalid> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(Invalid::new(
+            field,
+            format!("must be zero or positive, got {value}"),
+        ))
+    }
+}
+
+/// Checks that every channel of a colour is in [0, 1].
+pub fn colour(field: &str, value: [f64; 3]) -> Result<(), Invalid> {
+    if value
+        .iter()
+        .all(|c| c.is_finite() && (0.0..=1.0).contains(c))
+    {
+        Ok(())
+    } else {
+        Err(Invalid::new(
+            field,
+            format!("each channel must be in [0, 1], got {value:?}"),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_field_is_named_from_the_scene_down() {
+        let e = Invalid::new("stiffness", "bad")
+            .within("support")
+            .within("yarns");
+        assert_eq!(e.field, "yarns.support.stiffness");
+        let e = Invalid::new("[2].factor", "bad").within("stretch");
+        assert_eq!(e.field, "stretch[2].factor");
+        assert_eq!(Invalid::new("", "bad").within("tube").field, "tube");
+    }
+}

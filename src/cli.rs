@@ -1,0 +1,414 @@
+//! The command line's arguments (clap) and the progress bar. A flag that sets a scene field
+//! becomes an [`Override`] of that field: the scene applies the flags and validates once, so a
+//! flag's value meets the same checks as the field's and a refusal names the flag.
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use serde_json::json;
+
+use knitfit::run::Progress;
+use knitfit::scene::{LoadedScene, Override};
+use knitfit::Error;
+
+/// Fits a knitted stocking onto a 3D leg (Sakaguchi & Miyata) and writes files artists' tools
+/// read. With no subcommand, fits the bundled sample scene into `out/`.
+#[derive(Parser, Debug)]
+#[command(name = "knitfit", version, about, long_about = None)]
+#[command(
+    after_help = "Exit codes: 0 done, 1 run failed, 2 bad input, 3 did not converge \
+                        (files written, report.json says \"converged\": false)."
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    /// No progress bar and no summary.
+    #[arg(short, long, global = true)]
+    pub quiet: bool,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Fit the stocking onto a leg from a glTF file; write stocking.glb, stocking.ply, leg.ply.
+    Fit(FitArgs),
+    /// The paper's flat-patch experiment: hold two edges of a knit patch, pull them apart, relax.
+    Patch(PatchArgs),
+    /// What accuracy costs in time: sweep resolution × solver × tolerance on the bundled legs;
+    /// write bench.md, bench.csv and bench.png.
+    Bench(BenchArgs),
+    /// Ray-trace the yarn-level preview of a fit from its stocking.glb (or its directory).
+    Render(RenderArgs),
+    /// Show what a fit (default) or `plan patch` would run: effects, stages and why each is
+    /// there, what is left out, the files, and the fit's memory estimate. Runs nothing and
+    /// writes nothing.
+    Plan(Box<PlanArgs>),
+}
+
+#[derive(clap::Args, Debug)]
+pub struct PlanArgs {
+    #[command(subcommand)]
+    pub of: Option<PlanOf>,
+    /// The fit to plan, as `knitfit fit` takes it.
+    #[command(flatten)]
+    pub fit: FitArgs,
+    /// Print the plan as JSON (for scripts).
+    #[arg(long, global = true)]
+    pub json: bool,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum PlanOf {
+    /// The plan of `knitfit fit` (what `knitfit plan` shows without a subcommand).
+    Fit(FitArgs),
+    /// The plan of `knitfit patch`.
+    Patch(PatchArgs),
+}
+
+#[derive(clap::Args, Debug, Default)]
+pub struct BenchArgs {
+    /// The short sweep (50×50 and 100×100 on the MakeHuman leg): under two minutes.
+    #[arg(long)]
+    pub quick: bool,
+    /// Output directory (created if missing).
+    #[arg(long, default_value = "out/bench")]
+    pub out: PathBuf,
+}
+
+#[derive(clap::Args, Debug, Default)]
+pub struct RenderArgs {
+    /// A fit's output directory or its stocking.glb.
+    pub input: PathBuf,
+    /// Scene file (JSON) for yarn radii, colours and render settings. Default: the bundled
+    /// samples/scene.json.
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Image width, pixels. Overrides render.width.
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height, pixels. Overrides render.height.
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Camera side: front, side, back or three-quarter. Overrides render.view (and the
+    /// scene's fixed camera).
+    #[arg(long, value_name = "VIEW")]
+    pub view: Option<String>,
+    /// Samples per pixel (stratified). Overrides render.spp.
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// yarn (the shaded yarns) or density (stitch density with a colour bar). Overrides
+    /// render.mode.
+    #[arg(long, value_name = "yarn|density")]
+    pub mode: Option<String>,
+    /// Picture to write (.png). Default: preview.png next to the input.
+    #[arg(long, value_name = "FILE.png")]
+    pub out: Option<PathBuf>,
+    /// Instead of writing a picture, print time and error against a 64-spp reference for 1, 4
+    /// and 16 samples per pixel.
+    #[arg(long)]
+    pub spp_sweep: bool,
+}
+
+#[derive(clap::Args, Debug, Default)]
+pub struct FitArgs {
+    /// Scene file (JSON). Default: the bundled samples/scene.json.
+    pub scene: Option<PathBuf>,
+    /// Leg file (.glb or .gltf). Overrides leg.file.
+    #[arg(long)]
+    pub leg: Option<PathBuf>,
+    /// Tube size, WALESxCOURSES (e.g. 150x150). Overrides tube.wales and tube.courses.
+    #[arg(long, value_name = "WxC")]
+    pub resolution: Option<String>,
+    /// Bottom and top of the stocking on the leg's axis, in the leg file's coordinates:
+    /// BX,BY,BZ,TX,TY,TZ. Overrides leg.axis.
+    #[arg(long, value_name = "BX,BY,BZ,TX,TY,TZ", allow_hyphen_values = true)]
+    pub axis: Option<String>,
+    /// Contact queries: bvh (fast) or brute (the paper's all-triangles test). Overrides
+    /// contact.method.
+    #[arg(long, value_name = "bvh|brute")]
+    pub contact: Option<String>,
+    /// Solver: multilevel (fast, the default) or paper (the paper's explicit steps, the
+    /// reference). Overrides solver.method.
+    #[arg(long, value_name = "multilevel|paper")]
+    pub solver: Option<String>,
+    /// Convergence tolerance on the relative residual and the largest move. Overrides
+    /// solver.tolerance.
+    #[arg(long, value_name = "TOL")]
+    pub tolerance: Option<f64>,
+    /// Memory the fit may use, GiB; a fit estimated to need more is refused before it starts.
+    /// Overrides limits.memory_gib (default: what the system has available).
+    #[arg(long, value_name = "GIB")]
+    pub memory_limit: Option<f64>,
+    /// Run even when the memory estimate is over the limit. Sets limits.allow_large.
+    #[arg(long)]
+    pub allow_large: bool,
+    /// Output directory (created if missing).
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+}
+
+impl FitArgs {
+    /// The arguments of `knitfit` with no subcommand: the bundled scene into `out/`.
+    pub fn bundled() -> FitArgs {
+        FitArgs {
+            out: PathBuf::from("out"),
+            ..FitArgs::default()
+        }
+    }
+
+    /// True when a scene or any option other than `--out` was given (every field is named, so
+    /// a new option cannot be forgotten here).
+    pub fn given(&self) -> bool {
+        let FitArgs {
+            scene,
+            leg,
+            resolution,
+            axis,
+            contact,
+            solver,
+            tolerance,
+            memory_limit,
+            allow_large,
+            out: _,
+        } = self;
+        scene.is_some()
+            || leg.is_some()
+            || resolution.is_some()
+            || axis.is_some()
+            || contact.is_some()
+            || solver.is_some()
+            || tolerance.is_some()
+            || memory_limit.is_some()
+            || *allow_large
+    }
+
+    /// The scene file with these flags applied.
+    pub fn load(&self) -> Result<LoadedScene, Error> {
+        let mut set = Vec::new();
+        if let Some(path) = &self.leg {
+            set.push(Override::new(
+                "--leg",
+                "leg.file",
+                path.display().to_string(),
+            ));
+        }
+        if let Some(text) = &self.resolution {
+            let [wales, courses] = parse_grid("--resolution", text)?;
+            set.push(
+                Override::new("--resolution", "tube.wales", wales).and("tube.courses", courses),
+            );
+        }
+        if let Some(text) = &self.axis {
+            let [bx, by, bz, tx, ty, tz] = parse_axis(text)?;
+            let axis = json!({ "bottom": [bx, by, bz], "top": [tx, ty, tz] });
+            set.push(Override::new("--axis", "leg.axis", axis));
+        }
+        if let Some(method) = &self.contact {
+            set.push(Override::new(
+                "--contact",
+                "contact.method",
+                method.as_str(),
+            ));
+        }
+        if let Some(method) = &self.solver {
+            set.push(Override::new("--solver", "solver.method", method.as_str()));
+        }
+        if let Some(tolerance) = self.tolerance {
+            let tolerance = finite("--tolerance", tolerance)?;
+            set.push(Override::new("--tolerance", "solver.tolerance", tolerance));
+        }
+        if let Some(gib) = self.memory_limit {
+            let gib = finite("--memory-limit", gib)?;
+            set.push(Override::new("--memory-limit", "limits.memory_gib", gib));
+        }
+        if self.allow_large {
+            set.push(Override::new("--allow-large", "limits.allow_large", true));
+        }
+        LoadedScene::load(self.scene.as_deref(), set)
+    }
+}
+
+#[derive(clap::Args, Debug, Default)]
+pub struct PatchArgs {
+    /// Scene file (JSON). Default: the bundled samples/scene.json.
+    pub scene: Option<PathBuf>,
+    /// Patch size in points, WALESxCOURSES (e.g. 10x10). Overrides patch.size.
+    #[arg(long, value_name = "WxH")]
+    pub size: Option<String>,
+    /// A stretch to run, course=S or wale=S (S = held-edge distance / rest distance). Repeat for
+    /// both directions side by side. Overrides patch.stretch.
+    #[arg(long, value_name = "AXIS=S")]
+    pub stretch: Vec<String>,
+    /// Output directory (created if missing).
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+}
+
+impl PatchArgs {
+    /// The scene file with these flags applied.
+    pub fn load(&self) -> Result<LoadedScene, Error> {
+        let mut set = Vec::new();
+        if let Some(text) = &self.size {
+            let size = parse_grid("--size", text)?;
+            set.push(Override::new("--size", "patch.size", json!(size)));
+        }
+        if !self.stretch.is_empty() {
+            let stretches = self
+                .stretch
+                .iter()
+                .map(|text| parse_stretch(text))
+                .collect::<Result<Vec<_>, _>>()?;
+            set.push(Override::new("--stretch", "patch.stretch", stretches));
+        }
+        LoadedScene::load(self.scene.as_deref(), set)
+    }
+}
+
+impl RenderArgs {
+    /// The scene file with these flags applied.
+    pub fn load(&self) -> Result<LoadedScene, Error> {
+        let mut set = Vec::new();
+        if let Some(width) = self.width {
+            set.push(Override::new("--width", "render.width", width));
+        }
+        if let Some(height) = self.height {
+            set.push(Override::new("--height", "render.height", height));
+        }
+        if let Some(spp) = self.spp {
+            set.push(Override::new("--spp", "render.spp", spp));
+        }
+        if let Some(view) = &self.view {
+            // A view asked for on the command line wins over the scene's fixed camera.
+            set.push(
+                Override::new("--view", "render.view", view.as_str())
+                    .and("render.camera", serde_json::Value::Null),
+            );
+        }
+        if let Some(mode) = &self.mode {
+            set.push(Override::new("--mode", "render.mode", mode.as_str()));
+        }
+        LoadedScene::load(self.scene.as_deref(), set)
+    }
+}
+
+/// Parses `AxB` into two counts (the scene checks their range).
+fn parse_grid(flag: &str, text: &str) -> Result<[usize; 2], Error> {
+    let bad = || Error::InvalidArgument {
+        flag: flag.into(),
+        message: format!("expected two counts such as 150x150, got {text:?}"),
+    };
+    let (a, b) = text.split_once(['x', 'X']).ok_or_else(bad)?;
+    let parse = |s: &str| s.trim().parse::<usize>().map_err(|_| bad());
+    Ok([parse(a)?, parse(b)?])
+}
+
+/// Parses `BX,BY,BZ,TX,TY,TZ` (the scene checks the points).
+fn parse_axis(text: &str) -> Result<[f64; 6], Error> {
+    let bad = |message: String| Error::InvalidArgument {
+        flag: "--axis".into(),
+        message,
+    };
+    let numbers: Vec<f64> = text
+        .split(',')
+        .map(|s| s.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| {
+            bad(format!(
+                "expected six numbers BX,BY,BZ,TX,TY,TZ, got {text:?}"
+            ))
+        })?;
+    if !numbers.iter().all(|c| c.is_finite()) {
+        return Err(bad("coordinates must be finite numbers".into()));
+    }
+    numbers.try_into().map_err(|numbers: Vec<f64>| {
+        bad(format!(
+            "expected six numbers BX,BY,BZ,TX,TY,TZ, got {}",
+            numbers.len()
+        ))
+    })
+}
+
+/// `value`, refused unless finite: a scene file cannot hold NaN or infinity, so neither may a
+/// flag that sets a scene field.
+fn finite(flag: &str, value: f64) -> Result<f64, Error> {
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(Error::InvalidArgument {
+            flag: flag.into(),
+            message: format!("must be a finite number, got {value}"),
+        })
+    }
+}
+
+/// Parses `course=S` or `wale=S` into the scene's form of a stretch (the scene checks the axis
+/// name and the factor).
+fn parse_stretch(text: &str) -> Result<serde_json::Value, Error> {
+    let bad = |message: String| Error::InvalidArgument {
+        flag: "--stretch".into(),
+        message,
+    };
+    let (axis, factor) = text
+        .split_once('=')
+        .ok_or_else(|| bad(format!("expected course=S or wale=S, got {text:?}")))?;
+    let factor: f64 = factor
+        .trim()
+        .parse()
+        .map_err(|_| bad(format!("stretch factor must be a number, got {factor:?}")))?;
+    let factor = finite("--stretch", factor)?;
+    Ok(json!({ "axis": axis.trim(), "factor": factor }))
+}
+
+/// A progress bar on stderr, shown only on a terminal and without `-q`.
+pub struct Bar {
+    visible: bool,
+    bar: Option<ProgressBar>,
+}
+
+impl Bar {
+    pub fn new(quiet: bool) -> Bar {
+        Bar {
+            visible: !quiet && std::io::stderr().is_terminal(),
+            bar: None,
+        }
+    }
+}
+
+impl Progress for Bar {
+    fn begin(&mut self, stage: &str, total: u64) {
+        if !self.visible {
+            return;
+        }
+        let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
+        bar.set_style(
+            ProgressStyle::with_template("{prefix:>20} [{elapsed_precise}] {pos} steps {msg}")
+                .expect("static template"),
+        );
+        bar.set_prefix(stage.to_string());
+        self.bar = Some(bar);
+    }
+
+    fn advance(&mut self, position: u64, residual: f64) {
+        if let Some(bar) = &self.bar {
+            bar.set_position(position);
+            if position.is_multiple_of(16) {
+                bar.set_message(format!("residual {residual:.2e}"));
+            }
+        }
+    }
+
+    fn end(&mut self) {
+        if let Some(bar) = self.bar.take() {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+/// Prints where a run's files went.
+pub fn print_written(out: &Path, written: &[PathBuf]) {
+    println!("wrote to {}/:", out.display());
+    for path in written {
+        println!("  {}", path.display());
+    }
+}

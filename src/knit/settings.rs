@@ -1,0 +1,301 @@
+//! The knit's settings (the scene's `knit`, `yarns`, `tube` and `patch`): the pattern and the
+//! relaxed stitch, the two yarn materials, the tube a fit starts from, and the flat patch of the
+//! paper's experiment. Lengths in metres; stiffness in the paper's solver units.
+
+use serde::{Deserialize, Serialize};
+
+use super::Pattern;
+use crate::base::settings::{self, Invalid};
+use crate::base::YarnKind;
+
+/// Knit structure.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct KnitSettings {
+    /// `"plain"` (one nylon yarn) or `"alternating"` (nylon and support yarn in alternate courses,
+    /// the paper's 交編). Default: `"alternating"`.
+    pub pattern: Pattern,
+    /// Rest length of a course spring: the distance between neighbouring wales along a course,
+    /// in metres (default: 0.0005, i.e. 20 wales per cm, typical of a sheer stocking).
+    pub course_spacing_m: f64,
+    /// Rest length of a wale spring: the distance between neighbouring courses along a wale,
+    /// in metres (default: 0.00074). With `course_spacing_m` it sets the fabric's stitch shape,
+    /// which a fit keeps at any grid size (`Knit::with_stitch_shape`); why not a square stitch:
+    /// docs/decisions.
+    pub wale_spacing_m: f64,
+    /// Connection factor c2 of eq. (2), dimensionless (default: 0.2, the paper's value). Used only
+    /// when `effects` lists `yarn_connection`.
+    pub connection_factor: f64,
+}
+
+impl Default for KnitSettings {
+    fn default() -> Self {
+        KnitSettings {
+            pattern: Pattern::Alternating,
+            course_spacing_m: 0.0005,
+            wale_spacing_m: 0.00074,
+            connection_factor: 0.2,
+        }
+    }
+}
+
+/// The two yarn materials.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Yarns {
+    /// Nylon yarn (default: c1 = 1, radius 0.03 mm). The only yarn of a plain pattern.
+    pub nylon: Yarn,
+    /// Support yarn (default: c1 = 10, radius 0.04 mm). Used by the alternating pattern.
+    pub support: Yarn,
+}
+
+impl Default for Yarns {
+    fn default() -> Self {
+        Yarns {
+            nylon: Yarn {
+                stiffness: 1.0,
+                radius_m: 0.00003,
+                colour: [0.16, 0.11, 0.09],
+            },
+            support: Yarn {
+                stiffness: 10.0,
+                radius_m: 0.00004,
+                colour: [0.08, 0.07, 0.10],
+            },
+        }
+    }
+}
+
+impl Yarns {
+    /// The material of a yarn kind.
+    pub fn get(&self, kind: YarnKind) -> &Yarn {
+        match kind {
+            YarnKind::Nylon => &self.nylon,
+            YarnKind::Support => &self.support,
+        }
+    }
+}
+
+/// One yarn material.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Yarn {
+    /// Spring stiffness c1 of eq. (1), per solver time unit squared for a unit mass point
+    /// (force per metre of extension per unit mass). The paper uses 1 for nylon, 10 for support.
+    pub stiffness: f64,
+    /// Yarn radius, metres: the contact offset (nylon), the coverage and every picture.
+    pub radius_m: f64,
+    /// Linear-RGB base colour, each channel 0–1.
+    #[serde(default = "default_colour")]
+    pub colour: [f64; 3],
+}
+
+fn default_colour() -> [f64; 3] {
+    [0.15, 0.1, 0.1]
+}
+
+/// The stocking tube before fitting (paper §6.1).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct TubeSettings {
+    /// Points around the tube (wales) (default: 150, the paper's smaller fit).
+    pub wales: usize,
+    /// Rings along the tube (courses) (default: 150).
+    pub courses: usize,
+    /// Circumference of the stocking lying relaxed, metres (default: 0.20, a typical sheer
+    /// stocking's leg measured flat and doubled).
+    pub relaxed_circumference_m: f64,
+    /// Length of the relaxed stocking between the two axis points, metres; must be shorter than
+    /// the axis, since a stocking is worn stretched along the leg. Absent means
+    /// [`RELAXED_LENGTH_FRACTION`] of the axis length (default: absent).
+    pub relaxed_length_m: Option<f64>,
+}
+
+/// A stocking's relaxed length as a fraction of the leg length it covers, when the scene does
+/// not give one: sheer stockings are worn stretched by about 1.4× along the leg.
+pub const RELAXED_LENGTH_FRACTION: f64 = 0.7;
+
+impl Default for TubeSettings {
+    fn default() -> Self {
+        TubeSettings {
+            wales: 150,
+            courses: 150,
+            relaxed_circumference_m: 0.20,
+            relaxed_length_m: None,
+        }
+    }
+}
+
+/// Direction a patch is stretched in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum StretchAxis {
+    /// Along the course: the two end wales are held and pulled apart.
+    Course,
+    /// Along the wale: the first and last courses are held and pulled apart.
+    Wale,
+}
+
+impl StretchAxis {
+    /// Name as in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            StretchAxis::Course => "course",
+            StretchAxis::Wale => "wale",
+        }
+    }
+}
+
+/// One stretch of the patch experiment.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Stretch {
+    /// Which pair of edges is held and pulled apart.
+    pub axis: StretchAxis,
+    /// Held-edge distance over rest distance, dimensionless (1 = unstretched).
+    pub factor: f64,
+}
+
+impl std::fmt::Display for Stretch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}={}", self.axis.name(), self.factor)
+    }
+}
+
+/// The flat-patch experiment (paper §5, Fig. 8/9).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PatchSettings {
+    /// Patch size as `[wales, courses]`, points (default: `[10, 10]`, the paper's patch).
+    pub size: [usize; 2],
+    /// Stretches to run, each on a fresh patch; drawn side by side (default: course ×1.5 and
+    /// wale ×1.5, the paper's Fig. 9).
+    pub stretch: Vec<Stretch>,
+}
+
+impl Default for PatchSettings {
+    fn default() -> Self {
+        PatchSettings {
+            size: [10, 10],
+            stretch: vec![
+                Stretch {
+                    axis: StretchAxis::Course,
+                    factor: 1.5,
+                },
+                Stretch {
+                    axis: StretchAxis::Wale,
+                    factor: 1.5,
+                },
+            ],
+        }
+    }
+}
+
+/// Largest stretch factor accepted: beyond it the mass-spring model has long stopped being yarn.
+pub const MAX_STRETCH: f64 = 10.0;
+/// Largest patch accepted, in points.
+pub const MAX_PATCH_POINTS: usize = 4_000_000;
+/// Largest tube a knit can hold, in points: its points, springs (two per point) and entries of
+/// its per-point spring lists (four per point) are numbered in 32 bits. Below it, what limits a
+/// tube is the memory it needs (`crate::limits`), which can be overridden; this cannot.
+pub const MAX_TUBE_POINTS: usize = (u32::MAX / 4) as usize;
+
+impl KnitSettings {
+    /// Checks every value; the error names the field under `knit`.
+    pub fn validate(&self) -> Result<(), Invalid> {
+        settings::positive("course_spacing_m", self.course_spacing_m)?;
+        settings::positive("wale_spacing_m", self.wale_spacing_m)?;
+        let c2 = self.connection_factor;
+        if !(c2.is_finite() && (0.0..1.0).contains(&c2)) {
+            return Err(Invalid::new(
+                "connection_factor",
+                format!("must be in [0, 1), got {c2}"),
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl Yarns {
+    /// Checks every value; the error names the field under `yarns`.
+    pub fn validate(&self) -> Result<(), Invalid> {
+        for kind in YarnKind::ALL {
+            let yarn = self.get(kind);
+            let check = || -> Result<(), Invalid> {
+                settings::positive("stiffness", yarn.stiffness)?;
+                settings::positive("radius_m", yarn.radius_m)?;
+                settings::colour("colour", yarn.colour)
+            };
+            check().map_err(|e| e.within(kind.name()))?;
+        }
+        Ok(())
+    }
+}
+
+impl TubeSettings {
+    /// Checks every value; the error names the field under `tube`.
+    pub fn validate(&self) -> Result<(), Invalid> {
+        let (w, c) = (self.wales, self.courses);
+        if w < 3 || c < 2 {
+            return Err(Invalid::new(
+                "",
+                format!("needs at least 3 wales and 2 courses, got {w}×{c}"),
+            ));
+        }
+        if w.checked_mul(c).is_none_or(|n| n > MAX_TUBE_POINTS) {
+            return Err(Invalid::new(
+                "",
+                format!(
+                    "{w}×{c} points is over the {MAX_TUBE_POINTS} points a knit's 32-bit \
+                     indices can number"
+                ),
+            ));
+        }
+        settings::positive("relaxed_circumference_m", self.relaxed_circumference_m)?;
+        if let Some(length) = self.relaxed_length_m {
+            settings::positive("relaxed_length_m", length)?;
+        }
+        Ok(())
+    }
+}
+
+impl PatchSettings {
+    /// Checks every value; the error names the field under `patch`.
+    pub fn validate(&self) -> Result<(), Invalid> {
+        let [wales, courses] = self.size;
+        if wales < 2 || courses < 2 {
+            return Err(Invalid::new(
+                "size",
+                format!("needs at least 2x2 points (two held edges), got {wales}x{courses}"),
+            ));
+        }
+        if wales
+            .checked_mul(courses)
+            .is_none_or(|n| n > MAX_PATCH_POINTS)
+        {
+            return Err(Invalid::new(
+                "size",
+                format!(
+                    "{wales}×{courses} points is over the patch limit of {MAX_PATCH_POINTS} \
+                     points"
+                ),
+            ));
+        }
+        if self.stretch.is_empty() {
+            return Err(Invalid::new(
+                "stretch",
+                "needs at least one stretch, e.g. {\"axis\": \"course\", \"factor\": 1.5}",
+            ));
+        }
+        for (i, s) in self.stretch.iter().enumerate() {
+            let factor = s.factor;
+            if !(factor.is_finite() && factor > 0.0 && factor <= MAX_STRETCH) {
+                return Err(Invalid::new(
+                    format!("stretch[{i}].factor"),
+                    format!("must be in (0, {MAX_STRETCH}], got {factor}"),
+                ));
+            }
+        }
+        Ok(())
+    }
+}
