@@ -6,6 +6,7 @@
 //! command that strings the stages together. See ARCHITECTURE.md.
 
 pub mod base;
+pub mod draw;
 pub mod error;
 pub mod export;
 pub mod knit;
@@ -13,7 +14,7 @@ pub mod leg;
 pub mod limits;
 pub mod plan;
 pub mod post;
-pub mod render;
+pub mod preview;
 pub mod report;
 pub mod run;
 pub mod scene;

@@ -10,7 +10,7 @@ use serde::Serialize;
 use crate::base::YarnKind;
 use crate::export::Output;
 use crate::knit::Stretch;
-use crate::render::RenderMode;
+use crate::preview::RenderMode;
 use crate::scene::{Effect, Scene};
 use crate::sim::multilevel::grid_sizes;
 use crate::sim::{ForceTerms, SolverMethod};

@@ -13,7 +13,7 @@ use crate::limits::MemoryCheck;
 use crate::plan::{Plan, PlannedStage, Stage};
 use crate::post::penetration::PenetrationStats;
 use crate::post::StitchStats;
-use crate::render::preview::PreviewStats;
+use crate::preview::PreviewStats;
 use crate::scene::Effect;
 use crate::sim::contact::ContactCounters;
 use crate::sim::LevelStats;

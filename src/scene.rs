@@ -20,7 +20,7 @@ use crate::knit::settings::{KnitSettings, PatchSettings, TubeSettings, Yarns};
 use crate::knit::Pattern;
 use crate::leg::settings::LegSettings;
 use crate::limits::Limits;
-use crate::render::settings::RenderSettings;
+use crate::preview::settings::RenderSettings;
 use crate::sim::settings::{ContactSettings, SolverSettings};
 
 /// The scene bundled with the binary (`samples/scene.json`), used when no scene file is given.
@@ -348,7 +348,7 @@ fn syntax_error(name: &str, e: &serde_json::Error) -> Error {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::View;
+    use crate::preview::View;
 
     #[test]
     fn empty_object_is_the_default_scene() {

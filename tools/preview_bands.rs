@@ -10,8 +10,8 @@
 
 use std::path::PathBuf;
 
-use knitfit::render::preview::{render_preview, PreviewBuffers, PreviewInput};
-use knitfit::render::stocking_glb::read_stocking_glb;
+use knitfit::export::gltf::read::read_stocking_glb;
+use knitfit::preview::{render_preview, PreviewBuffers, PreviewInput};
 use knitfit::scene::Scene;
 
 fn band(b: &PreviewBuffers, heights: (f32, f32), facing: (f32, f32)) -> (f64, f64, usize) {

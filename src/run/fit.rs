@@ -10,6 +10,8 @@ use nalgebra::Point3;
 
 use super::{Outcome, Progress, Run, StepProgress};
 use crate::base::{colour, Direction, SurfaceMesh, YarnGeometry, YarnKind};
+use crate::draw;
+use crate::draw::density_map::{self, DensityPictureStyle};
 use crate::error::{Error, Result};
 use crate::export;
 use crate::export::gltf::GlbNode;
@@ -23,9 +25,7 @@ use crate::plan::{fit_files, File, FitFile, Plan, Stage, PREVIEW_FILE};
 use crate::post::fields::{self, KnitFields};
 use crate::post::penetration::{fix_penetrations, PenetrationStats};
 use crate::post::stitches::{bunched_courses, MAX_BUNCHED_FRACTION};
-use crate::render;
-use crate::render::density_picture::{self, DensityPictureStyle};
-use crate::render::preview::{PreviewInput, PreviewStats};
+use crate::preview::{PreviewInput, PreviewStats};
 use crate::report::{
     Bounds, ContactDetails, DensityRange, FitDetails, LegDetails, MemoryDetails, Metrics,
     PerDirection, SolverDetails, StageClock, TubeDetails,
@@ -124,7 +124,7 @@ pub fn run_fit(
     if plan.has(Stage::RenderPreview) {
         let (bytes, stats) = run.stage(Stage::RenderPreview, || {
             let input = PreviewInput::new(&products.leg_mesh, &yarns, &scene.yarns);
-            render::preview::encode_preview(input, &scene.render, PREVIEW_FILE)
+            crate::preview::encode_preview(input, &scene.render, PREVIEW_FILE)
         })?;
         run.keep(PREVIEW_FILE, bytes);
         preview = Some(stats);
@@ -611,13 +611,13 @@ impl FitProducts<'_> {
                     .get("stitch_density")
                     .map(|d| d.iter().map(|&v| f64::from(v)).collect())
                     .unwrap_or_default();
-                let picture = density_picture::draw_density(
+                let picture = density_map::draw_density(
                     &self.leg_mesh.positions,
                     &self.leg_mesh.triangles,
                     &density,
                     &DensityPictureStyle::default(),
                 );
-                render::encode_png(&picture, file.name())
+                draw::encode_png(&picture, file.name())
             }
         }
     }

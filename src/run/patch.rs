@@ -6,13 +6,13 @@ use std::path::Path;
 
 use super::{Outcome, Progress, Run, StepProgress};
 use crate::base::YarnGeometry;
+use crate::draw::patch_picture::{self, Panel, PictureStyle};
 use crate::error::Result;
 use crate::export;
 use crate::knit::patch::{build_patch, PatchSpec};
 use crate::knit::{Knit, Stretch, StretchAxis};
 use crate::plan::{patch_files, File, PatchFile, Plan, Stage};
 use crate::post::{measure_stitches, StitchStats};
-use crate::render::patch_picture::{self, Panel, PictureStyle};
 use crate::report::{Metrics, PatchDetails, PatchRun};
 use crate::scene::{LoadedScene, Scene};
 use crate::sim::{relax, RelaxStats};
@@ -117,7 +117,7 @@ fn encode(
                 yarn_colour: [yarns.nylon.colour, yarns.support.colour],
                 ..PictureStyle::default()
             };
-            crate::render::encode_png(&patch_picture::draw_patches(&panels, &style), file.name())
+            crate::draw::encode_png(&patch_picture::draw_patches(&panels, &style), file.name())
         }
     }
 }

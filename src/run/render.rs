@@ -9,9 +9,9 @@ use std::time::Instant;
 
 use super::{Outcome, Run};
 use crate::error::{Error, Result};
+use crate::export::gltf::read::read_stocking_glb;
 use crate::plan::{Plan, Stage};
-use crate::render::preview::{render_prepared, PreparedScene, PreviewInput};
-use crate::render::stocking_glb::read_stocking_glb;
+use crate::preview::{render_prepared, PreparedScene, PreviewInput};
 use crate::report::{Metrics, RenderDetails};
 use crate::scene::{LoadedScene, Scene};
 
@@ -90,7 +90,7 @@ pub fn run_render(
     let (bytes, stats) = run.stage(Stage::RenderPreview, || -> Result<_> {
         let prepared = PreparedScene::new(input, &name)?;
         let preview = render_prepared(&prepared, &scene.render);
-        let bytes = crate::render::encode_png(&preview.image, &name)?;
+        let bytes = crate::draw::encode_png(&preview.image, &name)?;
         Ok((bytes, preview.stats))
     })?;
     run.keep(&name, bytes);

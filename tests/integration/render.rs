@@ -5,9 +5,9 @@ use std::path::PathBuf;
 use std::sync::OnceLock;
 
 use knitfit::base::{Direction, Segment, SurfaceMesh, YarnGeometry, YarnKind};
-use knitfit::render::preview::{render_preview, PreviewBuffers, PreviewInput};
-use knitfit::render::stocking_glb::read_stocking_glb;
-use knitfit::render::{CameraSettings, RenderSettings};
+use knitfit::export::gltf::read::read_stocking_glb;
+use knitfit::preview::{render_preview, PreviewBuffers, PreviewInput};
+use knitfit::preview::{CameraSettings, RenderSettings};
 use knitfit::scene::Scene;
 
 use crate::util::{
@@ -476,7 +476,7 @@ fn density_mode_draws_the_denser_ankle_hotter_than_the_thigh_with_a_colour_bar()
     let stocking = read_stocking_glb(glb).unwrap();
     let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
     let settings = RenderSettings {
-        mode: knitfit::render::RenderMode::Density,
+        mode: knitfit::preview::RenderMode::Density,
         ..tall_settings()
     };
     let preview = render_preview(input, &settings, "test").unwrap();

@@ -10,19 +10,7 @@
 //! decides). A ray that misses the skin sees the background: yarn hovering beyond the outline
 //! is a few hundredths of a millimetre wide, far below a pixel.
 //!
-//! Anti-aliasing: each pixel is split into a grid of ⌈√spp⌉ × ⌈spp/⌈√spp⌉⌉ strata with one
-//! sample each, placed by correlated multi-jittered sampling (Kensler, "Correlated
-//! Multi-Jittered Sampling", Pixar 2013): stratified in 2D *and* along each axis alone, so that
-//! yarns running along the picture's axes (wales down a standing leg, courses across it) are
-//! sampled at spp distinct offsets, not ⌈√spp⌉. A plain jittered grid is no better than random
-//! samples when the yarn period equals a stratum. All samples belong to one box-filtered pixel,
-//! and their radiance is averaged *before* tone mapping, so where the yarn spacing is below a
-//! pixel the pixel converges to the area-weighted mix of yarn and skin — the mean sheerness —
-//! instead of aliasing into moiré (as one centred sample would) or vanishing.
-//!
-//! Determinism: every random number comes from a hash of (pixel index, sample index) and a fixed
-//! seed (SplitMix64), rows are rendered in parallel but each pixel depends only on its own
-//! samples, summed in a fixed order: the same bytes whatever the thread count.
+//! Anti-aliasing and determinism: [`super::sampling`].
 
 use nalgebra::{Point3, Vector3};
 use parry3d_f64::query::{PointQuery, Ray, RayCast};
@@ -30,16 +18,15 @@ use parry3d_f64::shape::{FeatureId, TriMesh};
 use rayon::prelude::*;
 
 use super::camera::Camera;
+use super::sampling::{strata, PixelSamples};
 use super::shading::{self, Lights};
 use super::yarn_lookup::YarnIndex;
 use crate::base::colour::{heat, linear_to_srgb8};
 use crate::base::{SurfaceMesh, YarnGeometry, YarnKind};
 use crate::error::{Error, Result};
 use crate::knit::Yarns;
-use crate::render::{RenderMode, RenderSettings};
+use crate::preview::{RenderMode, RenderSettings};
 
-/// The seed every preview sample is derived from.
-pub const SEED: u64 = 0x6b6e_6974_6669_7421;
 /// Width of the colour bar panel of the density mode, as a fraction of the image height.
 const BAR_PANEL_FRACTION: f64 = 0.16;
 
@@ -83,7 +70,10 @@ pub fn encode_preview(
     name: &str,
 ) -> Result<(Vec<u8>, PreviewStats)> {
     let preview = render_preview(input, settings, name)?;
-    Ok((super::encode_png(&preview.image, name)?, preview.stats))
+    Ok((
+        crate::draw::encode_png(&preview.image, name)?,
+        preview.stats,
+    ))
 }
 
 /// Per-pixel buffers besides the picture, for measuring what the picture shows. Each is
@@ -146,13 +136,6 @@ pub struct Preview {
     pub buffers: PreviewBuffers,
     /// Counters.
     pub stats: PreviewStats,
-}
-
-/// Samples per pixel as (columns, rows) of the stratification grid for a requested count.
-pub fn strata(spp: u32) -> (u32, u32) {
-    let spp = spp.max(1);
-    let cols = (spp as f64).sqrt().ceil() as u32;
-    (cols, spp.div_ceil(cols))
 }
 
 /// The leg and yarns made ready for ray casting.
@@ -355,7 +338,7 @@ pub fn render_prepared(scene: &PreparedScene, settings: &RenderSettings) -> Prev
         }
     }
     if settings.mode == RenderMode::Density {
-        image = super::density_bar::with_bar(
+        image = crate::draw::colour_bar::with_bar(
             &image,
             density_range.map(|(lo, hi)| (f64::from(lo), f64::from(hi))),
             BAR_PANEL_FRACTION,
@@ -406,21 +389,12 @@ impl Context<'_> {
         let mut sum = [0.0f64; 3];
         let (mut legs, mut yarns) = (0u32, 0u32);
         let (mut coverage, mut height, mut facing) = (0.0f64, 0.0f64, 0.0f64);
-        let seed = splitmix64(SEED ^ pixel_index.wrapping_mul(0x9e37_79b9_7f4a_7c15));
-        let col_perm = permutation(cols, splitmix64(seed ^ 0xa511_e9b3));
-        let row_perm = permutation(rows, splitmix64(seed ^ 0x63d8_3595));
+        let samples = PixelSamples::new(pixel_index, cols, rows);
         for j in 0..rows {
             for i in 0..cols {
-                let k = u64::from(j * cols + i);
-                let bits = splitmix64(seed ^ k.wrapping_mul(0xd1b5_4a32_d192_ed03));
-                let (jx, jy) = (unit(bits), unit(bits >> 32));
-                // Correlated multi-jitter: stratum (i, j), and within it the sub-stratum given by
-                // the other axis's permuted index, so the samples are also stratified along x
-                // alone and along y alone.
-                let sx = (f64::from(row_perm[j as usize]) + jx) / f64::from(rows);
-                let sy = (f64::from(col_perm[i as usize]) + jy) / f64::from(cols);
-                let u = (f64::from(x) + (f64::from(i) + sx) / f64::from(cols)) / f64::from(w);
-                let v = (f64::from(y) + (f64::from(j) + sy) / f64::from(rows)) / f64::from(h);
+                let (ox, oy) = samples.offset(i, j);
+                let u = (f64::from(x) + ox) / f64::from(w);
+                let v = (f64::from(y) + oy) / f64::from(h);
                 let s = self.sample(u, v);
                 for (total, r) in sum.iter_mut().zip(s.radiance) {
                     *total += r;
@@ -572,47 +546,9 @@ fn barycentric(c: &[Point3<f64>; 3], p: &Point3<f64>) -> [f64; 3] {
     [1.0 - v - w, v, w]
 }
 
-/// SplitMix64 (Steele, Lea & Flood 2014): a fixed, high-quality 64-bit mix.
-pub fn splitmix64(x: u64) -> u64 {
-    let mut z = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-
-/// A permutation of `0..n` (n ≤ [`MAX_STRATA`]) drawn by Fisher–Yates from `seed`.
-fn permutation(n: u32, seed: u64) -> [u32; MAX_STRATA] {
-    let mut p: [u32; MAX_STRATA] = std::array::from_fn(|i| i as u32);
-    let n = (n as usize).min(MAX_STRATA);
-    let mut state = seed;
-    for i in (1..n).rev() {
-        state = splitmix64(state);
-        let j = (state % (i as u64 + 1)) as usize;
-        p.swap(i, j);
-    }
-    p
-}
-
-/// Most strata along one axis: ⌈√1024⌉.
-const MAX_STRATA: usize = 32;
-
-/// The low 32 bits as a number in [0, 1).
-fn unit(bits: u64) -> f64 {
-    (bits & 0xffff_ffff) as f64 / 4_294_967_296.0
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn spp_fills_a_near_square_grid() {
-        assert_eq!(strata(1), (1, 1));
-        assert_eq!(strata(4), (2, 2));
-        assert_eq!(strata(16), (4, 4));
-        assert_eq!(strata(8), (3, 3));
-        assert_eq!(strata(6), (3, 2));
-    }
 
     #[test]
     fn inverse_tone_mapping_round_trips() {

@@ -8,7 +8,7 @@ use embedded_graphics::prelude::{Drawable, Point};
 use embedded_graphics::text::{Alignment, Baseline, Text, TextStyleBuilder};
 use image::{Rgb, RgbImage};
 
-use super::density_picture::{font_for, nice_ticks, ImageTarget, NO_YARN_LABEL, UNIT_LABEL};
+use super::density_map::{font_for, nice_ticks, ImageTarget, NO_YARN_LABEL, UNIT_LABEL};
 use crate::base::colour::{heat, linear_to_srgb8};
 
 /// sRGB of text and outlines.

@@ -8,7 +8,7 @@
 
 use nalgebra::{Point3, Vector3};
 
-use crate::render::{CameraSettings, View};
+use crate::preview::{CameraSettings, View};
 
 /// Vertical field of view of the auto-framed camera, degrees.
 pub const AUTO_FOV_DEG: f64 = 25.0;

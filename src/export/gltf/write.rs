@@ -13,9 +13,9 @@ use gltf_json as json;
 use json::validation::{Checked::Valid, USize64};
 use json::Index;
 
-use super::ply::{check_surface_mesh, check_yarn_geometry};
 use crate::base::{SurfaceMesh, YarnGeometry, YarnKind};
 use crate::error::{Error, Result};
+use crate::export::ply::{check_surface_mesh, check_yarn_geometry};
 
 /// One root node of a GLB file.
 pub enum GlbNode<'a> {

@@ -828,7 +828,7 @@ fn normalised(a: [f64; 3]) -> Option<[f64; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::encode_png;
+    use crate::draw::encode_png;
 
     const RADIUS_M: f64 = 0.05;
     const HEIGHT_M: f64 = 0.5;

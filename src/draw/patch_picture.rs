@@ -549,7 +549,7 @@ mod tests {
                 geometry: &g,
                 held: &held,
             };
-            crate::render::encode_png(
+            crate::draw::encode_png(
                 &draw_patches(&[panel, panel], &PictureStyle::default()),
                 "patch.png",
             )

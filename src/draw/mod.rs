@@ -1,22 +1,14 @@
-//! Pictures: the flat-patch drawing, the leg's density picture, and the yarn-level preview
-//! renderer (`preview`: camera, yarn lookup, shading).
+//! Pictures in two dimensions: the one raster-and-text layer every picture is drawn with, and
+//! the pictures themselves (`density.png`, the patch picture, the colour bar, `bench.png`).
 
 use image::{ImageEncoder, RgbImage};
 
 use crate::error::{Error, Result};
 
-pub use settings::{CameraSettings, RenderMode, RenderSettings, View};
-
 pub mod bench_plot;
-pub mod camera;
-pub mod density_bar;
-pub mod density_picture;
+pub mod colour_bar;
+pub mod density_map;
 pub mod patch_picture;
-pub mod preview;
-pub mod settings;
-pub mod shading;
-pub mod stocking_glb;
-pub mod yarn_lookup;
 
 /// Encodes an image as PNG bytes for the file `file_name`.
 ///
