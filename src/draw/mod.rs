@@ -6,6 +6,7 @@ use image::{ImageEncoder, RgbImage};
 use crate::error::{Error, Result};
 
 pub mod bench_plot;
+pub mod canvas;
 pub mod colour_bar;
 pub mod density_map;
 pub mod patch_picture;

@@ -5,14 +5,14 @@
 //! Every yarn segment is an anti-aliased capsule shaded like a cylinder seen from above (light on
 //! the crest, dark at the flanks). Segments are drawn in passes: the grip under held edges, then
 //! wale yarn, then course yarn over it, then a mark on every held point. Within a pass the
-//! capsules are merged as one signed-distance field (nearest capsule wins), so joints between the
-//! segments of one yarn are seamless rather than darkened twice by overlapping edges.
+//! capsules are merged as one shape ([`LinearImage::strokes`]), so joints between the segments
+//! of one yarn are seamless.
 //!
 //! Pure and deterministic: no randomness, no threads, the same bytes for the same input.
 
 use image::RgbImage;
 
-use crate::base::colour::linear_to_srgb8;
+use super::canvas::{Canvas, Capsule, LinearImage, Rect};
 use crate::base::{Direction, YarnGeometry};
 
 /// One patch to draw.
@@ -83,7 +83,7 @@ const GRIP_FRACTION: f64 = 0.22;
 pub fn draw_patches(panels: &[Panel], style: &PictureStyle) -> RgbImage {
     let side = style.panel_px.max(MIN_PANEL_PX);
     let width = side.saturating_mul(panels.len().max(1) as u32);
-    let mut canvas = Canvas::new(width as usize, side as usize);
+    let mut canvas = LinearImage::new(width as usize, side as usize, 1, BACKGROUND);
     let bounds: Vec<Option<Bounds>> = panels.iter().map(|p| bounds(p.geometry)).collect();
     let extent_m = bounds
         .iter()
@@ -129,12 +129,14 @@ pub fn draw_patches(panels: &[Panel], style: &PictureStyle) -> RgbImage {
             .collect();
         draw_panel(&mut canvas, rect, panel, &points_px, style, px_per_m);
     }
-    canvas.to_srgb()
+    let mut picture = Canvas::new(width as usize, side as usize, [0; 3]);
+    canvas.resolve(&mut picture, 0, 0);
+    picture.into_image()
 }
 
 /// Draws one panel inside `rect`, from its points already in pixels (`None`: not drawable).
 fn draw_panel(
-    canvas: &mut Canvas,
+    canvas: &mut LinearImage,
     rect: Rect,
     panel: &Panel,
     points_px: &[Option<[f64; 2]>],
@@ -177,7 +179,7 @@ fn draw_panel(
             colour: GRIP,
             shaded: false,
         });
-    canvas.draw_pass(rect, grip);
+    canvas.strokes(rect, grip);
     for direction in [Direction::Wale, Direction::Course] {
         let yarn = segments
             .iter()
@@ -192,7 +194,7 @@ fn draw_panel(
                     shaded: true,
                 }
             });
-        canvas.draw_pass(rect, yarn);
+        canvas.strokes(rect, yarn);
     }
 
     // Big enough to see next to the yarn, small enough not to fill a dense panel's stitches.
@@ -237,174 +239,10 @@ fn bounds(g: &YarnGeometry) -> Option<Bounds> {
         })
 }
 
-/// A pixel rectangle, `x0..x1` × `y0..y1`.
-#[derive(Clone, Copy, Debug)]
-struct Rect {
-    x0: usize,
-    x1: usize,
-    y0: usize,
-    y1: usize,
-}
-
-/// A stroke of yarn (or grip) from `a` to `b`, pixels.
-#[derive(Clone, Copy, Debug)]
-struct Capsule {
-    a: [f64; 2],
-    b: [f64; 2],
-    radius: f64,
-    /// Linear RGB.
-    colour: [f32; 3],
-    /// Cylinder shading (yarn) or flat (grip).
-    shaded: bool,
-}
-
-impl Capsule {
-    /// Pixel centres whose distance to the capsule's axis might be within `radius + 0.5`, clipped
-    /// to `rect`; `None` when none.
-    fn pixel_box(&self, rect: Rect) -> Option<Rect> {
-        let pad = self.radius + 1.0;
-        let lo = [
-            self.a[0].min(self.b[0]) - pad,
-            self.a[1].min(self.b[1]) - pad,
-        ];
-        let hi = [
-            self.a[0].max(self.b[0]) + pad,
-            self.a[1].max(self.b[1]) + pad,
-        ];
-        if !lo.iter().chain(&hi).all(|c| c.is_finite()) {
-            return None;
-        }
-        let clip = |v: f64, lo: usize, hi: usize| v.clamp(lo as f64, hi as f64) as usize;
-        let r = Rect {
-            x0: clip(lo[0].floor(), rect.x0, rect.x1),
-            x1: clip(hi[0].ceil(), rect.x0, rect.x1),
-            y0: clip(lo[1].floor(), rect.y0, rect.y1),
-            y1: clip(hi[1].ceil(), rect.y0, rect.y1),
-        };
-        (r.x0 < r.x1 && r.y0 < r.y1).then_some(r)
-    }
-
-    /// Distance from `p` to the axis segment `a`–`b`, pixels.
-    fn axis_distance(&self, p: [f64; 2]) -> f64 {
-        let ab = [self.b[0] - self.a[0], self.b[1] - self.a[1]];
-        let ap = [p[0] - self.a[0], p[1] - self.a[1]];
-        let len_sq = ab[0] * ab[0] + ab[1] * ab[1];
-        let t = if len_sq > 0.0 {
-            ((ap[0] * ab[0] + ap[1] * ab[1]) / len_sq).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        (ap[0] - t * ab[0]).hypot(ap[1] - t * ab[1])
-    }
-
-    /// The colour at distance `dist` from the axis: for yarn, a cylinder seen from above, lit
-    /// head-on (bright crest, dark flanks) with a narrow sheen along the crest.
-    fn colour_at(&self, dist: f64) -> [f32; 3] {
-        if !self.shaded {
-            return self.colour;
-        }
-        let across = (dist / self.radius).min(1.0) as f32;
-        let height = (1.0 - across * across).sqrt();
-        let shade = 0.4 + 0.8 * height;
-        // Absolute, so dark yarn still shows its round; small, so it stays dark.
-        let sheen = 0.06 * height.powi(4);
-        self.colour.map(|c| c * shade + sheen)
-    }
-}
-
-/// A linear-RGB float image, with a scratch layer for one pass of capsules.
-struct Canvas {
-    width: usize,
-    height: usize,
-    pixels: Vec<[f32; 3]>,
-    /// Per pixel, for the pass being drawn: signed distance to the nearest capsule's edge
-    /// (pixels, negative inside) and that capsule's colour there.
-    layer: Vec<(f32, [f32; 3])>,
-}
-
-/// Layer value of a pixel no capsule reached.
-const EMPTY: (f32, [f32; 3]) = (f32::INFINITY, [0.0; 3]);
-
-impl Canvas {
-    fn new(width: usize, height: usize) -> Canvas {
-        Canvas {
-            width,
-            height,
-            pixels: vec![BACKGROUND; width * height],
-            layer: vec![EMPTY; width * height],
-        }
-    }
-
-    /// Draws `capsules` as one shape (the union of the capsules, each pixel coloured by the
-    /// nearest), anti-aliased with a one-pixel edge, over what is already inside `rect`.
-    fn draw_pass(&mut self, rect: Rect, capsules: impl Iterator<Item = Capsule>) {
-        let mut touched: Option<Rect> = None;
-        for capsule in capsules {
-            let Some(r) = capsule.pixel_box(rect) else {
-                continue;
-            };
-            touched = Some(touched.map_or(r, |t| Rect {
-                x0: t.x0.min(r.x0),
-                x1: t.x1.max(r.x1),
-                y0: t.y0.min(r.y0),
-                y1: t.y1.max(r.y1),
-            }));
-            for y in r.y0..r.y1 {
-                for x in r.x0..r.x1 {
-                    let dist = capsule.axis_distance([x as f64 + 0.5, y as f64 + 0.5]);
-                    let edge = (dist - capsule.radius) as f32;
-                    let cell = &mut self.layer[y * self.width + x];
-                    if edge < cell.0 && edge < 0.5 {
-                        *cell = (edge, capsule.colour_at(dist));
-                    }
-                }
-            }
-        }
-        let Some(t) = touched else {
-            return;
-        };
-        for y in t.y0..t.y1 {
-            for x in t.x0..t.x1 {
-                let i = y * self.width + x;
-                let (edge, colour) = std::mem::replace(&mut self.layer[i], EMPTY);
-                let coverage = (0.5 - edge).clamp(0.0, 1.0);
-                if coverage > 0.0 {
-                    let p = &mut self.pixels[i];
-                    for k in 0..3 {
-                        p[k] += (colour[k] - p[k]) * coverage;
-                    }
-                }
-            }
-        }
-    }
-
-    /// A filled square of half-side `half` pixels centred on `c`, clipped to `rect`.
-    fn square(&mut self, rect: Rect, c: [f64; 2], half: f64, colour: [f32; 3]) {
-        let clip = |v: f64, lo: usize, hi: usize| v.round().clamp(lo as f64, hi as f64) as usize;
-        let (x0, x1) = (
-            clip(c[0] - half, rect.x0, rect.x1),
-            clip(c[0] + half, rect.x0, rect.x1),
-        );
-        let (y0, y1) = (
-            clip(c[1] - half, rect.y0, rect.y1),
-            clip(c[1] + half, rect.y0, rect.y1),
-        );
-        for y in y0..y1 {
-            self.pixels[y * self.width + x0..y * self.width + x1].fill(colour);
-        }
-    }
-
-    fn to_srgb(&self) -> RgbImage {
-        debug_assert_eq!(self.pixels.len(), self.width * self.height);
-        RgbImage::from_fn(self.width as u32, self.height as u32, |x, y| {
-            image::Rgb(self.pixels[y as usize * self.width + x as usize].map(linear_to_srgb8))
-        })
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::base::colour::linear_to_srgb8;
     use crate::base::{Segment, YarnKind};
     use std::collections::BTreeMap;
 
