@@ -132,8 +132,8 @@ pub struct FitArgs {
     /// reference). Overrides solver.method.
     #[arg(long, value_name = "multilevel|paper")]
     pub solver: Option<String>,
-    /// Convergence tolerance on the relative residual and the largest move. Overrides
-    /// solver.tolerance.
+    /// Convergence tolerance on the relative residual and the largest move per step (paper)
+    /// or force step (multilevel). Overrides solver.tolerance.
     #[arg(long, value_name = "TOL")]
     pub tolerance: Option<f64>,
     /// Memory the fit may use, GiB; a fit estimated to need more is refused before it starts.

@@ -28,7 +28,7 @@ const REST_STRAIN: f64 = 1e-9;
 /// scaled by the spring's geometric stiffness `|1 − l/len|` where that exceeds 1 (a spring
 /// compressed below half its rest length is stiffer across than along).
 /// `inv_len` is `1 / len`, 0 for coincident ends (which gives the factor 1).
-pub(crate) fn spring_stiffness_bound(c1: f64, rest: f64, inv_len: f64) -> f64 {
+pub fn spring_stiffness_bound(c1: f64, rest: f64, inv_len: f64) -> f64 {
     2.0 * c1 * (1.0 - rest * inv_len).abs().max(1.0)
 }
 
@@ -38,7 +38,7 @@ pub(crate) fn spring_stiffness_bound(c1: f64, rest: f64, inv_len: f64) -> f64 {
 /// force is zero there, and `inv_len_ij`, `1 / |x_i − x_j|`, is 0). Without the turning part a
 /// strained knit with a large c2 can have steps divided by the bound overshoot
 /// (`sim::properties`).
-pub(crate) fn connection_stiffness_bound(c2: f64, c1: f64, tension: f64, inv_len_ij: f64) -> f64 {
+pub fn connection_stiffness_bound(c2: f64, c1: f64, tension: f64, inv_len_ij: f64) -> f64 {
     2.0 * c2 * (c1 + tension * inv_len_ij)
 }
 
@@ -89,7 +89,7 @@ impl SpringState {
 }
 
 /// Scratch space and results of force evaluations, reused across iterations.
-pub(crate) struct Workspace {
+pub struct Workspace {
     /// Net force per point.
     pub force: Vec<Vec3>,
     /// Per point, a bound on the largest eigenvalue of the stiffness seen from that point
@@ -113,7 +113,7 @@ impl Workspace {
 
 /// Sums of one force evaluation.
 #[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct Evaluation {
+pub struct Evaluation {
     /// Σ over springs of (spring force magnitude)².
     pub spring_force_sq: f64,
     /// Σ over springs of ½ c1 (|x_b − x_a| − l)².
@@ -132,7 +132,7 @@ impl Evaluation {
 
 /// Computes the net force and the stiffness bound of every point into `ws.force` and
 /// `ws.stiffness_bound`; returns the sums the convergence test and the watchdog need.
-pub(crate) fn evaluate(knit: &Knit, terms: &ForceTerms, ws: &mut Workspace) -> Evaluation {
+pub fn evaluate(knit: &Knit, terms: &ForceTerms, ws: &mut Workspace) -> Evaluation {
     let (eval, _) = force_pass(
         knit,
         terms,

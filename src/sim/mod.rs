@@ -11,8 +11,6 @@ pub mod contact;
 pub mod evaluation;
 pub mod forces;
 pub mod multilevel;
-#[cfg(test)]
-mod properties;
 pub mod relax;
 pub mod settings;
 
@@ -37,7 +35,7 @@ pub struct ForceTerms {
 impl ForceTerms {
     /// c1 of a spring of the knit: its yarn's stiffness, times the knit's factor for its
     /// direction ([`Knit::stiffness_scale`]).
-    pub(crate) fn c1(&self, knit: &Knit, spring: u32) -> f64 {
+    pub fn c1(&self, knit: &Knit, spring: u32) -> f64 {
         let s = &knit.springs[spring as usize];
         self.c1_of(knit, s.yarn, s.direction)
     }

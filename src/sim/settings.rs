@@ -57,9 +57,10 @@ pub struct SolverSettings {
     /// Velocity damper: velocities decay as `exp(-damping · t)` each step; per solver time unit
     /// (default: 1.0, close to the fastest settling of the paper's 10×10 patch; see README).
     pub damping: f64,
-    /// Convergence tolerance on the relative residual (RMS net force on free points over RMS
-    /// spring-force magnitude) and on the largest move per step relative to the shortest rest
-    /// length (default: 0.001).
+    /// Convergence tolerance, dimensionless (default: 0.001). A run has converged when the
+    /// relative residual (RMS net force on free points over RMS spring force) is below it, and
+    /// so is the largest move per step (`paper`) or the largest move the unbalanced force alone
+    /// would make in one iteration (`multilevel`), each over the shortest rest length.
     pub tolerance: f64,
     /// Step limit (for `multilevel`, iterations per grid level); a run that reaches it is
     /// reported as not converged (default: 100000).

@@ -1,6 +1,8 @@
 //! The command line's contract: outputs, report, determinism, and clean refusals of bad input.
 
-use crate::util::{files_in, knitfit, knitfit_env, report, stage_names, stderr, stdout, write};
+use std::path::Path;
+
+use crate::support::{files_in, knitfit, knitfit_env, report, stage_names, stderr, stdout, write};
 
 #[test]
 fn no_arguments_fits_the_bundled_sample_and_says_where_outputs_went() {
@@ -22,12 +24,130 @@ fn no_arguments_fits_the_bundled_sample_and_says_where_outputs_went() {
     assert!(text.contains("converged"), "{text}");
 }
 
+/// The lines of a `--help` section (`Commands:`, `Arguments:`, `Options:`), each split into
+/// its names (`-q, --quiet`, `--leg <LEG>`, `[SCENE]`, `fit`) and its description.
+fn help_section(help: &str, heading: &str) -> Vec<(String, String)> {
+    let mut lines = help.lines().skip_while(|l| *l != heading).skip(1);
+    let mut entries = Vec::new();
+    for line in lines.by_ref() {
+        if line.trim().is_empty() {
+            break;
+        }
+        let entry = line.trim_start();
+        let (names, description) = entry.split_once("  ").unwrap_or((entry, ""));
+        entries.push((names.trim().to_string(), description.trim().to_string()));
+    }
+    entries
+}
+
+/// The long flags in `text` (`--memory-limit`).
+fn long_flags(text: &str) -> std::collections::BTreeSet<String> {
+    text.split(|c: char| !(c.is_ascii_alphanumeric() || c == '-'))
+        .filter(|w| {
+            w.strip_prefix("--")
+                .is_some_and(|f| f.starts_with(|c: char| c.is_ascii_lowercase()))
+        })
+        .map(String::from)
+        .collect()
+}
+
+/// The section of docs/GUIDE.md on `knitfit COMMAND`: from its heading to the next heading of
+/// the same or a higher level.
+fn guide_section(guide: &str, command: &str) -> String {
+    let heading = format!("### `knitfit {command}`");
+    let start = guide
+        .find(&heading)
+        .unwrap_or_else(|| panic!("docs/GUIDE.md has no {heading}"));
+    let rest = &guide[start + heading.len()..];
+    let end = ["\n### ", "\n## "]
+        .iter()
+        .filter_map(|h| rest.find(h))
+        .min()
+        .unwrap_or(rest.len());
+    rest[..end].to_string()
+}
+
+/// Every subcommand (nested ones too) has `--help`; every argument and flag it lists has a
+/// description; and the guide's section on the command names every flag the command takes
+/// and no flag it does not.
 #[test]
-fn help_lists_the_subcommands() {
+fn help_describes_every_subcommand_and_flag_and_the_guide_documents_each() {
     let dir = tempfile::tempdir().unwrap();
-    let out = knitfit(dir.path(), &["--help"]);
-    assert!(out.status.success());
-    assert!(stdout(&out).contains("patch"));
+    let guide =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/GUIDE.md"))
+            .unwrap();
+    let top = knitfit(dir.path(), &["--help"]);
+    assert!(top.status.success());
+    let mut pending: Vec<Vec<String>> = help_section(&stdout(&top), "Commands:")
+        .into_iter()
+        .map(|(name, _)| vec![name])
+        .filter(|path| path[0] != "help")
+        .collect();
+    let names: Vec<&str> = pending.iter().map(|p| p[0].as_str()).collect();
+    assert_eq!(names, ["fit", "patch", "bench", "render", "plan"]);
+    let mut checked = 0;
+    while let Some(path) = pending.pop() {
+        let mut args: Vec<&str> = path.iter().map(String::as_str).collect();
+        args.push("--help");
+        let out = knitfit(dir.path(), &args);
+        assert!(out.status.success(), "{args:?}");
+        let help = stdout(&out);
+        let mut subcommands = Vec::new();
+        for (sub, description) in help_section(&help, "Commands:") {
+            if sub != "help" {
+                assert!(!description.is_empty(), "{path:?} {sub} has no description");
+                pending.push([path.clone(), vec![sub.clone()]].concat());
+                subcommands.push(sub);
+            }
+        }
+        let entries = [
+            help_section(&help, "Arguments:"),
+            help_section(&help, "Options:"),
+        ]
+        .concat();
+        assert!(!entries.is_empty(), "{path:?}: no arguments or options");
+        // A command that plans others (`plan`, `plan fit`) takes their flags: the guide may
+        // document them in its own section or in theirs.
+        let sections: Vec<String> = path
+            .iter()
+            .chain(&subcommands)
+            .map(|c| guide_section(&guide, c))
+            .collect();
+        let documented: std::collections::BTreeSet<String> =
+            sections.iter().flat_map(|s| long_flags(s)).collect();
+        let mut taken = std::collections::BTreeSet::new();
+        for (names, description) in entries {
+            assert!(
+                !description.is_empty(),
+                "{path:?}: {names} has no description"
+            );
+            for flag in long_flags(&names) {
+                if ["--help", "--version", "--quiet"].contains(&flag.as_str()) {
+                    continue;
+                }
+                assert!(
+                    documented.contains(&flag),
+                    "docs/GUIDE.md does not document `knitfit {}` {flag}",
+                    path.join(" ")
+                );
+                taken.insert(flag);
+                checked += 1;
+            }
+        }
+        if path.len() == 1 {
+            let stale: Vec<String> = long_flags(&sections[0])
+                .difference(&taken)
+                .filter(|f| !["--help", "--quiet"].contains(&f.as_str()))
+                .cloned()
+                .collect();
+            assert!(
+                stale.is_empty(),
+                "docs/GUIDE.md documents flags `knitfit {}` does not take: {stale:?}",
+                path[0]
+            );
+        }
+    }
+    assert!(checked > 30, "only {checked} flags checked");
 }
 
 #[test]

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use knitfit::leg::{load_leg, Collider, ContactMethod, Units, UpAxis};
 use nalgebra::Point3;
 
-use crate::util::{
+use crate::support::{
     base64, files_in, fit, float, knitfit, point, procedural_leg, read_ply, report, sample_legs,
     stderr, write_tube_leg,
 };

@@ -18,8 +18,8 @@ use knitfit::{Error, Scene};
 use proptest::prelude::*;
 use serde_json::{json, Value};
 
-use crate::prop_config::config;
-use crate::util::{base64, files_in, knitfit, sample_legs, stderr, write_tube_leg};
+use crate::support::prop_config::config;
+use crate::support::{base64, files_in, knitfit, sample_legs, stderr, write_tube_leg};
 
 // ---------------------------------------------------------------------------------------------
 // GLB files and how to take them apart

@@ -1,4 +1,4 @@
-//! Hard cases (issue 7): stiff yarn ratios, large time steps, mm-scale and rotated legs, broken
+//! Hard cases: stiff yarn ratios, large time steps, mm-scale and rotated legs, broken
 //! meshes, a thin ankle, a tube that starts inside the leg, a file with both legs and the pelvis,
 //! and (opt-in) a leg of a million triangles. Each must converge with no yarn point inside the
 //! leg and a plausible fit, or stop with one clear line; never NaN, never a silent bad fit.
@@ -11,38 +11,21 @@ use std::path::{Path, PathBuf};
 use std::process::Output;
 
 use knitfit::base::SurfaceMesh;
-use knitfit::export::gltf::{write_nodes_glb, GlbNode};
 use knitfit::leg::{load_leg, Collider, ContactMethod, Leg, Units, UpAxis};
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
 use serde_json::{json, Value};
 
-use crate::util::{files_in, float, knitfit, point, procedural_leg, read_ply, report, stderr};
+use crate::support::{
+    files_in, float, knitfit, load_sample, point, procedural_leg, read_ply, report, revolved,
+    stderr, write_mesh, write_meshes,
+};
 
 // ---------------------------------------------------------------------------------------------
 // Making leg files.
 
 /// The procedural sample leg in metres, +Y up.
 fn procedural() -> Leg {
-    load_leg(&procedural_leg(), Units::Metres, UpAxis::PosY).unwrap()
-}
-
-/// Writes one GLB `dir/name` with a root node per mesh.
-fn write_meshes(dir: &Path, name: &str, meshes: &[SurfaceMesh]) -> PathBuf {
-    let nodes: Vec<GlbNode> = meshes.iter().map(GlbNode::Surface).collect();
-    let path = dir.join(name);
-    std::fs::write(&path, write_nodes_glb(&nodes, [[0.5; 3]; 2]).unwrap()).unwrap();
-    path
-}
-
-/// Writes `positions` and `triangles` as a one-mesh GLB `dir/name`.
-fn write_mesh(
-    dir: &Path,
-    name: &str,
-    positions: &[Point3<f64>],
-    triangles: Vec<[u32; 3]>,
-) -> PathBuf {
-    let positions = positions.iter().map(|p| p.coords.into()).collect();
-    write_meshes(dir, name, &[SurfaceMesh::new("leg", positions, triangles)])
+    load_sample(&procedural_leg())
 }
 
 /// Writes `leg` with every vertex moved by `f`.
@@ -54,44 +37,6 @@ fn transformed(
 ) -> PathBuf {
     let positions: Vec<Point3<f64>> = leg.positions.iter().map(f).collect();
     write_mesh(dir, name, &positions, leg.triangles.clone())
-}
-
-/// A leg-like body of revolution around +Y: `along + 1` rings of `around` vertices from
-/// `y0` to `y1`, radius `radius(h)` at `h` in 0..1, closed by a fan at each end.
-fn revolved_leg(
-    around: usize,
-    along: usize,
-    (y0, y1): (f64, f64),
-    radius: impl Fn(f64) -> f64,
-) -> (Vec<Point3<f64>>, Vec<[u32; 3]>) {
-    let mut positions = Vec::new();
-    for j in 0..=along {
-        let h = j as f64 / along as f64;
-        let (y, r) = (y0 + (y1 - y0) * h, radius(h));
-        for i in 0..around {
-            let t = std::f64::consts::TAU * i as f64 / around as f64;
-            positions.push(Point3::new(r * t.cos(), y, -r * t.sin()));
-        }
-    }
-    let mut triangles = Vec::new();
-    for j in 0..along {
-        for i in 0..around {
-            let a = (j * around + i) as u32;
-            let b = (j * around + (i + 1) % around) as u32;
-            triangles.push([a, b, b + around as u32]);
-            triangles.push([a, b + around as u32, a + around as u32]);
-        }
-    }
-    let (bottom, top) = (positions.len() as u32, positions.len() as u32 + 1);
-    positions.push(Point3::new(0.0, y0, 0.0));
-    positions.push(Point3::new(0.0, y1, 0.0));
-    let top_ring = (along * around) as u32;
-    for i in 0..around as u32 {
-        let n = (i + 1) % around as u32;
-        triangles.push([bottom, n, i]);
-        triangles.push([top, top_ring + i, top_ring + n]);
-    }
-    (positions, triangles)
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -341,7 +286,7 @@ const WIDE_STOCKING_M: f64 = 0.4;
 
 #[test]
 fn stiffness_ratios_10_and_1000_fit_every_sample_leg_without_penetration() {
-    for leg_path in crate::util::sample_legs() {
+    for leg_path in crate::support::sample_legs() {
         let leg = load_leg(&leg_path, Units::Metres, UpAxis::PosY).unwrap();
         for (ratio, circumference) in [(10.0, 0.2), (1000.0, WIDE_STOCKING_M)] {
             let scene = scene_for(&leg_path, json!({}), stiffness(ratio, circumference));
@@ -363,7 +308,7 @@ fn stiffness_ratio_1000_on_a_narrow_stocking_is_refused_as_bunched_not_written()
     // Support courses 1000× stiffer than nylon barely stretch: relaxed at 0.2 m, they slide down
     // the leg to where it is that thin and the stocking bunches at the ankle. It converges, but
     // it is not a stocking.
-    for leg_path in crate::util::sample_legs() {
+    for leg_path in crate::support::sample_legs() {
         let scene = scene_for(&leg_path, json!({}), stiffness(1000.0, 0.2));
         let (dir, out) = run_scene(&scene, "32x32", &[]);
         check_refused(
@@ -710,9 +655,15 @@ fn an_ankle_a_fifth_of_the_thigh_girth_is_gripped_and_densest() {
     // ankle too, so it is stretched 5.5× around the thigh and 1.1× around the ankle.
     let dir = tempfile::tempdir().unwrap();
     let girth = |h: f64| 0.1 + 0.4 * h * h;
-    let (positions, triangles) =
-        revolved_leg(96, 120, (0.08, 0.83), |h| girth(h) / std::f64::consts::TAU);
-    let path = write_mesh(dir.path(), "thin_ankle.glb", &positions, triangles);
+    let body = revolved("leg", 96, 120, (0.08, 0.83), |h| {
+        girth(h) / std::f64::consts::TAU
+    });
+    let path = write_mesh(
+        dir.path(),
+        "thin_ankle.glb",
+        &body.positions,
+        body.triangles,
+    );
     let scene = scene_for(
         &path,
         json!({}),
@@ -742,9 +693,15 @@ fn an_ankle_five_times_thinner_than_the_relaxed_stocking_is_covered_loosely() {
     // into the leg or blowing up.
     let dir = tempfile::tempdir().unwrap();
     let girth = |h: f64| 0.04 + 0.46 * h.powf(1.5);
-    let (positions, triangles) =
-        revolved_leg(96, 120, (0.08, 0.83), |h| girth(h) / std::f64::consts::TAU);
-    let path = write_mesh(dir.path(), "very_thin_ankle.glb", &positions, triangles);
+    let body = revolved("leg", 96, 120, (0.08, 0.83), |h| {
+        girth(h) / std::f64::consts::TAU
+    });
+    let path = write_mesh(
+        dir.path(),
+        "very_thin_ankle.glb",
+        &body.positions,
+        body.triangles,
+    );
     let scene = scene_for(&path, json!({}), json!({}));
     let (run, out) = run_scene(&scene, "32x32", &[]);
     let leg = load_leg(&path, Units::Metres, UpAxis::PosY).unwrap();
@@ -956,10 +913,10 @@ fn a_leg_of_a_million_triangles_fits() {
     let dir = tempfile::tempdir().unwrap();
     // 1000 around × 500 along, two triangles per quad: 1,000,000 triangles plus the end fans.
     let girth = |h: f64| 0.21 + 0.3 * h * h;
-    let (positions, triangles) = revolved_leg(1000, 500, (0.08, 0.83), |h| {
+    let body = revolved("leg", 1000, 500, (0.08, 0.83), |h| {
         girth(h) / std::f64::consts::TAU * (1.0 + 0.02 * (40.0 * h).sin())
     });
-    let path = write_mesh(dir.path(), "million.glb", &positions, triangles);
+    let path = write_mesh(dir.path(), "million.glb", &body.positions, body.triangles);
     let scene = scene_for(&path, json!({}), json!({}));
     let (run, out) = run_scene(&scene, "40x40", &[]);
     let leg = load_leg(&path, Units::Metres, UpAxis::PosY).unwrap();

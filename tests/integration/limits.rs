@@ -1,7 +1,7 @@
 //! Resource limits: a fit too large for memory is refused up front, with its estimate and the
 //! override; the override skips the check.
 
-use crate::util::{files_in, knitfit, procedural_leg, report, stderr, stdout, write};
+use crate::support::{files_in, knitfit, procedural_leg, report, stderr, stdout, write};
 
 /// A .gltf whose one primitive declares a billion triangles over a buffer file that does not
 /// exist: decoding it would fail on the buffer, so a refusal by size proves the check came first.
@@ -97,7 +97,7 @@ fn the_override_runs_a_fit_that_a_low_limit_refuses() {
         "s.json",
         r#"{"limits": {"memory_gib": 0.01, "allow_large": true}, "outputs": []}"#,
     );
-    let (_, fitted) = crate::util::fit(&leg, "20x12", &[scene.to_str().unwrap()]);
+    let (_, fitted) = crate::support::fit(&leg, "20x12", &[scene.to_str().unwrap()]);
     assert_eq!(
         fitted["details"]["memory"]["check"]["limit"]["source"],
         "scene"

@@ -2,6 +2,8 @@
 //! One test binary (see ripgrep); modules by topic.
 
 mod cli;
+mod contact;
+mod evaluation;
 mod fit;
 mod fuzz;
 mod hard_cases;
@@ -9,9 +11,8 @@ mod layers;
 mod limits;
 mod physics;
 mod plan;
-mod prop_config;
 mod properties;
 mod render;
 mod skin;
 mod solvers;
-mod util;
+mod support;

@@ -3,14 +3,16 @@
 
 use std::path::Path;
 
-use crate::util::{files_in, knitfit, procedural_leg, report, stage_names, stderr, stdout, write};
+use crate::support::{
+    files_in, knitfit, procedural_leg, report, stage_names, stderr, stdout, write,
+};
 
 /// Fits the procedural leg at 20×12 with the scene `scene` (written to `dir/NAME.json`) and
 /// `extra` flags, expecting success; returns the report.
 fn fit(dir: &Path, scene: &str, name: &str, extra: &[&str]) -> serde_json::Value {
     let scene = write(dir, &format!("{name}.json"), scene);
     let args = [&[scene.to_str().unwrap()][..], extra].concat();
-    crate::util::fit(&procedural_leg(), "20x12", &args).1
+    crate::support::fit(&procedural_leg(), "20x12", &args).1
 }
 
 /// The plan (`knitfit plan --json ARGS`) as JSON; the command must succeed.

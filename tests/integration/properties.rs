@@ -4,8 +4,8 @@
 //! triangle by brute force. The meshes are procedural (a sphere, a thin rod, a torus with its
 //! saddle-shaped hole, a sphere with duplicate vertices and zero-area triangles) and every sample
 //! leg (the MakeHuman legs are open at both cuts, so only their middle is used, where the winding
-//! number still says inside or out). The evaluation's assembly of these kernels is tested in the
-//! library (`src/sim/properties.rs`).
+//! number still says inside or out). The evaluation's assembly of these kernels is tested in
+//! `evaluation.rs`.
 
 use std::f64::consts::{PI, TAU};
 use std::sync::OnceLock;
@@ -22,8 +22,8 @@ use parry3d_f64::query::PointQuery;
 use parry3d_f64::shape::Triangle;
 use proptest::prelude::*;
 
-use crate::prop_config::config;
-use crate::util::sample_legs;
+use crate::support::prop_config::config;
+use crate::support::{grid_surface, sample_legs};
 
 // ---------------------------------------------------------------------------------------------
 // Force kernels
@@ -249,62 +249,6 @@ impl Surface {
 
 fn corners(leg: &Leg, t: usize) -> [Vec3; 3] {
     leg.triangles[t].map(|i| leg.positions[i as usize].coords)
-}
-
-fn leg(name: &str, positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Leg {
-    Leg {
-        path: name.into(),
-        positions: positions.into_iter().map(Point3::from).collect(),
-        triangles,
-        units: Units::Metres,
-        up_axis: UpAxis::PosY,
-        reoriented_triangles: 0,
-    }
-}
-
-/// A closed surface of `around × along` quads from `point(u, v)`, u around (0..1, periodic) and v
-/// along (0..1); for `poles`, v = 0 and v = 1 each collapse to one point (a sphere) or are capped
-/// by a fan around the axis (a rod); without, v is periodic too (a torus). Counter-clockwise seen
-/// from outside when `point` turns counter-clockwise seen from +v's end.
-fn grid_surface(
-    name: &str,
-    around: usize,
-    along: usize,
-    periodic_v: bool,
-    point: impl Fn(f64, f64) -> Vec3,
-) -> Leg {
-    let rings = if periodic_v { along } else { along + 1 };
-    let mut positions = Vec::new();
-    for j in 0..rings {
-        for i in 0..around {
-            positions.push(point(i as f64 / around as f64, j as f64 / along as f64));
-        }
-    }
-    let id = |i: usize, j: usize| ((j % rings) * around + i % around) as u32;
-    let mut triangles = Vec::new();
-    for j in 0..along {
-        for i in 0..around {
-            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            triangles.push([a, b, c]);
-            triangles.push([a, c, d]);
-        }
-    }
-    if !periodic_v {
-        // Caps: a fan from the centre of each end ring.
-        for (j, outward_down) in [(0, true), (along, false)] {
-            let centre: Vec3 = (0..around)
-                .map(|i| positions[id(i, j) as usize])
-                .sum::<Vec3>()
-                / around as f64;
-            let c = positions.len() as u32;
-            positions.push(centre);
-            for i in 0..around {
-                let (a, b) = (id(i, j), id(i + 1, j));
-                triangles.push(if outward_down { [c, b, a] } else { [c, a, b] });
-            }
-        }
-    }
-    leg(name, positions, triangles)
 }
 
 /// Every mesh the contact properties run on, built once.

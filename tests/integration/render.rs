@@ -10,7 +10,7 @@ use knitfit::preview::{render_preview, PreviewBuffers, PreviewInput};
 use knitfit::preview::{CameraSettings, RenderSettings};
 use knitfit::scene::Scene;
 
-use crate::util::{
+use crate::support::{
     files_in, knitfit, knitfit_env, procedural_leg, report, stage_names, stderr, write,
 };
 
@@ -522,7 +522,7 @@ fn the_spp_sweep_prints_time_and_error_per_sample_count_and_writes_nothing() {
         ],
     );
     assert!(out.status.success(), "{}", stderr(&out));
-    let text = crate::util::stdout(&out);
+    let text = crate::support::stdout(&out);
     let rows: Vec<Vec<f64>> = text
         .lines()
         .filter(|l| l.starts_with("| ") && !l.contains("spp"))

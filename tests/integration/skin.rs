@@ -8,7 +8,7 @@ use std::path::Path;
 use knitfit::leg::{load_leg, Collider, ContactMethod, Units, UpAxis};
 use nalgebra::Point3;
 
-use crate::util::{
+use crate::support::{
     fit, float, knitfit, point, read_ply, report, sample_legs, stage_names, stderr, write_tube_leg,
 };
 

@@ -10,7 +10,7 @@ use knitfit::run::NoProgress;
 use knitfit::scene::Scene;
 use knitfit::sim::SolverMethod;
 
-use crate::util::{fit, sample_legs};
+use crate::support::{fit, sample_legs};
 
 fn solve(leg: &std::path::Path, method: SolverMethod, tolerance: f64) -> (SolvedFit, Scene) {
     solve_grid(leg, method, tolerance, (40, 40))
@@ -182,12 +182,12 @@ fn a_bad_solver_or_tolerance_flag_is_refused_before_any_work() {
         let dir = tempfile::tempdir().unwrap();
         let mut all = vec!["fit", "--resolution", "20x20"];
         all.extend_from_slice(args);
-        let out = crate::util::knitfit(dir.path(), &all);
+        let out = crate::support::knitfit(dir.path(), &all);
         assert_eq!(out.status.code(), Some(2), "{args:?}");
-        let err = crate::util::stderr(&out);
+        let err = crate::support::stderr(&out);
         assert!(err.contains(expect), "{args:?}: {err}");
         assert_eq!(err.trim().lines().count(), 1, "{err}");
-        assert!(crate::util::files_in(&dir.path().join("out")).is_empty());
+        assert!(crate::support::files_in(&dir.path().join("out")).is_empty());
     }
 }
 

@@ -1,22 +1,22 @@
-//! Property tests of the force evaluation every solver shares ([`super::evaluation`]): over random
+//! Property tests of the force evaluation every solver shares (`sim::evaluation`): over random
 //! small knits, random positions (coincident points included) and random coefficients, the net
 //! force obeys Newton's third law, every value is finite, and the per-point stiffness bound
 //! covers the stiffness the forces really have (measured by finite differences).
 //!
-//! The kernels themselves and the contact projection are checked from outside, in
-//! `tests/integration/properties.rs`.
-
-#[path = "../../tests/integration/prop_config.rs"]
-mod prop_config;
+//! The kernels themselves and the contact projection are checked in `properties.rs`.
 
 use nalgebra::{DMatrix, Matrix3};
 use proptest::prelude::*;
 
-use super::evaluation::{connection_stiffness_bound, evaluate, spring_stiffness_bound, Workspace};
-use super::forces::{connection_force, spring_force, spring_tension};
-use super::ForceTerms;
-use crate::base::Vec3;
-use crate::knit::{Knit, Pattern, PointId, Tile};
+use knitfit::base::Vec3;
+use knitfit::knit::{Knit, Pattern, PointId, Tile};
+use knitfit::sim::evaluation::{
+    connection_stiffness_bound, evaluate, spring_stiffness_bound, Workspace,
+};
+use knitfit::sim::forces::{connection_force, spring_force, spring_tension};
+use knitfit::sim::ForceTerms;
+
+use crate::support::prop_config;
 
 /// A small knit, as the numbers it is built from (so a failing case prints short).
 #[derive(Clone, Debug)]

@@ -1,0 +1,164 @@
+//! The meshes the tests fit, query and damage: the bundled sample legs, closed surfaces made on
+//! a grid (a sphere, a rod, a torus, a leg-like body of revolution), and an open tube, written
+//! as GLB files by knitfit's own writer (no hand-written glTF).
+
+use std::path::{Path, PathBuf};
+
+use knitfit::base::{SurfaceMesh, Vec3};
+use knitfit::export::gltf::{write_nodes_glb, GlbNode};
+use knitfit::leg::{load_leg, Leg, Units, UpAxis};
+use nalgebra::Point3;
+
+/// Every bundled sample leg.
+pub fn sample_legs() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples");
+    let mut legs: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "glb"))
+        .collect();
+    legs.sort();
+    assert!(!legs.is_empty());
+    legs
+}
+
+/// The procedural sample leg: closed, Y-up, at the origin; the tests that edit a leg file or
+/// know its triangle count use it.
+pub fn procedural_leg() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/procedural_leg.glb")
+}
+
+/// A sample leg loaded as glTF says: metres, +Y up.
+pub fn load_sample(path: &Path) -> Leg {
+    load_leg(path, Units::Metres, UpAxis::PosY).unwrap()
+}
+
+/// A leg made of `positions` and `triangles`, in metres with +Y up, named `name`.
+fn leg(name: &str, positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Leg {
+    Leg {
+        path: name.into(),
+        positions: positions.into_iter().map(Point3::from).collect(),
+        triangles,
+        units: Units::Metres,
+        up_axis: UpAxis::PosY,
+        reoriented_triangles: 0,
+    }
+}
+
+/// A closed surface of `around × along` quads from `point(u, v)`, u around (0..1, periodic) and
+/// v along (0..1); without `periodic_v`, the rings at v = 0 and v = 1 are capped by a fan from
+/// their centre (a sphere whose poles are small rings, a rod); with it, v is periodic too (a
+/// torus). Counter-clockwise seen from outside when `point` turns counter-clockwise seen from
+/// +v's end.
+pub fn grid_surface(
+    name: &str,
+    around: usize,
+    along: usize,
+    periodic_v: bool,
+    point: impl Fn(f64, f64) -> Vec3,
+) -> Leg {
+    let rings = if periodic_v { along } else { along + 1 };
+    let mut positions = Vec::new();
+    for j in 0..rings {
+        for i in 0..around {
+            positions.push(point(i as f64 / around as f64, j as f64 / along as f64));
+        }
+    }
+    let id = |i: usize, j: usize| ((j % rings) * around + i % around) as u32;
+    let mut triangles = Vec::new();
+    for j in 0..along {
+        for i in 0..around {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            triangles.push([a, b, c]);
+            triangles.push([a, c, d]);
+        }
+    }
+    if !periodic_v {
+        for (j, outward_down) in [(0, true), (along, false)] {
+            let centre: Vec3 = (0..around)
+                .map(|i| positions[id(i, j) as usize])
+                .sum::<Vec3>()
+                / around as f64;
+            let c = positions.len() as u32;
+            positions.push(centre);
+            for i in 0..around {
+                let (a, b) = (id(i, j), id(i + 1, j));
+                triangles.push(if outward_down { [c, b, a] } else { [c, a, b] });
+            }
+        }
+    }
+    leg(name, positions, triangles)
+}
+
+/// A closed body of revolution around +Y from `y0` to `y1`: radius `radius(h)` at `h` in 0..1,
+/// `along + 1` rings of `around` vertices, capped at both ends (a rod, or a leg-like shape).
+pub fn revolved(
+    name: &str,
+    around: usize,
+    along: usize,
+    (y0, y1): (f64, f64),
+    radius: impl Fn(f64) -> f64,
+) -> Leg {
+    grid_surface(name, around, along, false, |u, h| {
+        let (t, r) = (std::f64::consts::TAU * u, radius(h));
+        Vec3::new(r * t.cos(), y0 + (y1 - y0) * h, -r * t.sin())
+    })
+}
+
+/// An open tube: `along + 1` rings of `around` vertices, ring `j`'s vertex `i` at
+/// `ring_point(j / along, angle)` (angle 0..2π), quads split in two, counter-clockwise seen from
+/// outside for a ring that runs counter-clockwise seen from +Y.
+fn tube_mesh(
+    around: usize,
+    along: usize,
+    ring_point: impl Fn(f64, f64) -> [f64; 3],
+) -> SurfaceMesh {
+    let mut positions = Vec::new();
+    for j in 0..=along {
+        for i in 0..around {
+            let angle = std::f64::consts::TAU * i as f64 / around as f64;
+            positions.push(ring_point(j as f64 / along as f64, angle));
+        }
+    }
+    let mut triangles = Vec::new();
+    for j in 0..along {
+        for i in 0..around {
+            let a = (j * around + i) as u32;
+            let b = (j * around + (i + 1) % around) as u32;
+            let (c, d) = (b + around as u32, a + around as u32);
+            triangles.push([a, b, c]);
+            triangles.push([a, c, d]);
+        }
+    }
+    SurfaceMesh::new("leg", positions, triangles)
+}
+
+/// Writes [`tube_mesh`] as a GLB `dir/name`.
+pub fn write_tube_leg(
+    dir: &Path,
+    name: &str,
+    around: usize,
+    along: usize,
+    ring_point: impl Fn(f64, f64) -> [f64; 3],
+) -> PathBuf {
+    write_meshes(dir, name, &[tube_mesh(around, along, ring_point)])
+}
+
+/// Writes one GLB `dir/name` with a root node per mesh.
+pub fn write_meshes(dir: &Path, name: &str, meshes: &[SurfaceMesh]) -> PathBuf {
+    let nodes: Vec<GlbNode> = meshes.iter().map(GlbNode::Surface).collect();
+    let path = dir.join(name);
+    std::fs::write(&path, write_nodes_glb(&nodes, [[0.5; 3]; 2]).unwrap()).unwrap();
+    path
+}
+
+/// Writes `positions` and `triangles` as a one-mesh GLB `dir/name`.
+pub fn write_mesh(
+    dir: &Path,
+    name: &str,
+    positions: &[Point3<f64>],
+    triangles: Vec<[u32; 3]>,
+) -> PathBuf {
+    let positions = positions.iter().map(|p| p.coords.into()).collect();
+    write_meshes(dir, name, &[SurfaceMesh::new("leg", positions, triangles)])
+}

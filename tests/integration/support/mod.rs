@@ -1,0 +1,16 @@
+//! What the integration tests share: running the binary and reading its outputs, reading the
+//! files it writes, the meshes and legs the tests use, and the one proptest configuration.
+
+pub mod files;
+pub mod fixtures;
+pub mod process;
+pub mod prop_config;
+
+pub use files::{base64, float, point, read_ply};
+pub use fixtures::{
+    grid_surface, load_sample, procedural_leg, revolved, sample_legs, write_mesh, write_meshes,
+    write_tube_leg,
+};
+pub use process::{
+    files_in, fit, knitfit, knitfit_env, report, stage_names, stderr, stdout, write,
+};

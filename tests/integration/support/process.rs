@@ -1,0 +1,82 @@
+//! Running the `knitfit` binary and reading what it wrote: its exit, its streams, its output
+//! directory and its report.
+
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+/// Runs the knitfit binary with `args` in directory `cwd`.
+pub fn knitfit(cwd: &Path, args: &[&str]) -> Output {
+    knitfit_env(cwd, args, &[])
+}
+
+/// Runs the knitfit binary with extra environment variables.
+pub fn knitfit_env(cwd: &Path, args: &[&str], env: &[(&str, &str)]) -> Output {
+    let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_knitfit"));
+    cmd.current_dir(cwd).args(args);
+    for (k, v) in env {
+        cmd.env(k, v);
+    }
+    cmd.output().expect("the knitfit binary runs")
+}
+
+/// Writes `text` to `dir/name` and returns the path.
+pub fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Standard error as text.
+pub fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Standard output as text.
+pub fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Sorted file names in `dir` (empty when it does not exist).
+pub fn files_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .map(|rd| {
+            rd.map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect()
+        })
+        .unwrap_or_default();
+    names.sort();
+    names
+}
+
+/// The parsed report.json of an output directory.
+pub fn report(dir: &Path) -> serde_json::Value {
+    serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
+}
+
+/// Fits `leg` at `resolution` into a fresh directory and returns (dir, report).
+pub fn fit(leg: &Path, resolution: &str, extra: &[&str]) -> (tempfile::TempDir, serde_json::Value) {
+    let dir = tempfile::tempdir().unwrap();
+    let mut args = vec![
+        "fit",
+        "--leg",
+        leg.to_str().unwrap(),
+        "--resolution",
+        resolution,
+        "-q",
+    ];
+    args.extend_from_slice(extra);
+    let out = knitfit(dir.path(), &args);
+    assert!(out.status.success(), "{}: {}", leg.display(), stderr(&out));
+    let r = report(&dir.path().join("out"));
+    (dir, r)
+}
+
+/// The names of the stages in a report, in order.
+pub fn stage_names(report: &serde_json::Value) -> Vec<String> {
+    report["stages"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["name"].as_str().unwrap().to_string())
+        .collect()
+}
