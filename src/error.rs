@@ -98,7 +98,9 @@ pub enum Error {
     /// force, so this points at the input (a knit compressed to a point, a leg with NaNs that
     /// slipped through) rather than at a step size.
     #[error(
-        "multilevel solver diverged on the {grid} grid at iteration {iteration} ({what}); nothing          was written. Check the scene's yarn stiffnesses and tube size, or run the paper's          solver (solver.method \"paper\", --solver paper) to compare"
+        "multilevel solver diverged on the {grid} grid at iteration {iteration} ({what}); \
+         nothing was written. Check the scene's yarn stiffnesses and tube size, or run the \
+         paper's solver (solver.method \"paper\", --solver paper) to compare"
     )]
     SolverDiverged {
         grid: String,
@@ -151,3 +153,41 @@ impl Error {
 
 /// Result with the library's error type.
 pub type Result<T> = std::result::Result<T, Error>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn messages_are_one_line_without_runs_of_spaces() {
+        let errors = [
+            Error::SolverDiverged {
+                grid: "38×39".into(),
+                iteration: 12,
+                what: "a position stopped being finite".into(),
+            },
+            Error::Diverged {
+                step: 3,
+                what: "energy grew 1000×".into(),
+                time_step: 0.4,
+                limit: 0.2,
+            },
+            Error::Bunched {
+                course: 4,
+                bunched: 11,
+                courses: 100,
+                ratio: 1000.0,
+                circumference_m: 0.2,
+            },
+            Error::TimeStepTooLarge {
+                time_step: 0.4,
+                limit: 0.2,
+                stiffest: 10.0,
+            },
+        ];
+        for e in errors {
+            let text = e.to_string();
+            assert!(!text.contains("  ") && !text.contains('\n'), "{text}");
+        }
+    }
+}

@@ -2,9 +2,11 @@
 //! decoded or its knit allocated, with the estimate and how to override it.
 //!
 //! The estimate is linear in the tube's points, the leg's triangles and the preview's pixels,
-//! with per-unit costs measured as the peak resident memory (`/usr/bin/time -v`) of real fits;
-//! the figures are beside each constant. The limit is the scene's `limits.memory_gib`, else what
-//! the system says is available, else [`FALLBACK_LIMIT_GIB`].
+//! with per-unit costs measured as the peak resident memory (`/usr/bin/time -v`) of real fits,
+//! each the slope between two sizes rounded up by about 10% (the measurements:
+//! docs/decisions/0020). The parts add, which overestimates a fit writing several files. The
+//! limit is the scene's `limits.memory_gib`, else what the system says is available, else
+//! [`FALLBACK_LIMIT_GIB`].
 
 use serde::{Deserialize, Serialize};
 
@@ -13,7 +15,7 @@ use crate::error::{Error, Result};
 use crate::export::Output;
 
 /// The memory a fit may use. A fit whose estimate is over it is refused before the leg is
-/// decoded or the knit allocated .
+/// decoded or the knit allocated.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields, default)]
 pub struct Limits {
@@ -43,57 +45,29 @@ impl Limits {
 const MIB: f64 = 1024.0 * 1024.0;
 const GIB: f64 = 1024.0 * MIB;
 
-// Measured on the release build (2 threads), `knitfit fit` with `solver.max_steps` 40 (the peak
-// does not depend on how long the solver runs): peak resident set (`/usr/bin/time -v`), MiB.
-//
-//   tube on the procedural leg (41k triangles)   []      ["glb"]  ["ply"]  all three  preview 512²
-//   200×200 (40k points)                          38.6    56.2     44.1       60.6     58.4
-//   400×800 (320k points)                         187.2   295.5    187.3     295.8    271.7
-//   400×1600 (640k points), run to convergence    —       —        —         485.1    —
-//   400×800, solver.method "paper"                162.0
-//   200×200, preview 4096², 1 spp                                                      801.6
-//
-//   leg (a cylinder), tube 20×12                  []      ["glb"]  ["ply"]  all three  ["picture"]
-//   41k triangles                                 21.9    —        —        68.9       —
-//   205k triangles                                82.1    —        89.1     108.7      —
-//   819k triangles                                269.8   347.8    347.0    378.0      310.0
-//   819k triangles, preview 512², 1 spp           418.2
-//   3.28M triangles                               988.1   —        —        —          —
-//
-// Each constant is the slope between two sizes above (given in its doc), rounded up by about
-// 10%; the parts add, which overestimates a fit writing several files (the encoders' scratch
-// is freed between files, and the PLY writer's stays under the solve's peak on large tubes).
-// (The glb and preview columns, and the 41k and 3.28M rows, were measured before the PLY writer
-// read columns instead of building a property map per element; neither depends on it.)
-
-/// What a fit needs whatever its size: the binary, thread stacks, the scene (measured: 22 MiB
-/// for the smallest fit above).
+/// What a fit needs whatever its size: the binary, thread stacks, the scene.
 const BASE_BYTES: f64 = 24.0 * MIB;
 /// Knit, solver workspaces (every multilevel level included), contact caches, the exact pass
-/// and the penetration check, per tube point (measured: 572 B with the multilevel solver, 477 B
-/// with the paper's).
+/// and the penetration check, per tube point.
 const SOLVE_BYTES_PER_POINT: f64 = 640.0;
-/// The yarns and stocking surface of `stocking.glb`, with the penetration fix, per tube point
-/// (measured: 340 B).
+/// The yarns and stocking surface of `stocking.glb`, with the penetration fix, per tube
+/// point.
 const GLB_BYTES_PER_POINT: f64 = 380.0;
-/// `stocking.ply`, with the penetration fix, per tube point (measured: 144 B over the solve's
-/// peak at 200×200; none at 400×800, where the writer stays under it).
+/// `stocking.ply`, with the penetration fix, per tube point.
 const PLY_BYTES_PER_POINT: f64 = 160.0;
-/// Leg vertices and triangles, the contact BVH and the penetration check, per triangle
-/// (measured: 309 B on legs of two triangles per vertex, from 819k to 3.28M triangles).
+/// Leg vertices and triangles, the contact BVH and the penetration check, per triangle.
 const LEG_BYTES_PER_TRIANGLE: f64 = 340.0;
-/// The leg's node in `stocking.glb` and its attributes, per triangle (measured: 106 B at 819k).
+/// The leg's node in `stocking.glb` and its attributes, per triangle.
 const LEG_GLB_BYTES_PER_TRIANGLE: f64 = 120.0;
-/// `leg.ply` and the leg's attributes, per triangle (measured: 120 B, 205k against 819k).
+/// `leg.ply` and the leg's attributes, per triangle.
 const LEG_PLY_BYTES_PER_TRIANGLE: f64 = 130.0;
-/// `density.png` and the leg's attributes, per triangle (measured: 58 B at 819k).
+/// `density.png` and the leg's attributes, per triangle.
 const LEG_PICTURE_BYTES_PER_TRIANGLE: f64 = 70.0;
-/// The preview's yarn grid and the penetration fix it needs, per tube point (measured: 226 B).
+/// The preview's yarn grid and the penetration fix it needs, per tube point.
 const PREVIEW_BYTES_PER_POINT: f64 = 250.0;
-/// The preview's picture and measurement buffers, per pixel (measured: 47 B, 512² against
-/// 4096²).
+/// The preview's picture and measurement buffers, per pixel.
 const PREVIEW_BYTES_PER_PIXEL: f64 = 52.0;
-/// The preview's BVH of the leg, per triangle (measured: 181 B at 819k).
+/// The preview's BVH of the leg, per triangle.
 const PREVIEW_BYTES_PER_TRIANGLE: f64 = 200.0;
 
 /// Memory assumed available where the system does not say (not Linux, or `/proc` unreadable),

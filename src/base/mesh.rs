@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 /// A triangle surface to write: the leg, or the fitted stocking as a surface.
 ///
 /// Positions in metres, Y up; triangles counter-clockwise seen from outside. Point attributes
-/// follow the same naming rule as [`YarnGeometry`].
+/// follow the same naming rule as [`YarnGeometry`](super::YarnGeometry).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SurfaceMesh {
     /// Node and mesh name.

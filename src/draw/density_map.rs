@@ -11,23 +11,17 @@
 //!   towards −X (−Z to the right: the character's front is on the left, and for a left leg this
 //!   is its outer side).
 //! - **Colour.** Density maps linearly over [min, max] of the covered vertices (density > 0) onto
-//!   [`heat`], the same map as the vertex colours of `stocking.glb` and `leg.ply`. A range of a
-//!   single value is widened by ±5 % so it still draws mid-map. Vertices without yarn (density 0,
-//!   negative or not finite) are skin, drawn neutral grey rather than the coldest colour, so "no
-//!   stocking here" never reads as "very sparse stocking"; a grey swatch under the bar says so.
+//!   the heat map, the same as the vertex colours of `stocking.glb` and `leg.ply` and the
+//!   colour bar's ([`super::colour_bar`]). Vertices without yarn (density 0, negative or not
+//!   finite) are skin, drawn neutral grey rather than the coldest colour.
 //! - **Shading.** Per-vertex coverage and normalised density are interpolated across each
 //!   triangle (Gouraud) and mapped to colour per sample, so the leg shows the bar's colours (not
 //!   blends of them); a Lambert term from a light fixed relative to the camera (up, left and in
 //!   front) over a 30 % ambient floor darkens them just enough that the leg's form reads. Faces
 //!   seen from behind (through an open cut) are drawn darker and flat.
 //! - **Anti-aliasing.** Each view is z-buffered at `supersample`² samples per pixel and
-//!   box-filtered in linear light.
-//! - **Colour bar.** Vertical, at the right, maximum at the top and minimum at the bottom, with
-//!   4–6 ticks at round numbers and the unit above it. With no covered vertex at all the bar is
-//!   grey and labelled "no yarn".
-//!
-//! Text uses the `embedded-graphics` ISO 8859-1 bitmap fonts (so "cm²" is spelt with its
-//! superscript), drawn onto the image through a small [`DrawTarget`] wrapper.
+//!   box-filtered in linear light ([`super::canvas::LinearImage`]).
+//! - **Colour bar** at the right ([`super::colour_bar`]), the unit above it.
 //!
 //! Pure and deterministic: no randomness, no threads, the same bytes for the same input; bad input
 //! (out-of-range indices, non-finite positions, degenerate triangles) is skipped, never a panic.

@@ -32,7 +32,7 @@ pub struct Panel<'a> {
 pub struct PictureStyle {
     /// Side of each square panel, pixels (default: 480; at least 16 is used).
     pub panel_px: u32,
-    /// Yarn radius per yarn kind ([`crate::knit::YarnKind::index`]), metres (default: 0.03 mm
+    /// Yarn radius per yarn kind ([`crate::base::YarnKind::index`]), metres (default: 0.03 mm
     /// nylon, 0.04 mm support, as the scene defaults). Drawn at least 1.2 px, and at most 30 % of
     /// the panel's median segment length so stitches stay open.
     pub yarn_radius_m: [f64; 2],

@@ -22,12 +22,13 @@ const MESH_VERTEX_PROPERTIES: [&str; 9] = ["x", "y", "z", "nx", "ny", "nz", "red
 /// `vertex`: `x`, `y`, `z` (float, metres, each part's `offset_m` added, as PLY has no
 /// transforms), every point attribute (float, in the map's order), `part` (uchar, index into
 /// `parts`). `edge`: `vertex1`, `vertex2` (int, indices into all parts' vertices in order),
-/// `yarn_kind` (uchar, [`YarnKind::index`](crate::knit::YarnKind::index)), `direction` (uchar,
+/// `yarn_kind` (uchar, [`YarnKind::index`](crate::base::YarnKind::index)), `direction` (uchar,
 /// 0 course, 1 wale). The header holds `comments`, then the unit/axis convention, then one line
 /// per part giving its name and the offset added. The bytes depend only on the arguments.
 ///
 /// Fails with [`Error::Encode`] if the parts carry different attribute names, if a part is
-/// inconsistent (see [`check_yarn_geometry`]), if there are more than 256 parts or 2^31
+/// inconsistent (indices past the points, attributes of the wrong length, non-finite
+/// positions), if there are more than 256 parts or 2^31
 /// vertices, or if a comment holds a line break.
 pub fn write_ply(parts: &[YarnGeometry], comments: &[String]) -> Result<Vec<u8>> {
     let encode_error = |message: String| Error::Encode {
@@ -284,7 +285,7 @@ fn refuse_clashing_names<V>(
 /// nx, ny, nz, every point attribute, and red/green/blue as sRGB uchar when the mesh has
 /// colours) and `face` (vertex_indices).
 ///
-/// Fails with [`Error::Encode`] if the mesh is inconsistent (see [`check_surface_mesh`]), an
+/// Fails with [`Error::Encode`] if the mesh is inconsistent (as for [`write_ply`]), an
 /// attribute takes the name of a vertex property, or a comment holds a line break.
 pub fn write_mesh_ply(mesh: &SurfaceMesh, comments: &[String]) -> Result<Vec<u8>> {
     let encode_error = |message: String| Error::Encode {

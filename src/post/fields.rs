@@ -24,9 +24,9 @@ use std::collections::HashMap;
 
 use nalgebra::Point3;
 
-use crate::knit::{Knit, PointId};
-
 use crate::base::{Direction, Vec3};
+use crate::knit::{Knit, PointId};
+use crate::leg::Leg;
 use crate::sim::ForceTerms;
 
 /// Square metres per square centimetre.
@@ -299,6 +299,29 @@ impl PointGrid {
             }
         }
     }
+}
+
+/// Per-point stitch fields of `knit` and their transfer to the leg's vertices.
+pub fn measure_fields(knit: &Knit, leg: &Leg, radius_m: [f64; 2]) -> (KnitFields, KnitFields) {
+    let per_point = KnitFields::measure(knit, radius_m);
+    // Wide enough to span a nylon and a support course whichever way the knit runs, so the
+    // alternation of the yarns does not print through as speckle.
+    let bandwidth =
+        3.0 * mean_spacing(knit, Direction::Course).max(mean_spacing(knit, Direction::Wale));
+    let on_leg = per_point.transfer_to_leg(&knit.particles.x, &leg.positions, bandwidth);
+    (per_point, on_leg)
+}
+
+/// Mean length of the springs along `direction`, metres.
+fn mean_spacing(knit: &Knit, direction: Direction) -> f64 {
+    let x = &knit.particles.x;
+    let lengths: Vec<f64> = knit
+        .springs
+        .iter()
+        .filter(|s| s.direction == direction)
+        .map(|s| (x[s.b.index()] - x[s.a.index()]).norm())
+        .collect();
+    lengths.iter().sum::<f64>() / lengths.len().max(1) as f64
 }
 
 #[cfg(test)]

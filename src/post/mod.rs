@@ -1,8 +1,9 @@
 //! Post-processing of a relaxed knit: stitch measurements, per-point fields and their transfer
-//! to the leg, and the penetration fix of the yarn polylines.
+//! to the leg, the penetration fix of the yarn polylines, and the surfaces the files show.
 
 pub mod fields;
 pub mod penetration;
 pub mod stitches;
+pub mod surfaces;
 
 pub use stitches::{anisotropy, measure_stitches, StitchStats};

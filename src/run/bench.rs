@@ -12,7 +12,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::fit::{measure_fields, solve_fit, FitInputs, SolvedFit};
+use super::fit::{solve_fit, FitInputs, SolvedFit};
 use super::{NoProgress, Progress};
 use crate::base::YarnKind;
 use crate::draw::bench_plot::{self, Curve};
@@ -21,6 +21,7 @@ use crate::export;
 use crate::leg::AxisSource;
 use crate::limits::{peak_memory, reset_peak_memory};
 use crate::plan::{Plan, Stage};
+use crate::post::fields::measure_fields;
 use crate::report::StageClock;
 use crate::scene::{Scene, BUNDLED_SCENE_DIR};
 use crate::sim::SolverMethod;

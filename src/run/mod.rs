@@ -1,5 +1,6 @@
-//! The commands: each builds its [`Plan`], runs its stages in a [`Run`] and returns what it
-//! wrote. Data flows one way, scene → load → knit → solve → post-process → encode → write →
+//! The commands: each builds its [`Plan`], runs its stages in one shared frame (`Run`: the
+//! output directory checked first, stages timed, files encoded in memory, written atomically,
+//! then the report) and returns what it wrote. Data flows one way, scene → load → knit → solve → post-process → encode → write →
 //! report; the library prints nothing (long stages report to a [`Progress`] the caller
 //! supplies, which the CLI draws as a progress bar).
 

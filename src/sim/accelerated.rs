@@ -27,61 +27,24 @@
 //!
 //! Contact and the held end rings act through [`Constraints`] as for the paper's solver: the
 //! move is limited, and the momentum carries only the move that was allowed. The step itself
-//! already leaves out the force the skin holds; pushing a resting point into the skin and
-//! letting the contact take it back made it chatter, and the chatter restarted the momentum of
-//! the whole grid every other iteration.
+//! leaves out the force the skin holds, so a resting point is not pushed into the skin and
+//! taken back each iteration (docs/decisions/0010).
 //!
 //! **The stall test.** The power `Σ F·v` is taken over the whole grid, and late in a fit most of
-//! the grid is still coasting forward on its momentum while a few dozen to a few hundred points
-//! do all the work that is left. On the MakeHuman leg they sit at the top of the inner thigh,
-//! just off the skin: lifted off, caught again, nudged out by exact contact queries, they
-//! oscillate with the momentum weight near 1, and the grid's power stays positive. They held the
-//! 300×300 fit's finest level at a residual of 4–6e-4 for some 200 iterations at 1e-4, and at
-//! 1e-3 for 435 iterations (it had taken 69 before contact stopped holding points that rise off
-//! the skin). So the iteration also watches the *unsettled* points, those whose force step
-//! (below) is above the tolerance: when their power, taken together, has been negative for
-//! `STALL_ITERATIONS` (12) iterations in a row, the momentum is restarted as it is for the grid.
-//! Measured in fine-grid-equivalent iterations, summed over 18 fits (three legs at 100×100,
-//! 120×130, 150×150, 180×170, 200×200 and 300×300) and over 15 others (the three legs at
-//! 110×120, 140×140, 160×190, 230×230 and 260×250):
-//!
-//! | rule | 18 fits, 1e-3 | 18 fits, 1e-4 | 15 fits, 1e-3 | 15 fits, 1e-4 |
-//! |---|---:|---:|---:|---:|
-//! | no stall test | 2,489 | 8,216 | 1,964 | 7,181 |
-//! | 5 in a row | 1,677 | 8,220 | | |
-//! | 10 in a row | 1,870 | 7,525 | 1,534 | 6,551 |
-//! | **12 in a row** | 1,864 | 7,258 | 1,537 | 6,863 |
-//! | 14 in a row | 1,873 | 7,260 | 1,613 | 6,958 |
-//! | 7 of the last 10 | 1,702 | 8,972 | | |
-//!
-//! 10 and 12 in a row tie over all 33 fits (3,404 and 3,401 at 1e-3; 14,076 and 14,121 at
-//! 1e-4); 12 was taken for the 18 fits at 1e-4 and for the 300×300 MakeHuman fit, whose finest
-//! level takes 147 and 295 iterations with it against 205 and 299 with 10. 5 in a row gains
-//! most at 1e-3 and nothing at 1e-4.
-//!
-//! On the 300×300 MakeHuman fit the finest level takes 147 iterations instead of 435 at 1e-3,
-//! and 295 instead of 318 at 1e-4; 400×1600 takes the same iterations at 1e-4 with or without
-//! the test. Measured and not kept:
-//! - restarting on the first negative power of the unsettled points: on the coarse levels only
-//!   one or two points are unsettled and their power flips sign every few iterations (the
-//!   coarsest level of that 300×300 fit took 834 iterations instead of 218);
-//! - 7 negative of the last 10 iterations: a few fits slowed 2–3×, restarted again and again
-//!   while one or two points were unsettled and the grid's residual still needed its momentum;
-//! - requiring the unsettled points to carry a quarter or half of the residual as well: about
-//!   the same totals;
-//! - zeroing only the unsettled points' velocity: 339 finest-level iterations at 1e-3;
-//! - contact pushes that carry no momentum: 1e-3 fixed as well, but 13–18% more work at 1e-4.
+//! the grid can still be coasting forward while a few hundred points (just off the skin at the
+//! top of the inner thigh) oscillate with the momentum weight near 1. So the iteration also
+//! watches the *unsettled* points, those whose force step (below) is above the tolerance: when
+//! their power, taken together, has been negative for `STALL_ITERATIONS` (12) iterations in a
+//! row, the momentum restarts as it does for the grid. Why 12, and the rules measured against
+//! it: docs/decisions/0047.
 //!
 //! **Convergence.** The relative residual is the paper solver's (RMS unheld net force over RMS
 //! spring force); with it, the *force step* must be below the tolerance: the largest move the
-//! unheld force alone would make in one step, `s |F_i| / m_i`, over the shortest rest length.
-//! It is the max-norm companion of the residual (one point far from balance cannot hide in the
-//! RMS) and, measured in moves, the counterpart of the paper solver's largest move per step.
-//! The largest move of the last iteration itself is reported too, but does not decide: with
-//! momentum it includes coasting along the near-free slides of a tube on a smooth leg (a turn
-//! around it, say), which change neither the forces nor the stitch density, and would hold a
-//! balanced fit for hundreds of iterations. `knitfit bench` measures what each tolerance buys
-//! against a tight reference.
+//! unheld force alone would make in one step, `s |F_i| / m_i`, over the shortest rest length,
+//! so one point far from balance cannot hide in the RMS. The last iteration's largest move is
+//! reported but does not decide: with momentum it includes coasting along near-free slides of
+//! the tube around a smooth leg, which change neither the forces nor the density
+//! (docs/decisions/0011).
 
 use std::time::Instant;
 

@@ -18,27 +18,12 @@
 //!   Sharper creases and coarse facets can let it dip a few micrometres: the exact pass after the
 //!   fit ([`LegContact::finish`]) moves such points out. A point that rises off its plane by more
 //!   than half the offset (the most an exact query calls touching) stops touching there and is
-//!   queried on its next move. Before, it stayed "touching" up to the plane's full reuse
-//!   distance: the force that pressed it back was held while momentum carried it further off,
-//!   until the plane expired and that whole force came back in one iteration. Those points kept
-//!   the solver's max-norm stop above the tolerance for hundreds of iterations; without them the
-//!   300×300 MakeHuman fit's finest level took 316 iterations instead of 404, and 15 fits at 1e-4
-//!   (three legs, 100×100 to 200×200) 7,094 fine-grid-equivalent iterations instead of 7,913
-//!   (measured before the solver's stall test). It has a cost: the points at the top of that
-//!   thigh which used to hover, held, now oscillate against the skin until a restart damps them.
-//!   The solver's stall test (`accelerated.rs`) restarts for them; without it the same fit to
-//!   1e-3 took 435 finest-level iterations instead of 69.
+//!   queried on its next move (docs/decisions/0031).
 //!
-//! The plane cache is also what lets tight tolerances converge. An exact query on a faceted leg
-//! can put a point on another facet's plane, a jump the forces then have to settle again; the
-//! cache makes those jumps rare. It used to be shortened with the tolerance (so that a re-query
-//! moved no point by more than the tolerance), which made them frequent exactly where they hurt:
-//! at 1e-6, MakeHuman 50×50 did not converge in 100,000 iterations, nor did the coarse MakeHuman
-//! leg at 50×50 and 100×100; with the full 0.5 mm every one of them converges (674, 775 and
-//! 4,815 fine-grid iterations). Where both converge, the rest states agree: the procedural leg
-//! at 100×100 and 1e-6 has stitch densities within 7.3e-4 (relative L2) either way. Fewer
-//! queries also make each iteration cheaper: over 15 fits at 1e-4 (three legs, 100×100 to
-//! 200×200) the solve took 16.7 s against 24.5 s, for about the same number of iterations.
+//! The plane cache is also what lets tight tolerances converge: an exact query on a faceted leg
+//! can put a point on another facet's plane, a jump the forces then have to settle again, and
+//! the cache makes those jumps rare. Why [`PLANE_REUSE_M`] does not shrink with the tolerance:
+//! docs/decisions/0027.
 
 use nalgebra::Point3;
 use rayon::prelude::*;

@@ -2,12 +2,10 @@
 //! net force on each point with the connection terms of eq. (2), a per-point bound on the
 //! stiffness (Gershgorin), and the relative residual that says how far from rest the knit is.
 //!
-//! The pass walks the grid row by row ([`force_pass`]): a row's springs are computed into small
+//! The pass walks the grid row by row (`force_pass`): a row's springs are computed into small
 //! buffers just before its points read them, with one division each, and the constraints are
-//! asked for a whole row's unheld forces at once. Against a state per spring kept for the whole
-//! knit and read back per point, with four divisions per spring, the 300×300 MakeHuman fit's
-//! finest level went from 6.1 to about 3.5 ms per iteration (same iterations; medians of
-//! alternating runs).
+//! asked for a whole row's unheld forces at once, so each spring is read where it is needed and
+//! divided once (docs/decisions/0028).
 //!
 //! Every sum is taken in chunks fixed by the grid alone, in a fixed order, so results are
 //! bit-identical whatever the number of threads.
@@ -164,8 +162,8 @@ pub(crate) struct MomentumStep {
 /// decide on them (a restart redoes the step with no velocity). Fills `ws.stiffness_bound`, not
 /// `ws.force` or `ws.unheld`.
 ///
-/// One pass instead of an evaluation and then a step over the same points saved the reading of
-/// five arrays per iteration (the step was 8% of the 300×300 fit's finest level).
+/// One pass, so the step reads the point arrays the evaluation has just read
+/// (docs/decisions/0030).
 pub(crate) fn evaluate_and_step(
     knit: &Knit,
     terms: &ForceTerms,

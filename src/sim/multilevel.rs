@@ -15,19 +15,9 @@
 //! the paper's, linearly with momentum. On a coarse grid that same smooth error is a few stitches
 //! wide and cheap to remove, and each level starts from a state close to its own rest.
 //!
-//! What it does not do (yet): keep the fine grid's work flat. Measured (README, `knitfit
-//! fit`), the finest grid still needs more iterations the finer it is (235 at 150×150 and 295 at
-//! 300×300 on the MakeHuman leg for 1e-4, 314 at 400×1600: chaotic, but never flat), and
-//! tightening the coarse levels does not shorten it (loosening them to twice the tolerance
-//! saves work, [`COARSE_TOLERANCE_FACTOR`]), so the error it removes is not the coarse solve's:
-//! its tail is a few points near the top of the thigh that oscillate against the skin while the
-//! momentum weight is near 1, until a restart damps them (README, "What is not right yet").
-//! (400×1600 converges since the grids became the same fabric, `Knit::with_stitch_shape`, and
-//! reached 15 s to 1e-4 when the contact's plane cache stopped shrinking with the tolerance,
-//! 12 s with the row-by-row force pass.) Full multigrid would also
-//! send the fine grid's residual back down (V-cycles, FAS); a first try, with the residual
-//! restricted by the transpose of the interpolation, did not lower the fine residual (closing
-//! note).
+//! It does not keep the finest grid's work flat: that level still needs more iterations the
+//! finer the grid, and sending the fine residual back down (V-cycles, FAS) has not been shown to
+//! help here (docs/decisions/0025).
 
 use super::accelerated::{relax_accelerated, LevelStats};
 use super::{Constraints, ForceTerms, RelaxObserver};
@@ -44,15 +34,8 @@ pub const COARSEST: usize = 24;
 pub const COARSE_LEVEL_ITERATIONS: usize = 2000;
 /// Coarser levels stop at this many times the tolerance asked for: their rest state is only the
 /// start of the next level, whose interpolation error (a start residual near 1.4 whatever the
-/// coarse accuracy) is far larger than what a coarse level's last iterations remove.
-///
-/// Measured in fine-grid-equivalent iterations (each fit's count is chaotic; totals are not).
-/// Over the 15-fit sweep plus 300×300 on the three sample legs, factor 1 → 8,814,
-/// 2 → 8,217, 3 → 8,140, 4 → 7,897, 10 → 9,255. But at the real count (MakeHuman 400×1600,
-/// 1e-4), 1 → 364, 2 → 371, 3 → 418, 4 → 476: with five levels, a loose second-finest level
-/// leaves smooth error for the 640,000-point grid. 2 gains on the first and is neutral on the
-/// second (also at 1e-3 and 1e-2: 87 → 88 and 44 → 42). Measured before the accelerated
-/// iteration's stall test.
+/// coarse accuracy) is far larger than what a coarse level's last iterations remove. Looser
+/// still leaves smooth error for a very fine grid (docs/decisions/0032).
 pub const COARSE_TOLERANCE_FACTOR: f64 = 2.0;
 
 /// How the caller makes the knit and constraints of each level: the solver knows grids, the

@@ -55,7 +55,8 @@ pub struct SolverSettings {
     /// Time step t, in solver time units (default: 0.1, the paper's value).
     pub time_step: f64,
     /// Velocity damper: velocities decay as `exp(-damping · t)` each step; per solver time unit
-    /// (default: 1.0, close to the fastest settling of the paper's 10×10 patch; see README).
+    /// (default: 1.0, close to the fastest settling of the paper's 10×10 patch,
+    /// docs/decisions/0003).
     pub damping: f64,
     /// Convergence tolerance, dimensionless (default: 0.001). A run has converged when the
     /// relative residual (RMS net force on free points over RMS spring force) is below it, and

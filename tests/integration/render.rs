@@ -118,7 +118,7 @@ fn the_ankle_is_more_covered_than_the_thigh_and_both_follow_the_coverage_attribu
     );
     for (name, (rendered, attribute, _)) in [("ankle", ankle), ("thigh", thigh)] {
         let relative = (rendered - attribute).abs() / attribute;
-        // The README's measured range is 10–25% above (most at the ankle): the fitted yarns
+        // Rendered coverage runs above the attribute (most at the ankle): the fitted yarns
         // zigzag, the attribute models straight strips.
         assert!(
             relative < 0.25,

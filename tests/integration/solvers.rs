@@ -4,8 +4,9 @@
 use knitfit::base::Direction;
 use knitfit::leg::AxisSource;
 use knitfit::plan::Plan;
+use knitfit::post::fields::measure_fields;
 use knitfit::report::StageClock;
-use knitfit::run::fit::{measure_fields, solve_fit, FitInputs, SolvedFit};
+use knitfit::run::fit::{solve_fit, FitInputs, SolvedFit};
 use knitfit::run::NoProgress;
 use knitfit::scene::Scene;
 use knitfit::sim::SolverMethod;
@@ -125,8 +126,8 @@ fn the_report_says_which_solver_ran_and_how_each_level_went() {
 #[test]
 fn the_default_tolerance_does_not_stall_on_points_that_hover_at_the_top_of_the_thigh() {
     // MakeHuman 200×200 at 1e-3: a few hundred points just off the skin at the top of the inner
-    // thigh oscillate while the rest of the grid coasts; the grid's power stays positive. Without
-    // the stall test (accelerated.rs) the finest level ran 319 iterations; with it, 153.
+    // thigh oscillate while the rest of the grid coasts; the grid's power stays positive. The
+    // stall test (accelerated.rs, docs/decisions/0047) must restart them.
     let leg = &sample_legs()[0];
     assert!(leg.ends_with("makehuman_leg.glb"), "{}", leg.display());
     let (_dir, r) = fit(leg, "200x200", &["--tolerance", "1e-3"]);
@@ -139,9 +140,8 @@ fn the_default_tolerance_does_not_stall_on_points_that_hover_at_the_top_of_the_t
 
 #[test]
 fn the_bench_reference_tolerance_converges_on_every_sample_leg() {
-    // 1e-6 is the bench's reference. With the contact's plane cache shortened as the tolerance
-    // tightened, re-queries kept moving points from facet to facet and MakeHuman and the coarse
-    // leg ran 100,000 iterations at 50×50 without converging; now they take about 1,500.
+    // 1e-6 is the bench's reference: re-queries that moved points from facet to facet used to
+    // keep it from converging on the faceted legs (docs/decisions/0027).
     for leg in sample_legs() {
         let mut scene = Scene::load(None).unwrap();
         (scene.tube.wales, scene.tube.courses) = (50, 50);

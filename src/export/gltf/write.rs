@@ -35,8 +35,8 @@ pub enum GlbNode<'a> {
 /// attribute. A part without segments is a node without a mesh. The bytes depend only on the
 /// arguments.
 ///
-/// Fails with [`Error::Encode`] if a part is inconsistent (see
-/// [`check_yarn_geometry`](super::ply::check_yarn_geometry)).
+/// Fails with [`Error::Encode`] if a part is inconsistent (indices past the points, attributes
+/// of the wrong length, non-finite positions).
 pub fn write_glb(parts: &[YarnGeometry], yarn_colours: [[f64; 3]; 2]) -> Result<Vec<u8>> {
     let nodes: Vec<GlbNode> = parts.iter().map(GlbNode::Yarns).collect();
     write_nodes_glb(&nodes, yarn_colours)
