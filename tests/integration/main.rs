@@ -3,6 +3,7 @@
 
 mod cli;
 mod contact;
+mod docs;
 mod evaluation;
 mod fit;
 mod fuzz;

@@ -1,0 +1,202 @@
+//! The docs state what is true now: the README stays short and links every other doc, every
+//! relative link resolves, ARCHITECTURE.md names every source file (and every file it names
+//! exists), module docs fit on a screen, and docs/SOLVERS.md's figures are the bench's own.
+
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+/// Every `.rs` file under `dir`, sorted.
+fn rust_files(dir: &Path) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    let mut dirs = vec![dir.to_path_buf()];
+    while let Some(d) = dirs.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                dirs.push(path);
+            } else if path.extension().is_some_and(|e| e == "rs") {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
+/// The Markdown files of the project's docs.
+fn doc_files() -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = ["README.md", "ARCHITECTURE.md", "CHANGELOG.md"]
+        .iter()
+        .map(|f| root().join(f))
+        .collect();
+    for dir in ["docs", "docs/decisions"] {
+        let mut more: Vec<PathBuf> = std::fs::read_dir(root().join(dir))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .filter(|p| p.extension().is_some_and(|e| e == "md"))
+            .collect();
+        more.sort();
+        files.extend(more);
+    }
+    files
+}
+
+/// The targets of the Markdown links `[text](target)` in `text`.
+fn link_targets(text: &str) -> Vec<String> {
+    let mut targets = Vec::new();
+    let mut rest = text;
+    while let Some(at) = rest.find("](") {
+        rest = &rest[at + 2..];
+        if let Some(end) = rest.find(')') {
+            targets.push(rest[..end].to_string());
+        }
+    }
+    targets
+}
+
+#[test]
+fn the_readme_is_short_starts_with_the_two_commands_and_links_every_doc() {
+    let readme = read(&root().join("README.md"));
+    let lines = readme.lines().count();
+    assert!(lines <= 150, "README.md has {lines} lines");
+    let top: String = readme.lines().take(8).collect::<Vec<_>>().join("\n");
+    assert!(top.contains("cargo run --release"), "{top}");
+    assert!(top.contains("cargo test --release"), "{top}");
+    let links = link_targets(&readme);
+    for doc in [
+        "docs/GUIDE.md",
+        "docs/SOLVERS.md",
+        "ARCHITECTURE.md",
+        "CHANGELOG.md",
+        "docs/decisions/README.md",
+    ] {
+        assert!(
+            links.iter().any(|l| l == doc),
+            "README.md does not link {doc}"
+        );
+    }
+}
+
+/// The anchors of a Markdown file's headings, as GitHub makes them: lower case, punctuation
+/// other than `-` and `_` dropped, spaces as `-`.
+fn anchors(markdown: &str) -> Vec<String> {
+    markdown
+        .lines()
+        .filter(|l| l.starts_with('#'))
+        .map(|l| {
+            l.trim_start_matches('#')
+                .trim()
+                .to_lowercase()
+                .chars()
+                .filter(|c| c.is_alphanumeric() || matches!(c, ' ' | '-' | '_'))
+                .map(|c| if c == ' ' { '-' } else { c })
+                .collect()
+        })
+        .collect()
+}
+
+#[test]
+fn every_relative_link_in_the_docs_resolves() {
+    for file in doc_files() {
+        let dir = file.parent().unwrap();
+        let text = read(&file);
+        for target in link_targets(&text) {
+            if target.contains("://") || target.starts_with("mailto:") {
+                continue;
+            }
+            let (path, anchor) = target.split_once('#').unwrap_or((&target, ""));
+            let linked = if path.is_empty() {
+                file.clone()
+            } else {
+                dir.join(path)
+            };
+            assert!(
+                linked.exists(),
+                "{}: the link {target} leads nowhere",
+                file.display()
+            );
+            if !anchor.is_empty() && linked.extension().is_some_and(|e| e == "md") {
+                assert!(
+                    anchors(&read(&linked)).iter().any(|a| a == anchor),
+                    "{}: the link {target} names no heading",
+                    file.display()
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn architecture_names_every_source_file_and_only_files_that_exist() {
+    let architecture = read(&root().join("ARCHITECTURE.md"));
+    for file in rust_files(&root().join("src")) {
+        let name = file
+            .strip_prefix(root())
+            .unwrap()
+            .to_string_lossy()
+            .into_owned();
+        let is_list = ["mod.rs", "lib.rs"].iter().any(|m| name.ends_with(m));
+        assert!(
+            is_list || architecture.contains(&format!("`{name}`")),
+            "ARCHITECTURE.md does not say where {name} fits"
+        );
+    }
+    for doc in ["ARCHITECTURE.md", "docs/GUIDE.md", "docs/SOLVERS.md"] {
+        let text = read(&root().join(doc));
+        for word in text.split('`') {
+            let word = word.trim();
+            let is_path = word.starts_with("src/") || word.starts_with("tools/");
+            if is_path && !word.contains(' ') && word.ends_with(['s', 'y']) {
+                assert!(
+                    root().join(word).exists(),
+                    "{doc} names {word}, which does not exist"
+                );
+            }
+        }
+    }
+    let lower = architecture.to_lowercase();
+    assert!(!lower.contains("issue "), "ARCHITECTURE.md names an issue");
+}
+
+#[test]
+fn every_module_doc_fits_on_a_screen() {
+    for file in rust_files(&root().join("src")) {
+        let text = read(&file);
+        let lines = text.lines().take_while(|l| l.starts_with("//!")).count();
+        assert!(lines > 0, "{} has no module doc", file.display());
+        assert!(
+            lines <= 50,
+            "{}: module doc of {lines} lines",
+            file.display()
+        );
+    }
+}
+
+#[test]
+fn solvers_md_embeds_the_bench_tables_as_the_bench_wrote_them() {
+    let solvers = read(&root().join("docs/SOLVERS.md"));
+    for (file, begins, ends) in [
+        ("bench.md", "<!-- bench.md begins", "<!-- bench.md ends -->"),
+        (
+            "bench-quick.md",
+            "<!-- bench-quick.md begins",
+            "<!-- bench-quick.md ends -->",
+        ),
+    ] {
+        let start = solvers.find(begins).expect("the begin marker");
+        let body_start = start + solvers[start..].find('\n').unwrap() + 1;
+        let end = solvers.find(ends).expect("the end marker");
+        assert_eq!(
+            &solvers[body_start..end],
+            read(&root().join("docs").join(file)),
+            "docs/SOLVERS.md's copy of docs/{file} differs: run python3 tools/embed_bench.py"
+        );
+    }
+}
