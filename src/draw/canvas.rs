@@ -189,9 +189,6 @@ pub struct LinearImage {
     pub supersample: usize,
     /// Row-major samples, linear RGB.
     pub pixels: Vec<[f32; 3]>,
-    /// Per sample, for the strokes being drawn: signed distance to the nearest stroke's edge
-    /// (negative inside) and that stroke's colour there. Empty until strokes are drawn.
-    layer: Vec<(f32, [f32; 3])>,
 }
 
 impl LinearImage {
@@ -204,7 +201,6 @@ impl LinearImage {
             height: height * s,
             supersample: s,
             pixels: vec![background; width * s * height * s],
-            layer: Vec::new(),
         }
     }
 
@@ -321,41 +317,39 @@ impl LinearImage {
     /// one stroke after another, so the joints of a polyline are seamless rather than darkened
     /// twice by overlapping edges.
     pub fn strokes(&mut self, rect: Rect, capsules: impl Iterator<Item = Capsule>) {
-        if self.layer.len() != self.pixels.len() {
-            self.layer = vec![EMPTY; self.pixels.len()];
-        }
-        let mut touched: Option<Rect> = None;
-        for capsule in capsules {
-            let Some(r) = capsule.sample_box(rect) else {
-                continue;
-            };
-            touched = Some(touched.map_or(r, |t| Rect {
-                x0: t.x0.min(r.x0),
-                x1: t.x1.max(r.x1),
-                y0: t.y0.min(r.y0),
-                y1: t.y1.max(r.y1),
-            }));
+        let boxed: Vec<(Capsule, Rect)> = capsules
+            .filter_map(|c| c.sample_box(rect).map(|r| (c, r)))
+            .collect();
+        let Some(t) = boxed.iter().map(|(_, r)| *r).reduce(|t, r| Rect {
+            x0: t.x0.min(r.x0),
+            x1: t.x1.max(r.x1),
+            y0: t.y0.min(r.y0),
+            y1: t.y1.max(r.y1),
+        }) else {
+            return;
+        };
+        // Per sample of the strokes' box: signed distance to the nearest stroke's edge (negative
+        // inside) and that stroke's colour there.
+        let box_width = t.x1 - t.x0;
+        let mut nearest = vec![EMPTY; box_width * (t.y1 - t.y0)];
+        for (capsule, r) in &boxed {
             for y in r.y0..r.y1 {
                 for x in r.x0..r.x1 {
                     let dist = capsule.axis_distance([x as f64 + 0.5, y as f64 + 0.5]);
                     let edge = (dist - capsule.radius) as f32;
-                    let cell = &mut self.layer[y * self.width + x];
+                    let cell = &mut nearest[(y - t.y0) * box_width + (x - t.x0)];
                     if edge < cell.0 && edge < 0.5 {
                         *cell = (edge, capsule.colour_at(dist));
                     }
                 }
             }
         }
-        let Some(t) = touched else {
-            return;
-        };
         for y in t.y0..t.y1 {
             for x in t.x0..t.x1 {
-                let i = y * self.width + x;
-                let (edge, colour) = std::mem::replace(&mut self.layer[i], EMPTY);
+                let (edge, colour) = nearest[(y - t.y0) * box_width + (x - t.x0)];
                 let coverage = (0.5 - edge).clamp(0.0, 1.0);
                 if coverage > 0.0 {
-                    let p = &mut self.pixels[i];
+                    let p = &mut self.pixels[y * self.width + x];
                     for k in 0..3 {
                         p[k] += (colour[k] - p[k]) * coverage;
                     }
