@@ -10,7 +10,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 
 use knitfit::run::Progress;
-use knitfit::scene::{LoadedScene, Override};
+use knitfit::scene::{LoadedScene, Override, LEG_AXIS, LEG_FILE};
 use knitfit::Error;
 
 /// Fits a knitted stocking onto a 3D leg (Sakaguchi & Miyata) and writes files artists' tools
@@ -143,22 +143,24 @@ pub struct FitArgs {
     /// Run even when the memory estimate is over the limit. Sets limits.allow_large.
     #[arg(long)]
     pub allow_large: bool,
-    /// Output directory (created if missing).
-    #[arg(long, default_value = "out")]
-    pub out: PathBuf,
+    /// Output directory, created if missing (default: out).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
 }
 
+/// Where a fit or patch writes when `--out` is not given.
+const DEFAULT_OUT: &str = "out";
+
 impl FitArgs {
-    /// The arguments of `knitfit` with no subcommand: the bundled scene into `out/`.
-    pub fn bundled() -> FitArgs {
-        FitArgs {
-            out: PathBuf::from("out"),
-            ..FitArgs::default()
-        }
+    /// The output directory: `--out`, else `out`.
+    pub fn out_dir(&self) -> PathBuf {
+        self.out
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(DEFAULT_OUT))
     }
 
-    /// True when a scene or any option other than `--out` was given (every field is named, so
-    /// a new option cannot be forgotten here).
+    /// True when a scene or any option was given (every field is named, so a new option cannot
+    /// be forgotten here).
     pub fn given(&self) -> bool {
         let FitArgs {
             scene,
@@ -170,7 +172,7 @@ impl FitArgs {
             tolerance,
             memory_limit,
             allow_large,
-            out: _,
+            out,
         } = self;
         scene.is_some()
             || leg.is_some()
@@ -181,17 +183,19 @@ impl FitArgs {
             || tolerance.is_some()
             || memory_limit.is_some()
             || *allow_large
+            || out.is_some()
     }
 
     /// The scene file with these flags applied.
     pub fn load(&self) -> Result<LoadedScene, Error> {
         let mut set = Vec::new();
         if let Some(path) = &self.leg {
-            set.push(Override::new(
-                "--leg",
-                "leg.file",
-                path.display().to_string(),
-            ));
+            // A scene file holds the leg's path as text; a path that is not text cannot go there.
+            let path = path.to_str().ok_or_else(|| Error::InvalidArgument {
+                flag: "--leg".into(),
+                message: format!("{} is not valid UTF-8; rename the file", path.display()),
+            })?;
+            set.push(Override::new("--leg", LEG_FILE, path));
         }
         if let Some(text) = &self.resolution {
             let [wales, courses] = parse_grid("--resolution", text)?;
@@ -202,7 +206,7 @@ impl FitArgs {
         if let Some(text) = &self.axis {
             let [bx, by, bz, tx, ty, tz] = parse_axis(text)?;
             let axis = json!({ "bottom": [bx, by, bz], "top": [tx, ty, tz] });
-            set.push(Override::new("--axis", "leg.axis", axis));
+            set.push(Override::new("--axis", LEG_AXIS, axis));
         }
         if let Some(method) = &self.contact {
             set.push(Override::new(
@@ -240,12 +244,19 @@ pub struct PatchArgs {
     /// both directions side by side. Overrides patch.stretch.
     #[arg(long, value_name = "AXIS=S")]
     pub stretch: Vec<String>,
-    /// Output directory (created if missing).
-    #[arg(long, default_value = "out")]
-    pub out: PathBuf,
+    /// Output directory, created if missing (default: out).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
 }
 
 impl PatchArgs {
+    /// The output directory: `--out`, else `out`.
+    pub fn out_dir(&self) -> PathBuf {
+        self.out
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(DEFAULT_OUT))
+    }
+
     /// The scene file with these flags applied.
     pub fn load(&self) -> Result<LoadedScene, Error> {
         let mut set = Vec::new();
@@ -407,8 +418,143 @@ impl Progress for Bar {
 
 /// Prints where a run's files went.
 pub fn print_written(out: &Path, written: &[PathBuf]) {
-    println!("wrote to {}/:", out.display());
+    say!("wrote to {}/:", out.display());
     for path in written {
-        println!("  {}", path.display());
+        say!("  {}", path.display());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use knitfit::leg::ContactMethod;
+    use knitfit::preview::{RenderMode, View};
+    use knitfit::sim::SolverMethod;
+
+    fn parse(args: &[&str]) -> Command {
+        let all = [&["knitfit"][..], args].concat();
+        Cli::try_parse_from(all).unwrap().command.unwrap()
+    }
+
+    #[test]
+    fn every_fit_flag_sets_its_scene_field() {
+        let Command::Fit(args) = parse(&[
+            "fit",
+            "--leg",
+            "legs/my leg.glb",
+            "--resolution",
+            "30x20",
+            "--axis",
+            "0,0.1,0,0,0.9,-0.1",
+            "--contact",
+            "brute",
+            "--solver",
+            "paper",
+            "--tolerance",
+            "0.01",
+            "--memory-limit",
+            "2.5",
+            "--allow-large",
+            "--out",
+            "there",
+        ]) else {
+            panic!("not a fit")
+        };
+        let loaded = args.load().unwrap();
+        let s = &loaded.scene;
+        assert_eq!(loaded.leg_path(), PathBuf::from("legs/my leg.glb"));
+        assert_eq!((s.tube.wales, s.tube.courses), (30, 20));
+        let axis = s.leg.axis.unwrap();
+        assert_eq!((axis.bottom, axis.top), ([0.0, 0.1, 0.0], [0.0, 0.9, -0.1]));
+        assert_eq!(loaded.set_by(LEG_AXIS), Some("--axis"));
+        assert_eq!(s.contact.method, ContactMethod::Brute);
+        assert_eq!(s.solver.method, SolverMethod::Paper);
+        assert_eq!(s.solver.tolerance, 0.01);
+        assert_eq!(s.limits.memory_gib, Some(2.5));
+        assert!(s.limits.allow_large);
+        assert_eq!(args.out_dir(), PathBuf::from("there"));
+        assert!(args.given());
+        assert!(!FitArgs::default().given());
+        assert_eq!(FitArgs::default().out_dir(), PathBuf::from("out"));
+    }
+
+    #[test]
+    fn every_patch_and_render_flag_sets_its_scene_field() {
+        let Command::Patch(args) = parse(&[
+            "patch",
+            "--size",
+            "8x6",
+            "--stretch",
+            "course=2",
+            "--stretch",
+            "wale=1.25",
+        ]) else {
+            panic!("not a patch")
+        };
+        let s = args.load().unwrap().scene;
+        assert_eq!(s.patch.size, [8, 6]);
+        let stretches: Vec<String> = s.patch.stretch.iter().map(|s| s.to_string()).collect();
+        assert_eq!(stretches, ["course=2", "wale=1.25"]);
+
+        let Command::Render(args) = parse(&[
+            "render", "out", "--width", "320", "--height", "200", "--spp", "9", "--view", "side",
+            "--mode", "density",
+        ]) else {
+            panic!("not a render")
+        };
+        let r = args.load().unwrap().scene.render;
+        assert_eq!((r.width, r.height, r.spp), (320, 200, 9));
+        assert_eq!((r.view, r.mode), (View::Side, RenderMode::Density));
+        assert!(r.camera.is_none());
+    }
+
+    #[test]
+    fn a_flag_value_the_scene_refuses_is_refused_under_the_flag() {
+        for (args, expect) in [
+            (
+                &["fit", "--resolution", "2x2"][..],
+                "--resolution: needs at least 3 wales",
+            ),
+            (
+                &["fit", "--resolution", "2by2"][..],
+                "--resolution: expected two counts",
+            ),
+            (
+                &["fit", "--axis", "1,2,3"][..],
+                "--axis: expected six numbers",
+            ),
+            (
+                &["fit", "--tolerance", "NaN"][..],
+                "--tolerance: must be a finite number",
+            ),
+            (
+                &["fit", "--solver", "fast"][..],
+                "--solver: unknown variant `fast`",
+            ),
+            (
+                &["patch", "--stretch", "course"][..],
+                "--stretch: expected course=S",
+            ),
+        ] {
+            let err = match parse(args) {
+                Command::Fit(a) => a.load().unwrap_err(),
+                Command::Patch(a) => a.load().unwrap_err(),
+                _ => unreachable!("only fits and patches listed"),
+            };
+            assert!(err.to_string().starts_with(expect), "{args:?}: {err}");
+        }
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_leg_path_that_is_not_text_is_refused_by_name() {
+        use std::os::unix::ffi::OsStrExt;
+        let args = FitArgs {
+            leg: Some(PathBuf::from(std::ffi::OsStr::from_bytes(b"leg\xff.glb"))),
+            ..FitArgs::default()
+        };
+        let err = args.load().unwrap_err().to_string();
+        assert!(err.starts_with("--leg: leg"), "{err}");
+        assert!(err.contains("not valid UTF-8"), "{err}");
     }
 }

@@ -1,6 +1,23 @@
 //! The `knitfit` command line: parse → the scene with the flags applied → run → summary → exit
 //! code. The only place that prints to the user or picks an exit code.
 
+/// `println!` that ends quietly when stdout is closed (`knitfit plan --json | head`) instead of
+/// panicking: nothing is left to print to.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
+/// `print!` as [`say!`] for text that ends in its own newline.
+macro_rules! say_text {
+    ($text:expr) => {{
+        use std::io::Write as _;
+        let _ = std::io::stdout().write_all($text.as_bytes());
+    }};
+}
+
 mod cli;
 
 use std::process::ExitCode;
@@ -29,7 +46,7 @@ fn main() -> ExitCode {
         Some(Command::Bench(args)) => bench(args, quiet),
         Some(Command::Render(args)) => render(args, quiet),
         Some(Command::Plan(args)) => plan(*args),
-        None => fit(FitArgs::bundled(), quiet),
+        None => fit(FitArgs::default(), quiet),
     };
     match result {
         Ok(code) => code,
@@ -42,11 +59,11 @@ fn main() -> ExitCode {
 
 fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
     let loaded = args.load()?;
-    let outcome = run_fit(&loaded, &args.out, &mut Bar::new(quiet))?;
+    let outcome = run_fit(&loaded, &args.out_dir(), &mut Bar::new(quiet))?;
     let (scene, report) = (&loaded.scene, &outcome.report);
     let m = &report.metrics;
     if !quiet {
-        println!(
+        say!(
             "fit {}x{} on {} ({} triangles): {} steps, residual {:.2e}, max penetration {:.4} mm, \
              {} in {:.2} s",
             scene.tube.wales,
@@ -59,7 +76,7 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
             converged_word(m.converged),
             report.wall_seconds
         );
-        print_written(&args.out, &outcome.written);
+        print_written(&args.out_dir(), &outcome.written);
     }
     Ok(finish(
         m.converged,
@@ -70,11 +87,11 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
 
 fn patch(args: PatchArgs, quiet: bool) -> Result<ExitCode, Error> {
     let loaded = args.load()?;
-    let outcome = run_patch(&loaded, &args.out, &mut Bar::new(quiet))?;
+    let outcome = run_patch(&loaded, &args.out_dir(), &mut Bar::new(quiet))?;
     let (scene, report) = (&loaded.scene, &outcome.report);
     let m = &report.metrics;
     if !quiet {
-        println!(
+        say!(
             "patch {}x{}: {} relaxation(s), {} steps, residual {:.2e}, {} in {:.2} s",
             scene.patch.size[0],
             scene.patch.size[1],
@@ -84,7 +101,7 @@ fn patch(args: PatchArgs, quiet: bool) -> Result<ExitCode, Error> {
             converged_word(m.converged),
             report.wall_seconds
         );
-        print_written(&args.out, &outcome.written);
+        print_written(&args.out_dir(), &outcome.written);
     }
     // A patch squeezed in its plane has no stable flat rest state: the square spring grid has no
     // shear stiffness, so it buckles instead of settling.
@@ -107,14 +124,14 @@ fn plan(args: PlanArgs) -> Result<ExitCode, Error> {
         });
     }
     let outcome = match &args.of {
-        Some(PlanOf::Patch(patch)) => plan_patch(&patch.load()?, &patch.out),
-        Some(PlanOf::Fit(fit)) => plan_fit(&fit.load()?, &fit.out)?,
-        None => plan_fit(&args.fit.load()?, &args.fit.out)?,
+        Some(PlanOf::Patch(patch)) => plan_patch(&patch.load()?, &patch.out_dir()),
+        Some(PlanOf::Fit(fit)) => plan_fit(&fit.load()?, &fit.out_dir())?,
+        None => plan_fit(&args.fit.load()?, &args.fit.out_dir())?,
     };
     if args.json {
-        println!("{:#}", outcome.to_json());
+        say!("{:#}", outcome.to_json());
     } else {
-        print!("{}", outcome.to_text());
+        say_text!(outcome.to_text());
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -126,7 +143,7 @@ fn bench(args: BenchArgs, quiet: bool) -> Result<ExitCode, Error> {
     };
     let outcome = run_bench(&options, &mut Bar::new(quiet))?;
     if !quiet {
-        print!("{}", outcome.markdown);
+        say_text!(outcome.markdown);
         print_written(&args.out, &outcome.written);
     }
     Ok(ExitCode::SUCCESS)
@@ -137,7 +154,7 @@ fn render(args: RenderArgs, quiet: bool) -> Result<ExitCode, Error> {
     let r = &loaded.scene.render;
     if args.spp_sweep {
         let sweep = run_spp_sweep(&loaded.scene, &args.input)?;
-        println!(
+        say!(
             "{}×{} {} mode; scene prepared in {:.2} s; reference {} spp in {:.2} s; error over {} \
              leg pixels, RMS in 8-bit sRGB levels",
             r.width,
@@ -148,22 +165,24 @@ fn render(args: RenderArgs, quiet: bool) -> Result<ExitCode, Error> {
             sweep.reference_seconds,
             sweep.leg_pixels
         );
-        println!(
+        say!(
             "| spp | seconds | RMS error vs {} spp |",
             sweep.reference_spp
         );
-        println!("|---|---|---|");
+        say!("|---|---|---|");
         for row in &sweep.rows {
-            println!(
+            say!(
                 "| {} | {:.2} | {:.2} |",
-                row.spp, row.seconds, row.rms_error
+                row.spp,
+                row.seconds,
+                row.rms_error
             );
         }
         return Ok(ExitCode::SUCCESS);
     }
     let outcome = run_render(&loaded, &args.input, args.out.as_deref())?;
     if !quiet {
-        println!(
+        say!(
             "rendered {}×{} at {} spp ({} mode) in {:.2} s",
             r.width,
             r.height,
@@ -172,7 +191,7 @@ fn render(args: RenderArgs, quiet: bool) -> Result<ExitCode, Error> {
             outcome.report.wall_seconds
         );
         for path in &outcome.written {
-            println!("  {}", path.display());
+            say!("  {}", path.display());
         }
     }
     Ok(ExitCode::SUCCESS)

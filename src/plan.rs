@@ -237,11 +237,6 @@ impl Plan {
         self.stages.iter().any(|s| s.stage == stage)
     }
 
-    /// True when the plan writes a file for `output`.
-    pub fn writes(&self, output: Output) -> bool {
-        self.files.iter().any(|f| f.output == output)
-    }
-
     /// Every file the run writes, its report last.
     pub fn file_names(&self) -> Vec<&str> {
         self.files
@@ -265,10 +260,10 @@ impl Plan {
         });
     }
 
-    fn new(command: &'static str, scene: &Scene, effects: Vec<Effect>) -> Plan {
+    fn new(command: &'static str, forces: ForceTerms, effects: Vec<Effect>) -> Plan {
         Plan {
             command,
-            forces: force_terms(scene, &effects),
+            forces,
             effects,
             stages: Vec::new(),
             left_out: Vec::new(),
@@ -291,7 +286,7 @@ impl Plan {
             .filter(|e| without_leg.contains(e))
             .collect();
         effects.retain(|e| !without_leg.contains(e));
-        let mut plan = Plan::new("patch", scene, effects);
+        let mut plan = Plan::new("patch", force_terms(scene, &effects), effects);
         for effect in dropped {
             plan.leave_out(
                 format!("effect {}", effect.name()),
@@ -354,7 +349,7 @@ impl Plan {
         if skip_fix {
             effects.retain(|&e| e != Effect::PenetrationFix);
         }
-        let mut plan = Plan::new("fit", scene, effects);
+        let mut plan = Plan::new("fit", force_terms(scene, &effects), effects);
         if skip_fix {
             plan.leave_out(
                 Stage::PenetrationFix.to_string(),
@@ -472,11 +467,11 @@ impl Plan {
     /// The plan of `knitfit render`: read a fit's `stocking.glb` (`input`), ray-trace and encode
     /// the preview as `picture` with its report `report` beside it. No solver, no forces.
     pub fn render(scene: &Scene, input: &str, picture: &str, report: &str) -> Plan {
-        let mut plan = Plan::new("render", scene, Vec::new());
-        plan.forces = ForceTerms {
+        let no_forces = ForceTerms {
             stiffness: [0.0; 2],
             connection_factor: None,
         };
+        let mut plan = Plan::new("render", no_forces, Vec::new());
         plan.report = report.to_string();
         plan.add(Stage::ReadStocking, format!("the leg and yarns of {input}"));
         plan.add(
@@ -598,7 +593,7 @@ mod tests {
         scene.outputs = vec![Output::Glb, Output::Picture];
         let plan = Plan::fit(&scene);
         assert!(!plan.has(Stage::RenderPreview));
-        assert!(!plan.writes(Output::Preview));
+        assert!(!plan.files.iter().any(|f| f.output == Output::Preview));
         scene.outputs.push(Output::Preview);
         let plan = Plan::fit(&scene);
         let stage = plan

@@ -8,7 +8,7 @@ use std::time::Instant;
 use serde::Serialize;
 
 use crate::knit::{Pattern, Stretch};
-use crate::leg::Axis;
+use crate::leg::{Axis, ContactMethod, Units, UpAxis};
 use crate::limits::MemoryCheck;
 use crate::plan::{Plan, PlannedStage, Stage};
 use crate::post::penetration::PenetrationStats;
@@ -115,9 +115,9 @@ pub struct LegDetails {
     /// The leg file.
     pub file: String,
     /// Units the file was read in (`m`).
-    pub units: &'static str,
+    pub units: Units,
     /// The file's up axis (`+y`).
-    pub up_axis: &'static str,
+    pub up_axis: UpAxis,
     /// Triangles whose winding was flipped to face outwards.
     pub reoriented_triangles: usize,
     /// Bounds in world space, metres.
@@ -195,7 +195,7 @@ pub enum SolverDetails {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct ContactDetails {
     /// `bvh` or `brute`.
-    pub method: &'static str,
+    pub method: ContactMethod,
     /// Distance kept between yarn centre line and skin, metres.
     pub offset_m: f64,
     /// Counters over every level.

@@ -3,7 +3,7 @@
 //!
 //! JSON, read with serde. Unknown fields are errors (a typo must not be silently ignored); every
 //! field has a default, so `{}` is a complete scene. Each stage owns its part (`leg`, `knit`,
-//! `sim`, `render`, `export`, `limits` define the types, their defaults, units and checks); this
+//! `sim`, `preview`, `export`, `limits` define the types, their defaults, units and checks); this
 //! module only composes them, loads them, and applies command-line flags as [`Override`]s
 //! before the one validation, so a flag meets exactly the checks its scene field does and a
 //! refusal names the flag that set the value.
@@ -20,7 +20,7 @@ use crate::knit::settings::{KnitSettings, PatchSettings, TubeSettings, Yarns};
 use crate::knit::Pattern;
 use crate::leg::settings::LegSettings;
 use crate::limits::Limits;
-use crate::preview::settings::RenderSettings;
+use crate::preview::settings::PreviewSettings;
 use crate::sim::settings::{ContactSettings, SolverSettings};
 
 /// The scene bundled with the binary (`samples/scene.json`), used when no scene file is given.
@@ -57,7 +57,7 @@ pub struct Scene {
     /// Contact between yarn and leg (`knitfit fit`).
     pub contact: ContactSettings,
     /// The yarn-level preview still (`preview.png` of `knitfit fit`, and `knitfit render`).
-    pub render: RenderSettings,
+    pub render: PreviewSettings,
     /// How much memory a fit may use (`knitfit fit`; see [`crate::limits`]).
     pub limits: Limits,
 }
@@ -136,6 +136,12 @@ impl Scene {
     }
 }
 
+/// The field that names the leg file; a flag that sets it gives a path relative to the current
+/// directory, not to the scene file.
+pub const LEG_FILE: &str = "leg.file";
+/// The field that holds the stocking's axis; a run reports whether a flag set it.
+pub const LEG_AXIS: &str = "leg.axis";
+
 /// A command-line flag that sets scene fields (`--tolerance` sets `solver.tolerance`). Applied to
 /// the scene before it is validated, so the value meets the same checks as in a scene file; a
 /// value the scene refuses is reported under the flag's name.
@@ -167,7 +173,6 @@ impl Override {
     fn touches(&self, field: &str) -> bool {
         let within = |inner: &str, outer: &str| {
             inner == outer
-                || outer.is_empty()
                 || inner
                     .strip_prefix(outer)
                     .is_some_and(|rest| rest.starts_with(['.', '[']))
@@ -252,7 +257,7 @@ impl LoadedScene {
 
     /// The leg file: `leg.file` relative to the scene file, or as given when a flag set it.
     pub fn leg_path(&self) -> PathBuf {
-        match self.set_by("leg.file") {
+        match self.set_by(LEG_FILE) {
             Some(_) => PathBuf::from(&self.scene.leg.file),
             None => self.dir().join(&self.scene.leg.file),
         }
@@ -263,15 +268,11 @@ impl LoadedScene {
         self.path.iter().cloned().collect()
     }
 
-    /// The error for a value the scene's checks refuse: the flag's when a flag set that field,
-    /// else the scene file's.
+    /// The error for a value the scene's checks refuse: the last flag's that set one of the
+    /// fields it is about, else the scene file's.
     fn refusal(&self, invalid: Invalid) -> Error {
-        match self
-            .overrides
-            .iter()
-            .rev()
-            .find(|o| o.touches(&invalid.field))
-        {
+        let set_by_flag = |o: &&Override| invalid.fields().any(|f| o.touches(f));
+        match self.overrides.iter().rev().find(set_by_flag) {
             Some(o) => Error::InvalidArgument {
                 flag: o.flag.clone(),
                 message: invalid.message,
@@ -492,7 +493,8 @@ mod tests {
 
     #[test]
     fn flags_leave_every_other_field_as_the_scene_file_has_it() {
-        let text = r#"{"yarns": {"nylon": {"stiffness": 2, "radius_m": 5e-5}}, "tube": {"relaxed_length_m": 0.5}}"#;
+        let text = r#"{"yarns": {"nylon": {"stiffness": 2, "radius_m": 5e-5}},
+                      "tube": {"relaxed_length_m": 0.5}}"#;
         let plain = LoadedScene::from_json(text, "s.json", None, Vec::new()).unwrap();
         let flagged = LoadedScene::from_json(
             text,
@@ -509,5 +511,24 @@ mod tests {
             plain.leg_path(),
             Path::new(BUNDLED_SCENE_DIR).join("procedural_leg.glb")
         );
+    }
+
+    #[test]
+    fn a_picture_too_large_names_a_size_flag_or_else_the_scene_file() {
+        let big = r#"{"render": {"width": 8192, "height": 8192}}"#;
+        let view = Override::new("--view", "render.view", "side");
+        let err = LoadedScene::from_json(big, "big.json", None, vec![view]).unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("big.json: render.width: 8192×8192"),
+            "{err}"
+        );
+        let sizes = vec![
+            Override::new("--width", "render.width", 5000),
+            Override::new("--height", "render.height", 5000),
+            Override::new("--mode", "render.mode", "yarn"),
+        ];
+        let err = with(sizes).unwrap_err();
+        assert!(err.to_string().starts_with("--height: 5000×5000"), "{err}");
     }
 }

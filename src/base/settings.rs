@@ -10,6 +10,9 @@
 pub struct Invalid {
     /// The field, as a dotted path (`yarns.support.stiffness`, `patch.stretch[0].factor`).
     pub field: String,
+    /// Other fields the check read, whose values share the blame (`width` and `height` for a
+    /// picture over its sample budget, named by `spp`).
+    pub also: Vec<String>,
     /// What is wrong, and the value found.
     pub message: String,
 }
@@ -19,20 +22,38 @@ impl Invalid {
     pub fn new(field: impl Into<String>, message: impl Into<String>) -> Invalid {
         Invalid {
             field: field.into(),
+            also: Vec::new(),
             message: message.into(),
         }
     }
 
+    /// The same error, caused by `fields` as well.
+    pub fn with(mut self, fields: &[&str]) -> Invalid {
+        self.also.extend(fields.iter().map(|f| f.to_string()));
+        self
+    }
+
+    /// Every field the error is about, `field` first.
+    pub fn fields(&self) -> impl Iterator<Item = &str> {
+        std::iter::once(self.field.as_str()).chain(self.also.iter().map(String::as_str))
+    }
+
     /// The same error seen from settings that hold these under `prefix` (`"knit"`).
     pub fn within(self, prefix: &str) -> Invalid {
-        let field = if self.field.is_empty() {
-            prefix.to_string()
-        } else if self.field.starts_with('[') {
-            format!("{prefix}{}", self.field)
-        } else {
-            format!("{prefix}.{}", self.field)
+        let prefixed = |field: &str| {
+            if field.is_empty() {
+                prefix.to_string()
+            } else if field.starts_with('[') {
+                format!("{prefix}{field}")
+            } else {
+                format!("{prefix}.{field}")
+            }
         };
-        Invalid { field, ..self }
+        Invalid {
+            field: prefixed(&self.field),
+            also: self.also.iter().map(|f| prefixed(f)).collect(),
+            message: self.message,
+        }
     }
 }
 
@@ -88,5 +109,10 @@ mod tests {
         let e = Invalid::new("[2].factor", "bad").within("stretch");
         assert_eq!(e.field, "stretch[2].factor");
         assert_eq!(Invalid::new("", "bad").within("tube").field, "tube");
+        let e = Invalid::new("spp", "bad").with(&["width"]).within("render");
+        assert_eq!(
+            e.fields().collect::<Vec<_>>(),
+            ["render.spp", "render.width"]
+        );
     }
 }

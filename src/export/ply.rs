@@ -169,8 +169,8 @@ fn encode<'a>(
 }
 
 /// One element's values, a column per property in the order the file lists them: the writer
-/// reads them row by row through [`Row`]. (ply-rs's `DefaultElement`, a map of named values
-/// per row, took about a kilobyte a yarn point: most of a 400×1600 fit's peak memory.)
+/// reads them row by row through [`Row`], instead of building a map of named values per row
+/// (docs/decisions/0026).
 #[derive(Default)]
 struct Table<'a> {
     columns: Vec<(String, Column<'a>)>,

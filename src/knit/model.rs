@@ -355,8 +355,8 @@ impl Knit {
 
 /// Per-point lists in a compressed layout (start offsets, then all entries), from `entries`,
 /// which calls `push(point, item)` for each item in order (`filler` only fills space before it
-/// is written). `entries` runs twice, to count and then to fill: a `Vec` per point made the
-/// 300×300 knit build spend about 20 ms allocating, at every level of the multilevel solve.
+/// is written). `entries` runs twice, to count and then to fill, so no list is a `Vec` of its
+/// own: the multilevel solver builds a knit per level, and per-point allocations add up.
 fn lists<T: Copy>(
     points: usize,
     filler: T,

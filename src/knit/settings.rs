@@ -21,7 +21,7 @@ pub struct KnitSettings {
     /// Rest length of a wale spring: the distance between neighbouring courses along a wale,
     /// in metres (default: 0.00074). With `course_spacing_m` it sets the fabric's stitch shape,
     /// which a fit keeps at any grid size (`Knit::with_stitch_shape`); why not a square stitch:
-    /// docs/decisions.
+    /// docs/decisions/0024.
     pub wale_spacing_m: f64,
     /// Connection factor c2 of eq. (2), dimensionless (default: 0.2, the paper's value). Used only
     /// when `effects` lists `yarn_connection`.

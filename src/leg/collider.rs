@@ -48,11 +48,6 @@ impl Collider {
         Ok(Collider { mesh, method })
     }
 
-    /// Number of triangles used for contact (after dropping degenerate ones).
-    pub fn triangle_count(&self) -> usize {
-        self.mesh.indices().len()
-    }
-
     /// The triangles used for contact, as indices into [`Collider::vertices`] (duplicates
     /// merged, degenerate triangles dropped: not the file's numbering).
     pub fn triangles(&self) -> &[[u32; 3]] {

@@ -35,11 +35,6 @@ impl View {
             View::ThreeQuarter => "three-quarter",
         }
     }
-
-    /// Parses a name as written by [`View::name`].
-    pub fn parse(text: &str) -> Option<View> {
-        View::ALL.into_iter().find(|v| v.name() == text)
-    }
 }
 
 /// What a preview pixel shows.
@@ -83,7 +78,7 @@ fn default_fov_deg() -> f64 {
 /// The yarn-level preview (`preview.png`, `knitfit render`). Colours are linear RGB, 0–1.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
-pub struct RenderSettings {
+pub struct PreviewSettings {
     /// Image width, pixels (default: 768; 16 to 8192).
     pub width: u32,
     /// Image height, pixels (default: 768; 16 to 8192).
@@ -114,9 +109,9 @@ pub struct RenderSettings {
     pub yarn_sheen_exponent: f64,
 }
 
-impl Default for RenderSettings {
+impl Default for PreviewSettings {
     fn default() -> Self {
-        RenderSettings {
+        PreviewSettings {
             width: 768,
             height: 768,
             view: View::Front,
@@ -144,7 +139,7 @@ pub const MAX_RENDER_PIXELS: u64 = 4096 * 4096;
 /// See [`MAX_RENDER_PIXELS`].
 pub const MAX_RENDER_SAMPLES: u64 = 1 << 31;
 
-impl RenderSettings {
+impl PreviewSettings {
     /// Checks every value; the error names the field under `render`.
     pub fn validate(&self) -> Result<(), Invalid> {
         let (lo, hi) = RENDER_SIDE_PX;
@@ -206,27 +201,29 @@ impl RenderSettings {
     }
 
     /// Checks that this picture at `spp` samples per pixel stays within [`MAX_RENDER_PIXELS`]
-    /// and [`MAX_RENDER_SAMPLES`]; the error is the whole `render`'s, since any of its sizes
-    /// can bring it down.
+    /// and [`MAX_RENDER_SAMPLES`]; the error names `spp` (or `width` for the pixels alone) and
+    /// blames the other sizes too.
     pub fn check_budget(&self, spp: u32) -> Result<(), Invalid> {
         let (width, height) = (self.width, self.height);
         let pixels = u64::from(width) * u64::from(height);
         let samples = pixels * u64::from(spp);
         if pixels > MAX_RENDER_PIXELS {
             Err(Invalid::new(
-                "",
+                "width",
                 format!(
                     "{width}×{height} is over the limit of {MAX_RENDER_PIXELS} pixels (4096×4096)"
                 ),
-            ))
+            )
+            .with(&["height"]))
         } else if samples > MAX_RENDER_SAMPLES {
             Err(Invalid::new(
-                "",
+                "spp",
                 format!(
                     "{width}×{height} at {spp} spp is {samples} samples, over the limit of \
                      {MAX_RENDER_SAMPLES}; lower the size or the samples per pixel"
                 ),
-            ))
+            )
+            .with(&["width", "height"]))
         } else {
             Ok(())
         }

@@ -30,7 +30,7 @@ use crate::report::{
     Bounds, ContactDetails, DensityRange, FitDetails, LegDetails, MemoryDetails, Metrics,
     PerDirection, SolverDetails, StageClock, TubeDetails,
 };
-use crate::scene::{LoadedScene, Scene};
+use crate::scene::{LoadedScene, Scene, LEG_AXIS};
 use crate::sim::contact::{ContactCounters, LegContact};
 use crate::sim::{
     relax_constrained, relax_multilevel, Constraints, Levels, MultilevelStats, RelaxStats,
@@ -52,7 +52,7 @@ impl FitInputs {
     pub fn of(scene: &LoadedScene) -> FitInputs {
         FitInputs {
             leg: scene.leg_path(),
-            axis_source: match scene.set_by("leg.axis") {
+            axis_source: match scene.set_by(LEG_AXIS) {
                 Some(_) => AxisSource::CommandLine,
                 None => AxisSource::Scene,
             },
@@ -162,8 +162,8 @@ fn fit_details(
     FitDetails {
         leg: LegDetails {
             file: leg.path.display().to_string(),
-            units: leg.units.name(),
-            up_axis: leg.up_axis.name(),
+            units: leg.units,
+            up_axis: leg.up_axis,
             reoriented_triangles: leg.reoriented_triangles,
             bounds_m: Bounds {
                 min: min.coords.into(),
@@ -187,7 +187,7 @@ fn fit_details(
         },
         solver: fit.solver.details(scene),
         contact: ContactDetails {
-            method: scene.contact.method.name(),
+            method: scene.contact.method,
             offset_m: fit.offset,
             counters: fit.counters,
         },

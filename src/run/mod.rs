@@ -1,8 +1,8 @@
 //! The commands: each builds its [`Plan`], runs its stages in one shared frame (`Run`: the
 //! output directory checked first, stages timed, files encoded in memory, written atomically,
-//! then the report) and returns what it wrote. Data flows one way, scene → load → knit → solve → post-process → encode → write →
-//! report; the library prints nothing (long stages report to a [`Progress`] the caller
-//! supplies, which the CLI draws as a progress bar).
+//! then the report) and returns what it wrote. Data flows one way, scene → load → knit → solve
+//! → post-process → encode → write → report; the library prints nothing (long stages report to
+//! a [`Progress`] the caller supplies, which the CLI draws as a progress bar).
 
 pub mod bench;
 pub mod fit;

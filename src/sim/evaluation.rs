@@ -35,7 +35,7 @@ pub fn spring_stiffness_bound(c1: f64, rest: f64, inv_len: f64) -> f64 {
 /// x_j|` from its direction `i → j` turning as `i` and `j` move (none when they coincide: the
 /// force is zero there, and `inv_len_ij`, `1 / |x_i − x_j|`, is 0). Without the turning part a
 /// strained knit with a large c2 can have steps divided by the bound overshoot
-/// (`sim::properties`).
+/// (`tests/integration/evaluation.rs`).
 pub fn connection_stiffness_bound(c2: f64, c1: f64, tension: f64, inv_len_ij: f64) -> f64 {
     2.0 * c2 * (c1 + tension * inv_len_ij)
 }
@@ -231,8 +231,8 @@ fn rows_per_chunk(knit: &Knit) -> usize {
 /// from cache, never stored for the whole knit. A chunk also computes the wale springs just
 /// below its first row (the chunk before owns and sums them). Each point's force is what the
 /// kernels of `forces.rs` summed over its lists ([`Knit::incident`], [`Knit::connections`])
-/// give, to rounding (`sim::properties` checks it); only the neighbours' places come from the
-/// grid layout.
+/// give, to rounding (`tests/integration/evaluation.rs` checks it); only the neighbours'
+/// places come from the grid layout.
 fn force_pass<T: Send, S: Default + Send>(
     knit: &Knit,
     terms: &ForceTerms,

@@ -83,7 +83,8 @@ impl Default for SolverSettings {
     }
 }
 
-/// Contact between yarn and leg (paper §6.2).
+/// Contact between yarn and leg (paper §6.2). How its queries are answered
+/// ([`ContactMethod`]) belongs to the leg's collider, which `leg` owns.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ContactSettings {

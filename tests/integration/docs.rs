@@ -148,15 +148,20 @@ fn architecture_names_every_source_file_and_only_files_that_exist() {
             "ARCHITECTURE.md does not say where {name} fits"
         );
     }
-    for doc in ["ARCHITECTURE.md", "docs/GUIDE.md", "docs/SOLVERS.md"] {
-        let text = read(&root().join(doc));
-        for word in text.split('`') {
+    for doc in doc_files() {
+        for word in read(&doc).split('`') {
             let word = word.trim();
-            let is_path = word.starts_with("src/") || word.starts_with("tools/");
-            if is_path && !word.contains(' ') && word.ends_with(['s', 'y']) {
+            let is_path = ["src/", "tools/", "tests/"]
+                .iter()
+                .any(|d| word.starts_with(d));
+            let is_file = [".rs", ".py", ".js", ".sh"]
+                .iter()
+                .any(|e| word.ends_with(e));
+            if is_path && is_file && !word.contains(' ') {
                 assert!(
                     root().join(word).exists(),
-                    "{doc} names {word}, which does not exist"
+                    "{} names {word}, which does not exist",
+                    doc.display()
                 );
             }
         }

@@ -206,6 +206,8 @@ fn brute_force_contact_gives_the_same_fit_as_the_bvh() {
     let leg = coarse_leg(dir.path());
     let (bvh_dir, bvh) = fit(&leg, "16x12", &[]);
     let (brute_dir, brute) = fit(&leg, "16x12", &["--contact", "brute"]);
+    assert_eq!(bvh["details"]["contact"]["method"], "bvh");
+    assert_eq!(brute["details"]["contact"]["method"], "brute");
     assert_eq!(bvh["metrics"]["steps"], brute["metrics"]["steps"]);
     let a = read_ply(&bvh_dir.path().join("out/stocking.ply"));
     let b = read_ply(&brute_dir.path().join("out/stocking.ply"));

@@ -41,22 +41,46 @@ fn module_files(src: &Path, name: &str) -> Vec<PathBuf> {
     files
 }
 
-/// Modules named by `crate::NAME` in `text`, comments skipped.
+/// Modules named by `crate::NAME` or `crate::{NAME::…, …}` in `text`, comments skipped.
 fn imports(text: &str, modules: &[String]) -> BTreeSet<String> {
+    let ident = |s: &str| -> String {
+        s.trim_start()
+            .chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+            .collect()
+    };
+    let code: String = text
+        .lines()
+        .map(|line| line.split("//").next().unwrap_or(""))
+        .collect::<Vec<_>>()
+        .join("\n");
     let mut found = BTreeSet::new();
-    for line in text.lines() {
-        let code = line.split("//").next().unwrap_or("");
-        let mut rest = code;
-        while let Some(at) = rest.find("crate::") {
-            rest = &rest[at + "crate::".len()..];
-            let name: String = rest
-                .chars()
-                .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
-                .collect();
-            if modules.contains(&name) {
-                found.insert(name);
+    let mut rest = code.as_str();
+    while let Some(at) = rest.find("crate::") {
+        rest = &rest[at + "crate::".len()..];
+        let mut names = Vec::new();
+        if let Some(group) = rest.strip_prefix('{') {
+            // Split the group at its top-level commas: each item starts with a module's name.
+            let (mut depth, mut start) = (0, 0);
+            for (i, c) in group.char_indices() {
+                match c {
+                    '{' => depth += 1,
+                    '}' if depth == 0 => {
+                        names.push(ident(&group[start..i]));
+                        break;
+                    }
+                    '}' => depth -= 1,
+                    ',' if depth == 0 => {
+                        names.push(ident(&group[start..i]));
+                        start = i + 1;
+                    }
+                    _ => {}
+                }
             }
+        } else {
+            names.push(ident(rest));
         }
+        found.extend(names.into_iter().filter(|n| modules.contains(n)));
     }
     found
 }
@@ -127,6 +151,52 @@ fn no_top_level_module_imports_one_that_imports_it_back() {
     assert!(graph.len() >= 10, "modules found: {:?}", graph.keys());
     if let Some(cycle) = find_cycle(&graph) {
         panic!("import cycle: {}", cycle.join(" → "));
+    }
+}
+
+/// The layers of ARCHITECTURE.md's table, top first: a row per layer, `→` splitting a row into
+/// layers one above the other, `,` listing modules side by side. Module → its depth (0 at the
+/// top).
+fn documented_layers() -> BTreeMap<String, usize> {
+    let text =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("ARCHITECTURE.md"))
+            .unwrap();
+    let table = text
+        .split("## Layers")
+        .nth(1)
+        .expect("ARCHITECTURE.md has a Layers section");
+    let mut depth = BTreeMap::new();
+    let mut level = 0;
+    for row in table.lines().skip_while(|l| !l.starts_with("|---")).skip(1) {
+        if !row.starts_with('|') {
+            break;
+        }
+        let modules_cell = row.trim_matches('|').split('|').nth(1).unwrap_or("");
+        for part in modules_cell.split('→') {
+            for name in part.split(',') {
+                depth.insert(name.trim().trim_matches('`').to_string(), level);
+            }
+            level += 1;
+        }
+    }
+    depth
+}
+
+#[test]
+fn every_module_imports_only_modules_at_or_below_its_documented_layer() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let graph = import_graph(&src);
+    let depth = documented_layers();
+    for (module, named) in &graph {
+        let d = *depth
+            .get(module)
+            .unwrap_or_else(|| panic!("ARCHITECTURE.md's layers do not list {module}"));
+        for other in named {
+            assert!(
+                depth[other] >= d,
+                "{module} imports {other}, a layer above it in ARCHITECTURE.md"
+            );
+        }
     }
 }
 

@@ -7,6 +7,7 @@ mod docs;
 mod evaluation;
 mod fit;
 mod fuzz;
+mod golden;
 mod hard_cases;
 mod layers;
 mod limits;

@@ -170,10 +170,13 @@ fn assert_report_follows_plan(plan: &serde_json::Value, report: &serde_json::Val
     );
     let stages = report["stages"].as_array().unwrap();
     let mut total = 0.0;
-    for s in stages {
+    for (s, planned) in stages.iter().zip(plan["stages"].as_array().unwrap()) {
         let seconds = s["seconds"].as_f64().unwrap();
         assert!(seconds.is_finite() && seconds >= 0.0, "{s}");
         total += seconds;
+        // A stage the run times but the plan does not list gets no reason: it shows here.
+        assert!(!s["why"].as_str().unwrap().is_empty(), "{s}");
+        assert_eq!(s["why"], planned["why"], "{s}");
     }
     assert!(total <= report["wall_seconds"].as_f64().unwrap());
     let written: Vec<&str> = report["outputs"]
@@ -235,6 +238,39 @@ fn the_plan_lists_the_stages_a_real_run_reports_each_with_its_time() {
     assert!(patch.status.success(), "{}", stderr(&patch));
     let plan = plan_json(dir.path(), &["patch", "--size", "6x6", "--out", "p"]);
     assert_report_follows_plan(&plan, &report(&dir.path().join("p")));
+
+    // knitfit render has no `plan`: its report's stages must each carry the reason its plan gave.
+    let fitted = knitfit(
+        dir.path(),
+        &[
+            "fit",
+            "--leg",
+            leg,
+            "--resolution",
+            "20x12",
+            "--out",
+            "r",
+            "-q",
+        ],
+    );
+    assert!(fitted.status.success(), "{}", stderr(&fitted));
+    let render = knitfit(
+        dir.path(),
+        &[
+            "render", "r", "--width", "32", "--height", "32", "--spp", "1", "-q",
+        ],
+    );
+    assert!(render.status.success(), "{}", stderr(&render));
+    let r: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("r/preview.report.json")).unwrap())
+            .unwrap();
+    assert_eq!(
+        stage_names(&r),
+        ["read stocking.glb", "render preview", "write files"]
+    );
+    for s in r["stages"].as_array().unwrap() {
+        assert!(!s["why"].as_str().unwrap().is_empty(), "{s}");
+    }
 }
 
 #[test]
@@ -263,8 +299,13 @@ fn plan_says_why_each_stage_runs_and_writes_nothing() {
     );
 
     // Flags given before the subcommand would be silently dropped: refused instead.
-    let stray = knitfit(dir.path(), &["plan", "--resolution", "20x20", "patch"]);
-    assert_eq!(stray.status.code(), Some(2));
+    for stray in [
+        &["plan", "--resolution", "20x20", "patch"][..],
+        &["plan", "--out", "elsewhere", "fit"][..],
+    ] {
+        let run = knitfit(dir.path(), stray);
+        assert_eq!(run.status.code(), Some(2), "{stray:?}");
+    }
     // A leg the run could not read is refused as the run would refuse it.
     let missing = knitfit(dir.path(), &["plan", "--leg", "missing.glb"]);
     assert_eq!(missing.status.code(), Some(2));

@@ -7,7 +7,7 @@ use std::sync::OnceLock;
 use knitfit::base::{Direction, Segment, SurfaceMesh, YarnGeometry, YarnKind};
 use knitfit::export::gltf::read::read_stocking_glb;
 use knitfit::preview::{render_preview, PreviewBuffers, PreviewInput};
-use knitfit::preview::{CameraSettings, RenderSettings};
+use knitfit::preview::{CameraSettings, PreviewSettings};
 use knitfit::scene::Scene;
 
 use crate::support::{
@@ -51,7 +51,7 @@ fn thick_fit() -> &'static (tempfile::TempDir, PathBuf, Scene) {
 }
 
 /// Renders the thick fit's GLB with `settings` and returns the buffers.
-fn buffers(settings: &RenderSettings) -> PreviewBuffers {
+fn buffers(settings: &PreviewSettings) -> PreviewBuffers {
     let (_, glb, scene) = thick_fit();
     let stocking = read_stocking_glb(glb).unwrap();
     let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
@@ -88,12 +88,12 @@ fn stocking_heights() -> (f32, f32) {
         })
 }
 
-fn tall_settings() -> RenderSettings {
-    RenderSettings {
+fn tall_settings() -> PreviewSettings {
+    PreviewSettings {
         width: 200,
         height: 640,
         spp: 16,
-        ..RenderSettings::default()
+        ..PreviewSettings::default()
     }
 }
 
@@ -196,11 +196,11 @@ fn broken_geometry_renders_finite_pixels_without_panicking() {
     stocking.leg.triangles.push([0, 1, u32::MAX]);
     stocking.leg.normals[5] = [0.0, 0.0, 0.0];
     let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
-    let settings = RenderSettings {
+    let settings = PreviewSettings {
         width: 64,
         height: 128,
         spp: 4,
-        ..RenderSettings::default()
+        ..PreviewSettings::default()
     };
     let preview = render_preview(input, &settings, "test").unwrap();
     let b = &preview.buffers;
@@ -433,7 +433,7 @@ fn yarn_finer_than_a_pixel_averages_to_the_true_coverage_without_moire() {
     };
     let distance = 0.5;
     let fov = 2.0 * (0.048f64 / distance).atan().to_degrees();
-    let settings = |spp: u32| RenderSettings {
+    let settings = |spp: u32| PreviewSettings {
         width: 48,
         height: 48,
         spp,
@@ -442,7 +442,7 @@ fn yarn_finer_than_a_pixel_averages_to_the_true_coverage_without_moire() {
             target: [0.0, 0.0, 0.0],
             fov_deg: fov,
         }),
-        ..RenderSettings::default()
+        ..PreviewSettings::default()
     };
     let stats = |spp: u32| {
         let b = render_preview(input, &settings(spp), "test")
@@ -475,7 +475,7 @@ fn density_mode_draws_the_denser_ankle_hotter_than_the_thigh_with_a_colour_bar()
     let (_, glb, scene) = thick_fit();
     let stocking = read_stocking_glb(glb).unwrap();
     let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
-    let settings = RenderSettings {
+    let settings = PreviewSettings {
         mode: knitfit::preview::RenderMode::Density,
         ..tall_settings()
     };

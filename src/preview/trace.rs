@@ -25,7 +25,7 @@ use crate::base::colour::{heat, linear_to_srgb8};
 use crate::base::{SurfaceMesh, YarnGeometry, YarnKind};
 use crate::error::{Error, Result};
 use crate::knit::Yarns;
-use crate::preview::{RenderMode, RenderSettings};
+use crate::preview::{PreviewSettings, RenderMode};
 
 /// Width of the colour bar panel of the density mode, as a fraction of the image height.
 const BAR_PANEL_FRACTION: f64 = 0.16;
@@ -66,7 +66,7 @@ impl<'a> PreviewInput<'a> {
 /// Errors: [`Error::Encode`] naming `name` when the leg has no triangle or PNG encoding fails.
 pub fn encode_preview(
     input: PreviewInput,
-    settings: &RenderSettings,
+    settings: &PreviewSettings,
     name: &str,
 ) -> Result<(Vec<u8>, PreviewStats)> {
     let preview = render_preview(input, settings, name)?;
@@ -107,8 +107,8 @@ pub struct PreviewStats {
     pub height: u32,
     /// Samples per pixel actually taken (the requested count rounded up to fill the grid).
     pub spp: u32,
-    /// `yarn` or `density`.
-    pub mode: String,
+    /// What the pixels show.
+    pub mode: RenderMode,
     /// Leg triangles in the ray-casting BVH.
     pub bvh_triangles: usize,
     /// Yarn segments indexed.
@@ -215,7 +215,7 @@ impl<'a> PreparedScene<'a> {
     }
 
     /// The camera the settings ask for: the scene's, or framed on the leg.
-    pub fn camera(&self, settings: &RenderSettings) -> Camera {
+    pub fn camera(&self, settings: &PreviewSettings) -> Camera {
         let aspect = settings.width as f64 / settings.height as f64;
         match &settings.camera {
             Some(c) => Camera::from_settings(c, aspect),
@@ -265,7 +265,7 @@ struct Sample {
 /// Renders the preview of `input` as `settings` ask. `what` names the output in errors.
 pub fn render_preview(
     input: PreviewInput,
-    settings: &RenderSettings,
+    settings: &PreviewSettings,
     what: &str,
 ) -> Result<Preview> {
     let scene = PreparedScene::new(input, what)?;
@@ -273,7 +273,7 @@ pub fn render_preview(
 }
 
 /// Renders an already prepared scene (the spp sweep renders one scene several times).
-pub fn render_prepared(scene: &PreparedScene, settings: &RenderSettings) -> Preview {
+pub fn render_prepared(scene: &PreparedScene, settings: &PreviewSettings) -> Preview {
     let camera = scene.camera(settings);
     let (w, h) = (settings.width, settings.height);
     let (cols, rows) = strata(settings.spp);
@@ -352,7 +352,7 @@ pub fn render_prepared(scene: &PreparedScene, settings: &RenderSettings) -> Prev
             width: w,
             height: h,
             spp,
-            mode: settings.mode.name().into(),
+            mode: settings.mode,
             bvh_triangles: scene.triangles.len(),
             segments: scene.yarns.len(),
             cell_m: scene.yarns.cell_size(),
@@ -376,7 +376,7 @@ struct PixelOut {
 
 struct Context<'a> {
     scene: &'a PreparedScene<'a>,
-    settings: &'a RenderSettings,
+    settings: &'a PreviewSettings,
     camera: &'a Camera,
     lights: &'a Lights,
     density_range: Option<(f32, f32)>,
