@@ -16,7 +16,7 @@ use crate::post::StitchStats;
 use crate::preview::PreviewStats;
 use crate::scene::Effect;
 use crate::sim::contact::ContactCounters;
-use crate::sim::LevelStats;
+use crate::sim::{LevelStats, RelaxStats};
 
 /// One stage as it ran.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -247,18 +247,10 @@ pub struct PatchRun {
     pub stretch: Stretch,
     /// Points.
     pub points: usize,
-    /// Steps taken.
-    pub steps: usize,
-    /// Sub-steps per step.
-    pub substeps_per_step: usize,
-    /// The explicit stability limit, solver time units.
-    pub time_step_limit: f64,
-    /// Final relative residual.
-    pub residual: f64,
-    /// Final largest move per step over the shortest rest length.
-    pub max_move: f64,
-    /// Whether it converged.
-    pub converged: bool,
+    /// What the relaxation did: steps, sub-steps per step, the stability limit, the final
+    /// residual and largest move, whether it converged.
+    #[serde(flatten)]
+    pub relaxation: RelaxStats,
     /// Stitch shapes (`null` for a patch too small to measure).
     pub stitches: Option<StitchStats>,
 }

@@ -178,12 +178,7 @@ fn details(scene: &Scene, runs: &[Relaxed]) -> PatchDetails {
             .map(|r| PatchRun {
                 stretch: r.stretch,
                 points: r.knit.len(),
-                steps: r.stats.steps,
-                substeps_per_step: r.stats.substeps_per_step,
-                time_step_limit: r.stats.time_step_limit,
-                residual: r.stats.residual,
-                max_move: r.stats.max_move,
-                converged: r.stats.converged,
+                relaxation: r.stats,
                 stitches: r.stitches.clone(),
             })
             .collect(),

@@ -36,7 +36,7 @@ use crate::sim::{OnUnstable, SolverSettings};
 const DIVERGENCE_ENERGY_GROWTH: f64 = 1e3;
 
 /// What a relaxation did.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct RelaxStats {
     /// Full steps of size `time_step` taken.
     pub steps: usize,

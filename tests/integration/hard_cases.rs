@@ -28,6 +28,15 @@ fn procedural() -> Leg {
     load_sample(&procedural_leg())
 }
 
+/// Writes a leg-like body of revolution 0.75 m tall (from y = 0.08 m), girth `girth(h)` metres
+/// at height fraction `h`, as `dir/name`.
+fn write_leg_of_girth(dir: &Path, name: &str, girth: impl Fn(f64) -> f64) -> PathBuf {
+    let body = revolved("leg", 96, 120, (0.08, 0.83), |h| {
+        girth(h) / std::f64::consts::TAU
+    });
+    write_mesh(dir, name, &body.positions, body.triangles)
+}
+
 /// Writes `leg` with every vertex moved by `f`.
 fn transformed(
     dir: &Path,
@@ -655,15 +664,7 @@ fn an_ankle_a_fifth_of_the_thigh_girth_is_gripped_and_densest() {
     // ankle too, so it is stretched 5.5× around the thigh and 1.1× around the ankle.
     let dir = tempfile::tempdir().unwrap();
     let girth = |h: f64| 0.1 + 0.4 * h * h;
-    let body = revolved("leg", 96, 120, (0.08, 0.83), |h| {
-        girth(h) / std::f64::consts::TAU
-    });
-    let path = write_mesh(
-        dir.path(),
-        "thin_ankle.glb",
-        &body.positions,
-        body.triangles,
-    );
+    let path = write_leg_of_girth(dir.path(), "thin_ankle.glb", girth);
     let scene = scene_for(
         &path,
         json!({}),
@@ -693,15 +694,7 @@ fn an_ankle_five_times_thinner_than_the_relaxed_stocking_is_covered_loosely() {
     // into the leg or blowing up.
     let dir = tempfile::tempdir().unwrap();
     let girth = |h: f64| 0.04 + 0.46 * h.powf(1.5);
-    let body = revolved("leg", 96, 120, (0.08, 0.83), |h| {
-        girth(h) / std::f64::consts::TAU
-    });
-    let path = write_mesh(
-        dir.path(),
-        "very_thin_ankle.glb",
-        &body.positions,
-        body.triangles,
-    );
+    let path = write_leg_of_girth(dir.path(), "very_thin_ankle.glb", girth);
     let scene = scene_for(&path, json!({}), json!({}));
     let (run, out) = run_scene(&scene, "32x32", &[]);
     let leg = load_leg(&path, Units::Metres, UpAxis::PosY).unwrap();

@@ -1,9 +1,12 @@
 //! The library's top-level modules import one another in one direction only: no module reaches,
-//! directly or through others, back to itself. Read from the source: every `crate::MODULE` path
-//! outside comments, in each top-level module's files.
+//! directly or through others, back to itself, and none imports one above it in
+//! ARCHITECTURE.md's layer table. Read from the source: every `crate::MODULE` path outside
+//! comments, in each top-level module's files.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
+
+use crate::support::rust_files;
 
 /// Top-level modules of the library, from `pub mod NAME;` / `mod NAME;` lines in `src/lib.rs`.
 fn top_level_modules(src: &Path) -> Vec<String> {
@@ -25,20 +28,7 @@ fn module_files(src: &Path, name: &str) -> Vec<PathBuf> {
     if single.exists() {
         return vec![single];
     }
-    let mut files = Vec::new();
-    let mut dirs = vec![src.join(name)];
-    while let Some(dir) = dirs.pop() {
-        for entry in std::fs::read_dir(&dir).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                dirs.push(path);
-            } else if path.extension().is_some_and(|e| e == "rs") {
-                files.push(path);
-            }
-        }
-    }
-    files.sort();
-    files
+    rust_files(&src.join(name))
 }
 
 /// Modules named by `crate::NAME` or `crate::{NAME::…, …}` in `text`, comments skipped.

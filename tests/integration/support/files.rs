@@ -1,6 +1,7 @@
-//! Reading the files knitfit writes, for assertions on their contents.
+//! Reading the files knitfit writes, for assertions on their contents, and listing its own
+//! source files for the tests that read the source.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use nalgebra::Point3;
 use ply_rs_bw::ply::{DefaultElement, Property};
@@ -44,4 +45,22 @@ pub fn base64(bytes: &[u8]) -> String {
         }
     }
     out
+}
+
+/// Every `.rs` file under `dir`, sorted.
+pub fn rust_files(dir: &Path) -> Vec<PathBuf> {
+    let mut files = Vec::new();
+    let mut dirs = vec![dir.to_path_buf()];
+    while let Some(d) = dirs.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                dirs.push(path);
+            } else if path.extension().is_some_and(|e| e == "rs") {
+                files.push(path);
+            }
+        }
+    }
+    files.sort();
+    files
 }

@@ -6,7 +6,7 @@ pub mod fixtures;
 pub mod process;
 pub mod prop_config;
 
-pub use files::{base64, float, point, read_ply};
+pub use files::{base64, float, point, read_ply, rust_files};
 pub use fixtures::{
     grid_surface, load_sample, procedural_leg, revolved, sample_legs, write_mesh, write_meshes,
     write_tube_leg,
