@@ -9,18 +9,41 @@ use serde::Serialize;
 
 use crate::base::YarnKind;
 use crate::export::Output;
-use crate::knit::Stretch;
+use crate::knit::{Stretch, TubeBottom, TubeTop};
 use crate::preview::RenderMode;
 use crate::scene::{Effect, Scene};
 use crate::sim::multilevel::grid_sizes;
 use crate::sim::{ForceTerms, SolverMethod};
+
+/// Where `tube.bottom` puts the stocking's start, in words.
+pub fn tube_bottom_words(bottom: TubeBottom) -> String {
+    match bottom {
+        TubeBottom::Ankle => "the ankle (tube.bottom)".into(),
+    }
+}
+
+/// Where `tube.top` puts the stocking's end, in words.
+pub fn tube_top_words(top: TubeTop) -> String {
+    match top {
+        TubeTop::BelowCrotchM(d) => {
+            format!(
+                "{:.0} cm below the crotch, or inside the cut (tube.top)",
+                d * 100.0
+            )
+        }
+        TubeTop::Fraction(f) => format!("{:.0}% of the leg's height (tube.top)", f * 100.0),
+    }
+}
 
 /// One step of a run: what the plan lists, the run executes and the report records.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Stage {
     /// Read the leg file and check the fit's memory estimate before decoding it.
     LoadLeg,
-    /// Convert the given axis to world space, or detect it.
+    /// Find the leg to dress and its landmarks (only where no axis is given).
+    FindLandmarks,
+    /// Convert the given axis to world space, or place it on the landmarks; check the leg goes
+    /// around it.
     FindAxis,
     /// Build the contact queries' structure over the leg.
     BuildCollider,
@@ -58,6 +81,7 @@ impl fmt::Display for Stage {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             Stage::LoadLeg => f.write_str("load leg"),
+            Stage::FindLandmarks => f.write_str("find landmarks"),
             Stage::FindAxis => f.write_str("find axis"),
             Stage::BuildCollider => f.write_str("build collider"),
             Stage::KnitTube => f.write_str("knit tube"),
@@ -362,13 +386,30 @@ impl Plan {
             "the leg file (leg.file, or --leg): its declared triangles and the tube are checked \
              against the memory limit before anything is decoded",
         );
-        plan.add(
-            Stage::FindAxis,
-            match scene.leg.axis {
-                Some(_) => "leg.axis is given: convert it to world space",
-                None => "leg.axis is absent: detect the principal axis",
-            },
-        );
+        match scene.leg.axis {
+            Some(_) => plan.add(
+                Stage::FindAxis,
+                "leg.axis is given: convert it to world space and check the leg goes around it",
+            ),
+            None => {
+                plan.add(
+                    Stage::FindLandmarks,
+                    format!(
+                        "leg.axis is absent: find the {} leg (leg.side), its sole, toe, ankle, \
+                         knee and thigh top from girth profiles",
+                        scene.leg.side.name()
+                    ),
+                );
+                plan.add(
+                    Stage::FindAxis,
+                    format!(
+                        "place the axis from {} to {}",
+                        tube_bottom_words(scene.tube.bottom),
+                        tube_top_words(scene.tube.top)
+                    ),
+                );
+            }
+        }
         plan.add(
             Stage::BuildCollider,
             format!("contact ({} queries)", scene.contact.method.name()),

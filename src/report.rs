@@ -5,10 +5,12 @@
 
 use std::time::Instant;
 
+use nalgebra::Point3;
 use serde::Serialize;
 
 use crate::knit::{Pattern, Stretch};
-use crate::leg::{Axis, ContactMethod, Units, UpAxis};
+use crate::leg::landmarks::Ring;
+use crate::leg::{Axis, Cleaned, ContactMethod, Landmarks, Leg, Side, ThighTopKind, Units, UpAxis};
 use crate::limits::MemoryCheck;
 use crate::plan::{Plan, PlannedStage, Stage};
 use crate::post::penetration::PenetrationStats;
@@ -116,12 +118,91 @@ pub struct LegDetails {
     pub file: String,
     /// Units the file was read in (`m`).
     pub units: Units,
-    /// The file's up axis (`+y`).
+    /// The file's up axis (`+y`): given, or the nearest to the body's up.
     pub up_axis: UpAxis,
+    /// True when `up_axis` was found from the anatomy (`leg.up_axis: "auto"`).
+    pub up_axis_found: bool,
     /// Triangles whose winding was flipped to face outwards.
     pub reoriented_triangles: usize,
+    /// What cleaning removed from the file's mesh (repeats, slivers, debris).
+    pub cleaned: Cleaned,
     /// Bounds in world space, metres.
     pub bounds_m: Bounds,
+    /// The landmarks the axis was placed on; `null` when the axis was given.
+    pub landmarks: Option<LandmarkDetails>,
+}
+
+/// A landmark point: world space (metres, +Y up) and the leg file's own coordinates and units.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LandmarkPoint {
+    /// World space, metres.
+    pub m: [f64; 3],
+    /// The leg file's coordinates and units.
+    pub file: [f64; 3],
+}
+
+/// A section of the leg at a landmark.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LandmarkRing {
+    /// Centre of the section.
+    pub centre: LandmarkPoint,
+    /// Girth (convex perimeter), metres.
+    pub girth_m: f64,
+    /// Height above the sole, metres.
+    pub height_m: f64,
+}
+
+/// The landmarks of the dressed leg ([`crate::leg::landmarks`]).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct LandmarkDetails {
+    /// Unit vector up the body, world space.
+    pub up: [f64; 3],
+    /// Legs found at the bottom of the mesh.
+    pub legs_found: usize,
+    /// The dressed leg's side (`left`, `right`); `null` when the file holds one leg.
+    pub side: Option<Side>,
+    /// The leg's lowest point.
+    pub sole: LandmarkPoint,
+    /// The foot's furthest point forward; `null` when the leg has no foot.
+    pub toe_tip: Option<LandmarkPoint>,
+    /// Unit vector from the ankle to the toe, world space; `null` without a foot.
+    pub foot_direction: Option<[f64; 3]>,
+    /// The narrowest section above the foot.
+    pub ankle: LandmarkRing,
+    /// The narrowest section between calf and thigh.
+    pub knee: LandmarkRing,
+    /// The highest section of the leg alone.
+    pub thigh_top: LandmarkRing,
+    /// `crotch` (where the legs join) or `cut` (where the mesh ends).
+    pub thigh_top_kind: ThighTopKind,
+}
+
+impl LandmarkDetails {
+    /// The report's form of `landmarks` found on `leg`.
+    pub fn of(landmarks: &Landmarks, leg: &Leg) -> LandmarkDetails {
+        let point = |p: [f64; 3]| LandmarkPoint {
+            m: p,
+            file: leg.file_from_world(&Point3::from(p)).coords.into(),
+        };
+        let sole = landmarks.sole_s();
+        let ring = |r: &Ring| LandmarkRing {
+            centre: point(r.centre),
+            girth_m: r.girth_m,
+            height_m: r.s - sole,
+        };
+        LandmarkDetails {
+            up: landmarks.up,
+            legs_found: landmarks.legs_found,
+            side: landmarks.side,
+            sole: point(landmarks.sole),
+            toe_tip: landmarks.foot.map(|f| point(f.toe_tip)),
+            foot_direction: landmarks.foot.map(|f| f.direction),
+            ankle: ring(&landmarks.ankle),
+            knee: ring(&landmarks.knee),
+            thigh_top: ring(&landmarks.thigh_top),
+            thigh_top_kind: landmarks.thigh_top_kind,
+        }
+    }
 }
 
 /// An axis-aligned box, metres.

@@ -10,6 +10,6 @@ pub mod tube;
 pub use model::{Connection, Incident, Knit, Particles, PointId, Spring};
 pub use pattern::{Pattern, Tile};
 pub use settings::{
-    KnitSettings, PatchSettings, Stretch, StretchAxis, TubeSettings, Yarn, Yarns,
-    RELAXED_LENGTH_FRACTION,
+    KnitSettings, PatchSettings, Stretch, StretchAxis, TubeBottom, TubeSettings, TubeTop, Yarn,
+    Yarns, RELAXED_LENGTH_FRACTION,
 };

@@ -109,6 +109,38 @@ pub struct TubeSettings {
     /// the axis, since a stocking is worn stretched along the leg. Absent means
     /// [`RELAXED_LENGTH_FRACTION`] of the axis length (default: absent).
     pub relaxed_length_m: Option<f64>,
+    /// Where the stocking starts on the leg (default: `"ankle"`).
+    pub bottom: TubeBottom,
+    /// Where the stocking ends on the thigh (default: `{"below_crotch_m": 0.05}`, a
+    /// thigh-high's welt).
+    pub top: TubeTop,
+}
+
+/// Where the stocking starts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum TubeBottom {
+    /// At the ankle: the narrowest girth above the foot (or just inside the cut of a leg that
+    /// has no foot).
+    #[default]
+    Ankle,
+}
+
+/// Where the stocking ends.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum TubeTop {
+    /// This far below the crotch, metres (on a leg cut below the crotch: just inside the cut).
+    BelowCrotchM(f64),
+    /// At this fraction of the leg's height from the sole to the top of the thigh (1 = the
+    /// crotch or the cut).
+    Fraction(f64),
+}
+
+impl Default for TubeTop {
+    fn default() -> Self {
+        TubeTop::BelowCrotchM(0.05)
+    }
 }
 
 /// A stocking's relaxed length as a fraction of the leg length it covers, when the scene does
@@ -122,6 +154,8 @@ impl Default for TubeSettings {
             courses: 150,
             relaxed_circumference_m: 0.20,
             relaxed_length_m: None,
+            bottom: TubeBottom::Ankle,
+            top: TubeTop::default(),
         }
     }
 }
@@ -254,6 +288,25 @@ impl TubeSettings {
         settings::positive("relaxed_circumference_m", self.relaxed_circumference_m)?;
         if let Some(length) = self.relaxed_length_m {
             settings::positive("relaxed_length_m", length)?;
+        }
+        match self.top {
+            TubeTop::BelowCrotchM(d) => {
+                settings::non_negative("top.below_crotch_m", d)?;
+                if d >= 1.0 {
+                    return Err(Invalid::new(
+                        "top.below_crotch_m",
+                        format!("{d} m below the crotch is off the leg; give metres under 1"),
+                    ));
+                }
+            }
+            TubeTop::Fraction(f) => {
+                if !(f > 0.0 && f <= 1.0) {
+                    return Err(Invalid::new(
+                        "top.fraction",
+                        format!("must be above 0 and at most 1, got {f}"),
+                    ));
+                }
+            }
         }
         Ok(())
     }

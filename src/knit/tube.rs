@@ -17,9 +17,19 @@
 
 use nalgebra::{Point3, Vector3};
 
+use super::settings::{TubeBottom, TubeTop};
 use super::{Knit, Pattern, Tile};
 use crate::base::{perpendicular_frame, Vec3};
-use crate::leg::{section, Axis};
+use crate::leg::{section, Axis, AxisSource, Landmarks, ThighTopKind};
+
+/// Fraction of the leg's height kept between the stocking's end and a cut in the mesh, where
+/// inside and outside are not defined.
+pub const CUT_CLEARANCE: f64 = 0.03;
+/// Least distance kept between the stocking's top and the other leg, metres: a thigh-high's
+/// welt stays clear of the other thigh.
+pub const OTHER_LEG_CLEARANCE_M: f64 = 0.025;
+/// Shortest stocking the landmarks may give, metres.
+pub const MIN_TUBE_LENGTH_M: f64 = 0.1;
 
 /// Gap kept between the leg and a ring before the fit, as a fraction of the ring radius.
 const RADIAL_MARGIN: f64 = 0.08;
@@ -54,6 +64,42 @@ pub struct Tube {
     pub end_ring: Vec<bool>,
     /// Orthonormal frame: `u`, `v` across the axis.
     pub frame: (Vector3<f64>, Vector3<f64>),
+}
+
+/// The stocking's axis on the leg's landmarks: from the centre of the section at `bottom` to
+/// the centre of the section at `top`, kept [`OTHER_LEG_CLEARANCE_M`] below where the thighs
+/// come closer than that. The error says why there is no room for a stocking.
+pub fn tube_axis(landmarks: &Landmarks, bottom: TubeBottom, top: TubeTop) -> Result<Axis, String> {
+    let sole = landmarks.sole_s();
+    let thigh = landmarks.thigh_top.s;
+    let leg_height = thigh - sole;
+    let highest = match landmarks.thigh_top_kind {
+        ThighTopKind::Crotch => thigh,
+        ThighTopKind::Cut => thigh - CUT_CLEARANCE * leg_height,
+    };
+    let bottom_s = match bottom {
+        TubeBottom::Ankle => landmarks.ankle.s,
+    };
+    let top_s = match top {
+        TubeTop::BelowCrotchM(d) => thigh - d,
+        TubeTop::Fraction(f) => sole + f * leg_height,
+    }
+    .min(highest)
+    .min(landmarks.clear_of_other_leg(OTHER_LEG_CLEARANCE_M));
+    if top_s - bottom_s < MIN_TUBE_LENGTH_M {
+        return Err(format!(
+            "the stocking would run only {:.3} m, from the ankle ({:.3} m above the sole) to \
+             {:.3} m above the sole; lower tube.top",
+            (top_s - bottom_s).max(0.0),
+            bottom_s - sole,
+            top_s - sole
+        ));
+    }
+    Ok(Axis {
+        bottom: landmarks.ring_at(bottom_s).centre,
+        top: landmarks.ring_at(top_s).centre,
+        source: AxisSource::Landmarks,
+    })
 }
 
 /// Builds the tube around the leg (world-space `leg_vertices` and the `leg_triangles` that

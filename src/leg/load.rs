@@ -1,17 +1,21 @@
 //! Loading a leg from glTF 2.0 (`.glb`, or `.gltf` with external or embedded buffers).
 //!
 //! Every triangle primitive under the default scene's nodes is taken, with node transforms
-//! applied, then converted from the file's units and up axis to ours: metres, Y up (glTF's own
-//! convention, so a well-formed glTF file needs no conversion). The mesh is checked: it must have
-//! triangles, finite coordinates, no compressed geometry, and a plausible height.
+//! applied, scaled to metres, cleaned ([`super::clean`]: repeated vertices and faces, slivers,
+//! debris), and turned so that the file's up axis is +Y (glTF's own convention, so a well-formed
+//! glTF file needs no turning). With `up_axis: auto` the up axis is the file axis nearest the
+//! body's own up ([`anatomical_up`]). The mesh is checked: it must have triangles, finite
+//! coordinates, no compressed geometry, and a plausible height.
 
 use std::path::{Path, PathBuf};
 
-use nalgebra::{Matrix4, Point3};
+use nalgebra::{Matrix4, Point3, Vector3};
 
+use super::clean::{clean_mesh, Cleaned};
+use super::landmarks::anatomical_up;
 use super::orient::orient_outward;
 use crate::error::{Error, Result};
-use crate::leg::{Units, UpAxis};
+use crate::leg::{Units, UpAxis, UpChoice};
 
 /// A leg mesh in world space: metres, Y up.
 #[derive(Clone, Debug)]
@@ -27,8 +31,16 @@ pub struct Leg {
     pub reoriented_triangles: usize,
     /// The units the file was read in.
     pub units: Units,
-    /// The up axis the file was read with.
+    /// The up axis the file was read with (given, or the nearest to the body's up).
     pub up_axis: UpAxis,
+    /// True when `up_axis` was found from the anatomy (`leg.up_axis: auto`).
+    pub up_detected: bool,
+    /// Unit vector up the body, world space: +Y where the up axis was given; found from the
+    /// anatomy with `auto` (then it turns with the body, so a turned copy of a leg gets the
+    /// same landmarks, turned).
+    pub up: Vector3<f64>,
+    /// What cleaning removed.
+    pub cleaned: Cleaned,
 }
 
 /// Shortest and tallest leg accepted, metres: outside this range the file is almost certainly
@@ -43,6 +55,30 @@ const COMPRESSION_EXTENSIONS: [&str; 3] = [
 ];
 
 impl Leg {
+    /// A leg already in world space (metres, +Y up), cleaned and wound outwards: for meshes
+    /// made in code.
+    pub fn from_world(path: PathBuf, positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Leg {
+        let (positions, mut triangles, cleaned) = clean_mesh(positions, triangles);
+        let reoriented_triangles = orient_outward(&positions, &mut triangles);
+        Leg {
+            path,
+            positions,
+            triangles,
+            reoriented_triangles,
+            units: Units::Metres,
+            up_axis: UpAxis::PosY,
+            up_detected: false,
+            up: Vector3::y(),
+            cleaned,
+        }
+    }
+
+    /// Converts a point in world space to the file's coordinates and units.
+    pub fn file_from_world(&self, p: &Point3<f64>) -> Point3<f64> {
+        let turned = turn_back(self.up_axis, p);
+        Point3::from(turned.coords / self.units.metres())
+    }
+
     /// Converts a point given in the file's coordinates and units to world space.
     pub fn world_from_file(&self, p_file: &Point3<f64>) -> Point3<f64> {
         world_from_file(self.units, self.up_axis, p_file)
@@ -65,8 +101,13 @@ impl Leg {
 /// Converts file coordinates to world space: scale to metres, then rotate the file's up axis
 /// onto +Y (right-handed rotations only, so winding and handedness are kept).
 pub fn world_from_file(units: Units, up: UpAxis, p: &Point3<f64>) -> Point3<f64> {
-    let s = units.metres();
-    let (x, y, z) = (p.x * s, p.y * s, p.z * s);
+    turn(up, &Point3::from(p.coords * units.metres()))
+}
+
+/// Turns `p` so that the axis `up` points along +Y (a right-handed rotation by quarter turns:
+/// exact in floating point).
+fn turn(up: UpAxis, p: &Point3<f64>) -> Point3<f64> {
+    let (x, y, z) = (p.x, p.y, p.z);
     let [x, y, z] = match up {
         UpAxis::PosY => [x, y, z],
         UpAxis::NegY => [x, -y, -z],
@@ -78,8 +119,43 @@ pub fn world_from_file(units: Units, up: UpAxis, p: &Point3<f64>) -> Point3<f64>
     Point3::new(x, y, z)
 }
 
+/// The inverse of [`turn`].
+fn turn_back(up: UpAxis, p: &Point3<f64>) -> Point3<f64> {
+    let (x, y, z) = (p.x, p.y, p.z);
+    let [x, y, z] = match up {
+        UpAxis::PosY => [x, y, z],
+        UpAxis::NegY => [x, -y, -z],
+        UpAxis::PosZ => [x, -z, y],
+        UpAxis::NegZ => [x, z, -y],
+        UpAxis::PosX => [y, -x, z],
+        UpAxis::NegX => [-y, x, z],
+    };
+    Point3::new(x, y, z)
+}
+
+/// The file axis nearest to `up` (a unit vector in file coordinates); ties go to the first in
+/// [`UpAxis::ALL`].
+fn nearest_axis(up: &Vector3<f64>) -> UpAxis {
+    UpAxis::ALL
+        .into_iter()
+        .map(|axis| {
+            (
+                axis,
+                turn_back(axis, &Point3::new(0.0, 1.0, 0.0)).coords.dot(up),
+            )
+        })
+        .fold((UpAxis::PosY, f64::NEG_INFINITY), |best, (axis, along)| {
+            if along > best.1 {
+                (axis, along)
+            } else {
+                best
+            }
+        })
+        .0
+}
+
 /// Loads the leg in `path`, read in `units` with `up` as its up axis.
-pub fn load_leg(path: &Path, units: Units, up: UpAxis) -> Result<Leg> {
+pub fn load_leg(path: &Path, units: Units, up: UpChoice) -> Result<Leg> {
     decode_leg(read_leg_file(path)?, units, up)
 }
 
@@ -167,8 +243,8 @@ impl LegFile {
 }
 
 /// Decodes the triangles of a leg file into world space, read in `units` with `up` as its up
-/// axis, and checks them.
-pub fn decode_leg(file: LegFile, units: Units, up: UpAxis) -> Result<Leg> {
+/// axis, cleans and checks them.
+pub fn decode_leg(file: LegFile, units: Units, choice: UpChoice) -> Result<Leg> {
     let LegFile { path, gltf } = file;
     let path = path.as_path();
     let fail = |message: String| Error::Leg {
@@ -197,12 +273,30 @@ pub fn decode_leg(file: LegFile, units: Units, up: UpAxis) -> Result<Leg> {
             "has no triangles under its default scene".into()
         }));
     }
-    let positions: Vec<Point3<f64>> = mesh
+    let scaled: Vec<Point3<f64>> = mesh
         .positions
         .iter()
-        .map(|p| world_from_file(units, up, p))
+        .map(|p| Point3::from(p.coords * units.metres()))
         .collect();
-    let mut triangles = mesh.triangles;
+    let (scaled, mut triangles, cleaned) = clean_mesh(&scaled, &mesh.triangles);
+    if triangles.is_empty() {
+        return Err(fail("has no triangles with area".into()));
+    }
+    let (up_axis, up) = match choice {
+        UpChoice::Axis(axis) => (axis, Vector3::y()),
+        UpChoice::Auto => {
+            let body_up = anatomical_up(&scaled, &triangles).ok_or_else(|| {
+                fail(
+                    "cannot tell which way is up: no cross-section of the mesh is closed; set \
+                     leg.up_axis (or --up-axis)"
+                        .into(),
+                )
+            })?;
+            let axis = nearest_axis(&body_up);
+            (axis, turn(axis, &Point3::from(body_up)).coords)
+        }
+    };
+    let positions: Vec<Point3<f64>> = scaled.iter().map(|p| turn(up_axis, p)).collect();
     let reoriented_triangles = orient_outward(&positions, &mut triangles);
     let leg = Leg {
         path: path.to_path_buf(),
@@ -210,7 +304,10 @@ pub fn decode_leg(file: LegFile, units: Units, up: UpAxis) -> Result<Leg> {
         triangles,
         reoriented_triangles,
         units,
-        up_axis: up,
+        up_axis,
+        up_detected: choice == UpChoice::Auto,
+        up,
+        cleaned,
     };
     check_height(&leg)?;
     Ok(leg)

@@ -1,15 +1,20 @@
-//! The leg: glTF loading into world space (metres, Y up), the long axis, and the collider the
-//! yarn slides on.
+//! The leg: loading (glTF) into world space (metres, Y up), cleaning, the landmarks that say
+//! where the stocking goes, the axis it is stretched along, and the collider the yarn slides on.
 
 pub mod axis;
+pub mod clean;
 pub mod collider;
+pub mod landmarks;
 pub mod load;
 pub mod orient;
 pub mod section;
 pub mod settings;
+pub mod slice;
 pub mod weld;
 
-pub use axis::{detect_axis, leaves_mesh, Axis, AxisSource};
+pub use axis::{leaves_mesh, Axis, AxisSource};
+pub use clean::Cleaned;
 pub use collider::{Closest, Collider};
+pub use landmarks::{find_landmarks, Landmarks, ThighTopKind};
 pub use load::{decode_leg, load_leg, read_leg_file, Leg, LegFile};
-pub use settings::{ContactMethod, LegAxis, LegSettings, Units, UpAxis};
+pub use settings::{ContactMethod, LegAxis, LegSettings, Side, Units, UpAxis, UpChoice};

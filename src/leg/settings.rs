@@ -1,6 +1,6 @@
 //! The leg's settings (the scene's `leg` and `contact.method`): the file, its units and up axis,
-//! the stocking's axis if given, and how contact queries are answered. Defaults follow glTF
-//! (metres, +Y up).
+//! which leg to dress, the stocking's axis if given, and how contact queries are answered.
+//! Units default to glTF's metres; up defaults to the body's own (found from the anatomy).
 
 use serde::{Deserialize, Serialize};
 
@@ -76,6 +76,16 @@ pub enum UpAxis {
 }
 
 impl UpAxis {
+    /// Every axis, in the order a tie between them is broken.
+    pub const ALL: [UpAxis; 6] = [
+        UpAxis::PosY,
+        UpAxis::NegY,
+        UpAxis::PosZ,
+        UpAxis::NegZ,
+        UpAxis::PosX,
+        UpAxis::NegX,
+    ];
+
     /// Name as in scene files.
     pub fn name(self) -> &'static str {
         match self {
@@ -85,6 +95,73 @@ impl UpAxis {
             UpAxis::NegZ => "-z",
             UpAxis::PosX => "+x",
             UpAxis::NegX => "-x",
+        }
+    }
+}
+
+/// How up is found: from the body's shape, or a file axis the user names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(try_from = "String", into = "String")]
+pub enum UpChoice {
+    /// From the anatomy: the feet are at the bottom (default).
+    #[default]
+    Auto,
+    /// This file axis points up.
+    Axis(UpAxis),
+}
+
+impl UpChoice {
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            UpChoice::Auto => "auto",
+            UpChoice::Axis(axis) => axis.name(),
+        }
+    }
+}
+
+impl TryFrom<String> for UpChoice {
+    type Error = String;
+
+    fn try_from(name: String) -> Result<Self, String> {
+        if name == "auto" {
+            return Ok(UpChoice::Auto);
+        }
+        UpAxis::ALL
+            .into_iter()
+            .find(|a| a.name() == name)
+            .map(UpChoice::Axis)
+            .ok_or_else(|| {
+                format!(
+                    "unknown up axis \"{name}\": expected \"auto\", \"+y\", \"-y\", \"+z\", \"-z\", \"+x\" or \"-x\""
+                )
+            })
+    }
+}
+
+impl From<UpChoice> for String {
+    fn from(choice: UpChoice) -> String {
+        choice.name().into()
+    }
+}
+
+/// The character's own side: which leg to dress.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Side {
+    /// The character's left leg (default).
+    #[default]
+    Left,
+    /// The character's right leg.
+    Right,
+}
+
+impl Side {
+    /// Name as in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Side::Left => "left",
+            Side::Right => "right",
         }
     }
 }
@@ -108,10 +185,13 @@ pub struct LegSettings {
     pub file: String,
     /// Units of the file's coordinates (default: `"m"`, as glTF specifies).
     pub units: Units,
-    /// Which file axis points up (default: `"+y"`, as glTF specifies).
-    pub up_axis: UpAxis,
-    /// Bottom and top of the stocking on the leg's long axis, in file coordinates; detected from
-    /// the mesh when absent (default: absent).
+    /// Which file axis points up, or `"auto"` to find it from the anatomy (default: `"auto"`).
+    pub up_axis: UpChoice,
+    /// Which leg to dress, the character's own `"left"` or `"right"` (default: `"left"`); a file
+    /// with one leg has it dressed whatever its side.
+    pub side: Side,
+    /// Bottom and top of the stocking on the leg's long axis, in file coordinates; found from
+    /// the landmarks and `tube.bottom`/`tube.top` when absent (default: absent).
     pub axis: Option<LegAxis>,
 }
 
@@ -120,7 +200,8 @@ impl Default for LegSettings {
         LegSettings {
             file: "procedural_leg.glb".into(),
             units: Units::Metres,
-            up_axis: UpAxis::PosY,
+            up_axis: UpChoice::Auto,
+            side: Side::Left,
             axis: None,
         }
     }

@@ -371,7 +371,7 @@ mod tests {
 
     use super::*;
     use crate::base::{Direction, YarnKind};
-    use crate::leg::{ContactMethod, Leg, Units, UpAxis};
+    use crate::leg::{ContactMethod, Leg};
 
     /// A closed prism along Y with a sharp ridge on +Z, like a shin: its cross-section is a
     /// square of half-width `w` with a triangular ridge of height `h` on top; as few triangles
@@ -396,14 +396,7 @@ mod tests {
             triangles.push([0, i, i + 1]);
             triangles.push([m, m + i + 1, m + i]);
         }
-        Leg {
-            path: "ridge".into(),
-            positions,
-            triangles,
-            reoriented_triangles: 0,
-            units: Units::Metres,
-            up_axis: UpAxis::PosY,
-        }
+        Leg::from_world("ridge".into(), &positions, &triangles)
     }
 
     fn two_points(a: [f64; 3], b: [f64; 3]) -> YarnGeometry {

@@ -14,10 +14,11 @@ use crate::draw::density_map::{self, DensityPictureStyle};
 use crate::error::{Error, Result};
 use crate::export;
 use crate::export::gltf::GlbNode;
-use crate::knit::tube::{build_tube, end_rings, TubeSpec};
+use crate::knit::tube::{build_tube, end_rings, tube_axis, TubeSpec};
 use crate::knit::{Knit, RELAXED_LENGTH_FRACTION};
 use crate::leg::{
-    decode_leg, detect_axis, leaves_mesh, read_leg_file, Axis, AxisSource, Collider, Leg,
+    decode_leg, find_landmarks, leaves_mesh, read_leg_file, Axis, AxisSource, Collider, Landmarks,
+    Leg,
 };
 use crate::limits::{peak_memory, FitSize, MemoryCheck};
 use crate::plan::{fit_files, File, FitFile, Plan, Stage, PREVIEW_FILE};
@@ -27,8 +28,8 @@ use crate::post::stitches::{bunched_courses, MAX_BUNCHED_FRACTION};
 use crate::post::surfaces::{leg_surface, stocking_surface};
 use crate::preview::{PreviewInput, PreviewStats};
 use crate::report::{
-    Bounds, ContactDetails, DensityRange, FitDetails, LegDetails, MemoryDetails, Metrics,
-    PerDirection, SolverDetails, StageClock, TubeDetails,
+    Bounds, ContactDetails, DensityRange, FitDetails, LandmarkDetails, LegDetails, MemoryDetails,
+    Metrics, PerDirection, SolverDetails, StageClock, TubeDetails,
 };
 use crate::scene::{LoadedScene, Scene, LEG_AXIS};
 use crate::sim::contact::{ContactCounters, LegContact};
@@ -164,11 +165,14 @@ fn fit_details(
             file: leg.path.display().to_string(),
             units: leg.units,
             up_axis: leg.up_axis,
+            up_axis_found: leg.up_detected,
             reoriented_triangles: leg.reoriented_triangles,
+            cleaned: leg.cleaned,
             bounds_m: Bounds {
                 min: min.coords.into(),
                 max: max.coords.into(),
             },
+            landmarks: fit.landmarks.as_ref().map(|l| LandmarkDetails::of(l, leg)),
         },
         axis: fit.axis,
         tube: TubeDetails {
@@ -211,6 +215,8 @@ fn fit_details(
 pub struct SolvedFit {
     /// The leg, in world space (metres, +Y up).
     pub leg: Leg,
+    /// The leg's landmarks, where the axis was placed on them.
+    pub landmarks: Option<Landmarks>,
     /// The axis the tube was stretched along.
     pub axis: Axis,
     /// The leg's collider.
@@ -257,7 +263,20 @@ pub fn solve_fit(
             memory,
         ))
     })?;
-    let axis = clock.time(Stage::FindAxis, || choose_axis(scene, inputs, &leg))?;
+    let landmarks = match scene.leg.axis {
+        Some(_) => None,
+        None => Some(clock.time(Stage::FindLandmarks, || {
+            find_landmarks(&leg.positions, &leg.triangles, leg.up, scene.leg.side).map_err(
+                |message| Error::Leg {
+                    path: leg.path.clone(),
+                    message: format!("cannot find the leg's landmarks: {message}"),
+                },
+            )
+        })?),
+    };
+    let axis = clock.time(Stage::FindAxis, || {
+        choose_axis(scene, inputs, &leg, &landmarks)
+    })?;
     let collider = clock.time(Stage::BuildCollider, || {
         Collider::new(&leg, scene.contact.method)
     })?;
@@ -342,6 +361,7 @@ pub fn solve_fit(
     }
     Ok(SolvedFit {
         leg,
+        landmarks,
         axis,
         collider,
         spec,
@@ -476,39 +496,48 @@ impl SolverRun {
     }
 }
 
-/// The axis from the scene (converted from file coordinates) or detected.
-fn choose_axis(scene: &Scene, inputs: &FitInputs, leg: &Leg) -> Result<Axis> {
-    match &scene.leg.axis {
-        Some(given) => {
+/// The axis from the scene (converted from file coordinates), or placed on the landmarks by
+/// `tube.bottom` and `tube.top`; refused where the leg does not go around it.
+fn choose_axis(
+    scene: &Scene,
+    inputs: &FitInputs,
+    leg: &Leg,
+    landmarks: &Option<Landmarks>,
+) -> Result<Axis> {
+    let fail = |message: String| Error::Leg {
+        path: leg.path.clone(),
+        message,
+    };
+    let axis = match (&scene.leg.axis, landmarks) {
+        (Some(given), _) => {
             let bottom = leg.world_from_file(&Point3::from(given.bottom));
             let top = leg.world_from_file(&Point3::from(given.top));
-            Ok(Axis {
+            Axis {
                 bottom: bottom.coords.into(),
                 top: top.coords.into(),
                 source: inputs.axis_source,
-            })
-        }
-        None => {
-            let axis = detect_axis(leg).ok_or_else(|| Error::Leg {
-                path: leg.path.clone(),
-                message: "cannot find the leg's axis: the mesh has no area, or open edges all \
-                          along it; give leg.axis in the scene or --axis"
-                    .into(),
-            })?;
-            match leaves_mesh(leg, &axis) {
-                None => Ok(axis),
-                Some(at) => Err(Error::Leg {
-                    path: leg.path.clone(),
-                    message: format!(
-                        "the mesh's principal axis runs outside it ({:.0}% of the way up): the \
-                         file holds more than one leg, or a bent one; give the stocking's bottom \
-                         and top as leg.axis in the scene or --axis",
-                        100.0 * at
-                    ),
-                }),
             }
         }
+        (None, Some(landmarks)) => {
+            tube_axis(landmarks, scene.tube.bottom, scene.tube.top).map_err(fail)?
+        }
+        (None, None) => unreachable!("landmarks are found whenever no axis is given"),
+    };
+    if let Some(at) = leaves_mesh(leg, &axis) {
+        let given = match axis.source {
+            AxisSource::CommandLine => "--axis",
+            AxisSource::Scene => "leg.axis",
+            AxisSource::Landmarks => "the axis placed on the landmarks",
+        };
+        return Err(fail(format!(
+            "the leg does not go around {given} {:.0}% of the way from its bottom to its top: \
+             the axis misses the leg, or runs between two legs; check its coordinates (file \
+             units, {} up)",
+            100.0 * at,
+            leg.up_axis.name()
+        )));
     }
+    Ok(axis)
 }
 
 /// The stocking's relaxed length: given (and shorter than the axis), or a fraction of the axis.

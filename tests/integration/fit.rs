@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use knitfit::leg::{load_leg, Collider, ContactMethod, Units, UpAxis};
+use knitfit::leg::{load_leg, Collider, ContactMethod, Units, UpAxis, UpChoice};
 use nalgebra::Point3;
 
 use crate::support::{
@@ -32,7 +32,7 @@ fn every_sample_leg_fits_without_penetration_between_the_axis_points() {
         );
 
         // Independently of the report: every yarn point from the PLY, against the exact leg.
-        let leg = load_leg(&leg_path, Units::Metres, UpAxis::PosY).unwrap();
+        let leg = load_leg(&leg_path, Units::Metres, UpChoice::Axis(UpAxis::PosY)).unwrap();
         let collider = Collider::new(&leg, ContactMethod::Bvh).unwrap();
         let yarns = read_ply(&out.join("stocking.ply"));
         let points: Vec<Point3<f64>> = yarns.payload["vertex"].iter().map(point).collect();
@@ -62,10 +62,10 @@ fn every_sample_leg_fits_without_penetration_between_the_axis_points() {
         let length = (top - bottom).norm();
         // The knit's own points exactly; points the penetration fix put on the skin between
         // two end-ring points follow the skin, which may lean out of the ring's plane by a
-        // few hundredths of a millimetre on a faceted leg.
+        // few tenths of a millimetre on a coarsely faceted leg (the unsubdivided body).
         for (i, p) in points.iter().enumerate() {
             let s = (p - bottom).dot(&dir_axis);
-            let slack = if i < 3600 { 1e-6 } else { 1e-4 };
+            let slack = if i < 3600 { 1e-6 } else { 5e-4 };
             assert!(
                 (-slack..=length + slack).contains(&s),
                 "{name}: point {i}: {s} outside 0..{length}"
@@ -89,13 +89,16 @@ fn stitch_density_is_positive_on_covered_skin_and_higher_at_the_ankle_than_the_t
         let axis = &r["details"]["axis"];
         let y = |k: &str| axis[k][1].as_f64().unwrap();
         let (bottom, top) = (y("bottom"), y("top"));
+        // In a file with both legs (the sample bodies, symmetric about x = 0): the dressed side.
+        let both = r["details"]["leg"]["landmarks"]["legs_found"] == 2;
+        let side = axis["bottom"][0].as_f64().unwrap().signum();
         let band = |lo: f64, hi: f64| {
             let values: Vec<f64> = vertices
                 .iter()
                 .zip(&density)
                 .filter(|(v, _)| {
                     let t = (float(v, "y") - bottom) / (top - bottom);
-                    (lo..hi).contains(&t)
+                    (lo..hi).contains(&t) && (!both || float(v, "x") * side > 0.0)
                 })
                 .map(|(_, d)| *d)
                 .collect();

@@ -13,7 +13,7 @@ use std::sync::OnceLock;
 use knitfit::base::{Direction, Segment, SurfaceMesh, YarnGeometry, YarnKind};
 use knitfit::export::ply::{write_mesh_ply, write_ply};
 use knitfit::leg::load::PLAUSIBLE_HEIGHT_M;
-use knitfit::leg::{load_leg, Collider, ContactMethod, Leg, Units, UpAxis};
+use knitfit::leg::{load_leg, Collider, ContactMethod, Leg, Units, UpAxis, UpChoice};
 use knitfit::{Error, Scene};
 use proptest::prelude::*;
 use serde_json::{json, Value};
@@ -313,7 +313,7 @@ fn check_loader(bytes: &[u8], extension: &str) -> Result<(), TestCaseError> {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join(format!("leg.{extension}"));
     std::fs::write(&path, bytes).unwrap();
-    match load_leg(&path, Units::Metres, UpAxis::PosY) {
+    match load_leg(&path, Units::Metres, UpChoice::Axis(UpAxis::PosY)) {
         Ok(leg) => check_leg(&leg),
         Err(e) => check_refusal(&e, &path),
     }
@@ -719,7 +719,7 @@ fn regression_a_position_accessor_past_the_last_is_refused_not_a_panic() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("leg.glb");
     std::fs::write(&path, glb.bytes()).unwrap();
-    let err = load_leg(&path, Units::Metres, UpAxis::PosY).unwrap_err();
+    let err = load_leg(&path, Units::Metres, UpChoice::Axis(UpAxis::PosY)).unwrap_err();
     assert!(err.to_string().contains("POSITION names accessor"), "{err}");
 }
 
@@ -734,7 +734,7 @@ fn regression_float_indices_are_refused_not_a_panic() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("leg.glb");
     std::fs::write(&path, glb.bytes()).unwrap();
-    let err = load_leg(&path, Units::Metres, UpAxis::PosY).unwrap_err();
+    let err = load_leg(&path, Units::Metres, UpChoice::Axis(UpAxis::PosY)).unwrap_err();
     assert!(
         err.to_string().contains("not unsigned integer SCALAR"),
         "{err}"

@@ -11,7 +11,7 @@ use std::f64::consts::{PI, TAU};
 use std::sync::OnceLock;
 
 use knitfit::base::Vec3;
-use knitfit::leg::{load_leg, Collider, ContactMethod, Leg, Units, UpAxis};
+use knitfit::leg::{load_leg, Collider, ContactMethod, Leg, Units, UpAxis, UpChoice};
 use knitfit::sim::contact::LegContact;
 use knitfit::sim::forces::{
     connection_force, direction, spring_energy, spring_force, spring_tension,
@@ -289,7 +289,7 @@ fn surfaces() -> &'static [Surface] {
         ];
         for path in sample_legs() {
             let open = path.to_string_lossy().contains("makehuman");
-            let leg = load_leg(&path, Units::Metres, UpAxis::PosY).unwrap();
+            let leg = load_leg(&path, Units::Metres, UpChoice::Axis(UpAxis::PosY)).unwrap();
             all.push(Surface::new(leg, open));
         }
         all

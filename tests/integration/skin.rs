@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use knitfit::leg::{load_leg, Collider, ContactMethod, Units, UpAxis};
+use knitfit::leg::{load_leg, Collider, ContactMethod, Units, UpAxis, UpChoice};
 use nalgebra::Point3;
 
 use crate::support::{
@@ -59,7 +59,7 @@ fn polyline_depth(out: &Path, collider: &Collider, region: impl Fn(&Point3<f64>)
 }
 
 fn collider_of(leg: &Path) -> Collider {
-    let leg = load_leg(leg, Units::Metres, UpAxis::PosY).unwrap();
+    let leg = load_leg(leg, Units::Metres, UpChoice::Axis(UpAxis::PosY)).unwrap();
     Collider::new(&leg, ContactMethod::Bvh).unwrap()
 }
 
@@ -235,7 +235,8 @@ fn coverage_and_density_rise_where_the_leg_is_thin_and_fall_where_it_is_stretche
                     v.density > 0.0 && (from..to).contains(&h)
                 })
                 .collect();
-            assert!(picked.len() > 20, "{name}: {} vertices", picked.len());
+            // The low-poly game leg has about 15 vertices to a band.
+            assert!(picked.len() >= 10, "{name}: {} vertices", picked.len());
             let mean = |f: fn(&LegVertex) -> f64| {
                 picked.iter().map(|v| f(v)).sum::<f64>() / picked.len() as f64
             };
@@ -285,7 +286,7 @@ fn leg_attributes_are_smooth_across_the_mesh() {
             ..v
         })
         .collect();
-    let mesh = load_leg(&leg, Units::Metres, UpAxis::PosY).unwrap();
+    let mesh = load_leg(&leg, Units::Metres, UpChoice::Axis(UpAxis::PosY)).unwrap();
     let mut ratios = Vec::new();
     type Field = fn(&LegVertex) -> f64;
     let fields_of: [(&str, Field); 3] = [

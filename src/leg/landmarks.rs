@@ -1,0 +1,460 @@
+//! The leg's landmarks, read from girth profiles along the body: which way is up, which leg to
+//! dress, the sole and toe, the foot's direction, the ankle, the knee and the top of the thigh.
+//!
+//! Method: horizontal slicing with loop tracking, as body-scanner software finds landmarks
+//! (Leong, Fang & Tsai 2007, "Automatic body feature extraction from a marker-less scanned human
+//! body", Computer-Aided Design 39(7); Wang 2005, "Parameterization and parametric design of
+//! mannequins", CAD 37(1)); the anthropometric definitions follow ISO 8559-1 (ankle girth: the
+//! smallest above the malleoli; crotch: where the legs join).
+//!
+//! - **Up** ([`anatomical_up`]): the surface's principal axis, pointed away from the end whose
+//!   cross-sections are smaller (feet, ankles and calves are slimmer than thighs, hips or a
+//!   head and shoulders).
+//! - **The legs**: the closed loops of the section [`SEED_HEIGHT_M`] above the lowest point, each
+//!   followed up and down from slice to slice: the loop that encloses the last centre, or else
+//!   the nearest within [`MAX_STEP_M`]. Following stops where the mesh is cut, or where two legs'
+//!   loops become one (the crotch).
+//! - **Side**: the character faces where its feet point; its left is `up × forward`. A file
+//!   with no foot is taken to face +Z, as glTF characters do.
+//! - **Ankle**: the smallest girth between the foot and a third of the way up; **knee**: the
+//!   smallest between 35 % and 70 % of the way from ankle to thigh top; **toe**: the foot's
+//!   vertex furthest from the ankle's centre line; a foot is there when that reaches more than
+//!   [`FOOT_REACH`] ankle radii.
+//!
+//! Why this holds on character exports: girths are convex-hull perimeters of loops, so folds,
+//! dents and small self-intersections do not move them; loops are walked on the cleaned mesh
+//! ([`super::clean`]), so repeated faces and debris are gone; following a loop by enclosure
+//! keeps to one limb when a hand, the other leg or an eye is in the same plane; and the
+//! orientation comes from the shape, not the file's axes, so a Z-up, lying or moved character
+//! gives the same landmarks.
+
+use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
+use serde::Serialize;
+
+use super::slice::{Loop, Slicer};
+use super::Side;
+
+/// Height above the lowest point where the legs are first looked for, metres (above a foot's
+/// toes, at or below the ankle).
+pub const SEED_HEIGHT_M: f64 = 0.08;
+/// Spacing of the sections, metres.
+pub const SLICE_STEP_M: f64 = 0.0025;
+/// Furthest a limb's centre may move between two sections, metres.
+pub const MAX_STEP_M: f64 = 0.03;
+/// Smallest girth of a loop that can be a leg, metres.
+pub const MIN_LEG_GIRTH_M: f64 = 0.08;
+/// A foot reaches this many ankle radii from the ankle's centre line.
+pub const FOOT_REACH: f64 = 2.0;
+/// Furthest a vertex of the foot may be from the ankle's centre line, metres.
+pub const FOOT_MAX_M: f64 = 0.4;
+
+/// One section of a followed leg.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Ring {
+    /// Height along up, metres (absolute: the dot product with up).
+    #[serde(skip)]
+    pub s: f64,
+    /// Centre of the loop, world space.
+    pub centre: [f64; 3],
+    /// Girth (convex perimeter), metres.
+    pub girth_m: f64,
+    /// Distance to the other leg's section at this height, metres (infinite where there is
+    /// none).
+    #[serde(skip)]
+    pub gap_m: f64,
+}
+
+/// How the top of the thigh was found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ThighTopKind {
+    /// Where the two legs' sections join.
+    Crotch,
+    /// Where the mesh is cut.
+    Cut,
+}
+
+/// The foot, where the leg has one.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Foot {
+    /// The vertex furthest forward, world space.
+    pub toe_tip: [f64; 3],
+    /// Unit vector from the ankle to the toe, square to up.
+    pub direction: [f64; 3],
+}
+
+/// The landmarks of the leg to dress (see module docs), world space, metres.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Landmarks {
+    /// Unit vector pointing up the body.
+    pub up: [f64; 3],
+    /// Legs found at the bottom of the mesh.
+    pub legs_found: usize,
+    /// The dressed leg's side, where the file holds both.
+    pub side: Option<Side>,
+    /// The leg's lowest vertex.
+    pub sole: [f64; 3],
+    /// The foot, if the leg has one.
+    pub foot: Option<Foot>,
+    /// The narrowest section above the foot.
+    pub ankle: Ring,
+    /// The narrowest section between calf and thigh.
+    pub knee: Ring,
+    /// The highest section of the leg alone.
+    pub thigh_top: Ring,
+    /// Whether `thigh_top` is the crotch or a cut.
+    pub thigh_top_kind: ThighTopKind,
+    /// Every section of the leg, from the ankle to the thigh top, one per [`SLICE_STEP_M`].
+    #[serde(skip)]
+    pub profile: Vec<Ring>,
+}
+
+impl Landmarks {
+    /// The section of the profile nearest height `s`.
+    pub fn ring_at(&self, s: f64) -> Ring {
+        let k = self.profile.partition_point(|r| r.s < s);
+        let below = k.saturating_sub(1);
+        let above = k.min(self.profile.len() - 1);
+        if (self.profile[above].s - s).abs() < (s - self.profile[below].s).abs() {
+            self.profile[above]
+        } else {
+            self.profile[below]
+        }
+    }
+
+    /// The highest height up to which the leg's sections keep `clearance` from the other
+    /// leg's (the thigh top where the file holds one leg).
+    pub fn clear_of_other_leg(&self, clearance: f64) -> f64 {
+        self.profile
+            .iter()
+            .take_while(|r| r.gap_m >= clearance)
+            .last()
+            .map_or(self.ankle.s, |r| r.s)
+    }
+
+    /// Height of the sole along up.
+    pub fn sole_s(&self) -> f64 {
+        Vector3::from(self.sole).dot(&Vector3::from(self.up))
+    }
+}
+
+/// The principal axis of the surface, pointed up (see module docs); `None` for a mesh with no
+/// area or no closed section.
+pub fn anatomical_up(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Option<Vector3<f64>> {
+    let mut area_sum = 0.0;
+    let mut centroid = Vector3::zeros();
+    let mut second = Matrix3::zeros();
+    for t in triangles {
+        let [a, b, c] = t.map(|i| positions[i as usize].coords);
+        let area = (b - a).cross(&(c - a)).norm() / 2.0;
+        let m = (a + b + c) / 3.0;
+        area_sum += area;
+        centroid += m * area;
+        second += m * m.transpose() * area;
+    }
+    if !(area_sum > 0.0 && area_sum.is_finite()) {
+        return None;
+    }
+    centroid /= area_sum;
+    let eigen = SymmetricEigen::new(second / area_sum - centroid * centroid.transpose());
+    let k = eigen.eigenvalues.imax();
+    let axis: Vector3<f64> = eigen.eigenvectors.column(k).into_owned();
+    let slicer = Slicer::new(positions, triangles, axis);
+    let (lo, hi) = slicer.range();
+    let end_girth = |from: f64, to: f64| {
+        let (mut sum, mut count) = (0.0, 0usize);
+        for k in 0..40 {
+            let s = from + (to - from) * (k as f64 + 0.5) / 40.0;
+            for l in slicer.loops_at(s).iter().filter(|l| l.closed) {
+                sum += slicer.girth(l);
+                count += 1;
+            }
+        }
+        (count > 0).then(|| sum / count as f64)
+    };
+    let quarter = (hi - lo) / 4.0;
+    match (end_girth(lo, lo + quarter), end_girth(hi - quarter, hi)) {
+        (Some(bottom), Some(top)) if top < bottom => Some(-axis),
+        (None, None) => None,
+        (None, Some(_)) => Some(-axis),
+        _ => Some(axis),
+    }
+}
+
+/// Finds the landmarks of the leg on `side` (see module docs) of the cleaned mesh, with `up`
+/// the unit vector up the body. The error says what is missing, in a sentence.
+pub fn find_landmarks(
+    positions: &[Point3<f64>],
+    triangles: &[[u32; 3]],
+    up: Vector3<f64>,
+    side: Side,
+) -> Result<Landmarks, String> {
+    let slicer = Slicer::new(positions, triangles, up);
+    let (lo, hi) = slicer.range();
+    let heights = |from: f64, to: f64, step: f64| {
+        let n = ((to - from) / step).floor().max(0.0) as usize;
+        (0..=n).map(move |k| from + step * k as f64)
+    };
+    // The legs: closed loops just above the lowest point.
+    let seeds: Vec<Ring> = heights(lo + SEED_HEIGHT_M, (lo + 3.0 * SEED_HEIGHT_M).min(hi), 0.01)
+        .map(|s| legs_at(&slicer, s))
+        .find(|rings| !rings.is_empty())
+        .ok_or(
+            "no closed cross-section near its lowest point looks like a leg (the mesh is open \
+                all around there, or has holes)",
+        )?;
+    let seed_s = seeds[0].s;
+    let mut down = follow(
+        &slicer,
+        &seeds,
+        heights(lo, seed_s, SLICE_STEP_M).rev().skip(1),
+    );
+    let feet: Vec<Option<Foot>> = (0..seeds.len())
+        .map(|i| {
+            let mut low = down.rings[i].clone();
+            low.reverse();
+            low.push(seeds[i]);
+            foot(positions, &up, &low, &seeds, i)
+        })
+        .collect();
+    // Forward: where the feet point; otherwise +Z, glTF's facing.
+    let forward = feet
+        .iter()
+        .flatten()
+        .map(|f| Vector3::from(f.direction))
+        .sum::<Vector3<f64>>();
+    let forward = if forward.norm() > 1e-9 {
+        forward
+    } else {
+        Vector3::z() - up * up.z
+    };
+    let left = up.cross(&forward);
+    let leftness = |r: &Ring| Vector3::from(r.centre).dot(&left);
+    let chosen =
+        match side {
+            Side::Left => (0..seeds.len())
+                .max_by(|&a, &b| leftness(&seeds[a]).total_cmp(&leftness(&seeds[b]))),
+            Side::Right => (0..seeds.len())
+                .min_by(|&a, &b| leftness(&seeds[a]).total_cmp(&leftness(&seeds[b]))),
+        }
+        .unwrap_or(0);
+    // Up from the seeds: the chosen leg and its nearest neighbour, until they join or end.
+    let other = (0..seeds.len()).filter(|&i| i != chosen).min_by(|&a, &b| {
+        let d = |i: usize| {
+            (Vector3::from(seeds[i].centre) - Vector3::from(seeds[chosen].centre)).norm()
+        };
+        d(a).total_cmp(&d(b))
+    });
+    let pair: Vec<Ring> = std::iter::once(seeds[chosen])
+        .chain(other.map(|o| seeds[o]))
+        .collect();
+    let upward = follow(&slicer, &pair, heights(seed_s, hi, SLICE_STEP_M).skip(1));
+    let mut profile = std::mem::take(&mut down.rings[chosen]);
+    profile.reverse();
+    profile.push(seeds[chosen]);
+    profile.extend(upward.rings[0].iter().copied());
+    let thigh_top_kind = if upward.joined {
+        ThighTopKind::Crotch
+    } else {
+        ThighTopKind::Cut
+    };
+    let foot = feet[chosen];
+    let sole = sole(positions, &up, &profile, foot.is_some());
+    let sole_s = sole.coords.dot(&up);
+    let top = *profile
+        .last()
+        .ok_or("the leg has no closed cross-section")?;
+    let leg_height = top.s - sole_s;
+    if leg_height < 0.15 {
+        return Err(format!(
+            "the leg found is only {leg_height:.3} m from its lowest point to the top of its \
+             thigh"
+        ));
+    }
+    let narrowest = |from: f64, to: f64| {
+        profile
+            .iter()
+            .filter(|r| r.s >= from && r.s <= to)
+            .min_by(|a, b| a.girth_m.total_cmp(&b.girth_m))
+            .copied()
+    };
+    let lowest = profile[0].s;
+    let ankle =
+        narrowest((sole_s + 0.03).max(lowest), sole_s + leg_height / 3.0).unwrap_or(profile[0]);
+    let span = top.s - ankle.s;
+    let knee = narrowest(ankle.s + 0.35 * span, ankle.s + 0.7 * span)
+        .unwrap_or(profile[profile.len() / 2]);
+    profile.retain(|r| r.s >= ankle.s);
+    Ok(Landmarks {
+        up: up.into(),
+        legs_found: seeds.len(),
+        side: (seeds.len() > 1).then_some(side),
+        sole: sole.coords.into(),
+        foot,
+        ankle,
+        knee,
+        thigh_top: top,
+        thigh_top_kind,
+        profile,
+    })
+}
+
+/// The closed loops at height `s` big enough to be legs, as rings.
+fn legs_at(slicer: &Slicer, s: f64) -> Vec<Ring> {
+    slicer
+        .loops_at(s)
+        .iter()
+        .filter(|l| l.closed)
+        .map(|l| ring(slicer, l, s))
+        .filter(|r| r.girth_m >= MIN_LEG_GIRTH_M)
+        .collect()
+}
+
+fn ring(slicer: &Slicer, l: &Loop, s: f64) -> Ring {
+    Ring {
+        s,
+        centre: l.centre().coords.into(),
+        girth_m: slicer.girth(l),
+        gap_m: f64::INFINITY,
+    }
+}
+
+/// The shortest distance between the points of two loops, metres.
+fn gap(a: &Loop, b: &Loop) -> f64 {
+    a.points
+        .iter()
+        .flat_map(|p| b.points.iter().map(move |q| (p - q).norm()))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Limbs followed through a run of sections.
+struct Followed {
+    /// Per limb, its rings in the order of the heights.
+    rings: Vec<Vec<Ring>>,
+    /// True when the first two limbs' loops became one.
+    joined: bool,
+}
+
+/// Follows each of `start` through the sections at `heights` (see module docs) until it ends;
+/// stops all at once when the first two join.
+fn follow(slicer: &Slicer, start: &[Ring], heights: impl Iterator<Item = f64>) -> Followed {
+    let mut rings: Vec<Vec<Ring>> = vec![Vec::new(); start.len()];
+    let mut last: Vec<Option<Ring>> = start.iter().copied().map(Some).collect();
+    for s in heights {
+        if last.iter().all(Option::is_none) {
+            break;
+        }
+        let loops: Vec<Loop> = slicer
+            .loops_at(s)
+            .into_iter()
+            .filter(|l| l.closed)
+            .collect();
+        let mut taken: Vec<Option<usize>> = vec![None; start.len()];
+        for (i, prev) in last.iter().enumerate() {
+            let Some(prev) = prev else { continue };
+            let at = Point3::from(prev.centre);
+            taken[i] = loops
+                .iter()
+                .position(|l| slicer.encloses(l, &at))
+                .or_else(|| {
+                    loops
+                        .iter()
+                        .enumerate()
+                        .map(|(k, l)| (k, (l.centre() - at - slicer.up() * (s - prev.s)).norm()))
+                        .filter(|&(_, d)| d <= MAX_STEP_M)
+                        .min_by(|a, b| a.1.total_cmp(&b.1))
+                        .map(|(k, _)| k)
+                });
+        }
+        if start.len() > 1 && taken[0].is_some() && taken[0] == taken[1] {
+            return Followed {
+                rings,
+                joined: true,
+            };
+        }
+        let between = match (taken.first(), taken.get(1)) {
+            (Some(&Some(a)), Some(&Some(b))) => gap(&loops[a], &loops[b]),
+            _ => f64::INFINITY,
+        };
+        for i in 0..start.len() {
+            match taken[i] {
+                Some(k) if last[i].is_some() => {
+                    let r = Ring {
+                        gap_m: between,
+                        ..ring(slicer, &loops[k], s)
+                    };
+                    rings[i].push(r);
+                    last[i] = Some(r);
+                }
+                _ => last[i] = None,
+            }
+        }
+    }
+    Followed {
+        rings,
+        joined: false,
+    }
+}
+
+/// The foot of limb `i`, from its rings ascending from the bottom (`low`): the vertices below
+/// its narrowest low ring, nearer its centre line than any other limb's.
+fn foot(
+    positions: &[Point3<f64>],
+    up: &Vector3<f64>,
+    low: &[Ring],
+    seeds: &[Ring],
+    i: usize,
+) -> Option<Foot> {
+    let ankle = low.iter().min_by(|a, b| a.girth_m.total_cmp(&b.girth_m))?;
+    let centre = Vector3::from(ankle.centre);
+    let across = |p: &Vector3<f64>, c: &Vector3<f64>| {
+        let d = p - c;
+        d - up * d.dot(up)
+    };
+    let (mut toe, mut reach) = (None, 0.0);
+    for p in positions {
+        let p = p.coords;
+        if p.dot(up) >= ankle.s {
+            continue;
+        }
+        let d = across(&p, &centre).norm();
+        let nearer_other = seeds
+            .iter()
+            .enumerate()
+            .any(|(k, r)| k != i && across(&p, &Vector3::from(r.centre)).norm() < d);
+        if d > reach && d <= FOOT_MAX_M && !nearer_other {
+            (toe, reach) = (Some(p), d);
+        }
+    }
+    let radius = ankle.girth_m / std::f64::consts::TAU;
+    let toe = toe.filter(|_| reach > FOOT_REACH * radius)?;
+    Some(Foot {
+        toe_tip: toe.into(),
+        direction: across(&toe, &centre).normalize().into(),
+    })
+}
+
+/// The leg's lowest point: the lowest vertex under its rings (its foot's reach when it has one).
+fn sole(
+    positions: &[Point3<f64>],
+    up: &Vector3<f64>,
+    profile: &[Ring],
+    has_foot: bool,
+) -> Point3<f64> {
+    let bottom = profile[0];
+    let centre = Vector3::from(bottom.centre);
+    let reach = if has_foot {
+        FOOT_MAX_M
+    } else {
+        bottom.girth_m / std::f64::consts::PI
+    };
+    positions
+        .iter()
+        .filter(|p| {
+            let d = p.coords - centre;
+            (d - up * d.dot(up)).norm() <= reach
+        })
+        .min_by(|a, b| a.coords.dot(up).total_cmp(&b.coords.dot(up)))
+        .copied()
+        .unwrap_or(Point3::from(bottom.centre))
+}

@@ -1,0 +1,337 @@
+//! Plane sections of the leg as ordered loops: the girth profile the landmarks are read from.
+//!
+//! A plane at height `s` along a unit vector cuts each triangle with a corner below it and one at
+//! or above it (the half-open rule: a plane through a vertex counts it as above, so every cut
+//! triangle crosses exactly two of its edges). Each crossed edge is a point of the section; each
+//! cut triangle joins two of them. On a cleaned mesh (welded, no repeated faces, see
+//! [`super::clean`]) every point has two neighbours where the surface is closed and one at an
+//! open cut, so walking the joins gives closed loops around the limbs and open chains at cuts.
+//! Where a non-manifold edge gives a point three or more neighbours (a fin inside the leg), a
+//! walk that comes back to a point closes the loop there and leaves the fin an open tail; a
+//! chain broken by a small hole in the skin still counts as closed.
+//!
+//! A loop's girth is the perimeter of its convex hull in the plane: what a tape measure reads
+//! around a limb, blind to dents, folds and small self-intersections of the mesh.
+
+use std::collections::HashMap;
+
+use nalgebra::{Point3, Vector3};
+
+use crate::base::perpendicular_frame;
+
+/// Widest gap an open chain may have and still count as a closed loop, metres: a small hole in
+/// the skin, not a cut.
+pub const SMALL_GAP_M: f64 = 0.02;
+
+/// One connected piece of a plane section.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Loop {
+    /// The section's points in walking order, world space.
+    pub points: Vec<Point3<f64>>,
+    /// True when the walk came back to its start (the surface is closed around it).
+    pub closed: bool,
+}
+
+/// The sections of a mesh by parallel planes: built once per direction, asked per height.
+pub struct Slicer<'a> {
+    positions: &'a [Point3<f64>],
+    triangles: &'a [[u32; 3]],
+    up: Vector3<f64>,
+    /// Per vertex, its height along `up`.
+    height: Vec<f64>,
+    /// Triangle indices sorted by their lowest corner's height, with that height.
+    by_low: Vec<(f64, u32)>,
+    /// The tallest triangle's height span: a plane at `s` can only cut triangles whose lowest
+    /// corner is within it below `s`.
+    tallest: f64,
+    u: Vector3<f64>,
+    v: Vector3<f64>,
+}
+
+impl<'a> Slicer<'a> {
+    /// Prepares sections of `triangles` (indices into `positions`, welded) square to the unit
+    /// vector `up`.
+    pub fn new(positions: &'a [Point3<f64>], triangles: &'a [[u32; 3]], up: Vector3<f64>) -> Self {
+        let height: Vec<f64> = positions.iter().map(|p| p.coords.dot(&up)).collect();
+        let mut tallest: f64 = 0.0;
+        let mut by_low: Vec<(f64, u32)> = triangles
+            .iter()
+            .enumerate()
+            .map(|(k, t)| {
+                let h = t.map(|i| height[i as usize]);
+                let lo = h[0].min(h[1]).min(h[2]);
+                tallest = tallest.max(h[0].max(h[1]).max(h[2]) - lo);
+                (lo, k as u32)
+            })
+            .collect();
+        by_low.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let (u, v) = perpendicular_frame(&up);
+        Slicer {
+            positions,
+            triangles,
+            up,
+            height,
+            by_low,
+            tallest,
+            u,
+            v,
+        }
+    }
+
+    /// Lowest and highest vertex height.
+    pub fn range(&self) -> (f64, f64) {
+        self.height
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), &h| {
+                (lo.min(h), hi.max(h))
+            })
+    }
+
+    /// The direction the heights are measured along.
+    pub fn up(&self) -> Vector3<f64> {
+        self.up
+    }
+
+    /// The loops of the section at height `s`.
+    pub fn loops_at(&self, s: f64) -> Vec<Loop> {
+        let first = self
+            .by_low
+            .partition_point(|&(lo, _)| lo < s - self.tallest);
+        let last = self.by_low.partition_point(|&(lo, _)| lo < s);
+        // Each crossed edge is a node; each cut triangle joins two nodes.
+        let mut node: HashMap<(u32, u32), usize> = HashMap::new();
+        let mut points: Vec<Point3<f64>> = Vec::new();
+        let mut joins: Vec<[usize; 2]> = Vec::new();
+        for &(_, k) in &self.by_low[first..last] {
+            let t = self.triangles[k as usize];
+            let mut ends = [0usize; 2];
+            let mut found = 0;
+            for (i, j) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                let (i, j) = (i.min(j), i.max(j));
+                let (hi, hj) = (self.height[i as usize], self.height[j as usize]);
+                if (hi >= s) == (hj >= s) || found == 2 {
+                    continue;
+                }
+                let id = *node.entry((i, j)).or_insert_with(|| {
+                    let (pi, pj) = (self.positions[i as usize], self.positions[j as usize]);
+                    points.push(pi + (pj - pi) * ((s - hi) / (hj - hi)));
+                    points.len() - 1
+                });
+                ends[found] = id;
+                found += 1;
+            }
+            if found == 2 && ends[0] != ends[1] {
+                joins.push(ends);
+            }
+        }
+        walk_loops(&points, &joins)
+    }
+
+    /// `p` in the plane's 2-D frame.
+    pub fn flat(&self, p: &Point3<f64>) -> [f64; 2] {
+        [p.coords.dot(&self.u), p.coords.dot(&self.v)]
+    }
+
+    /// The girth of `l`: the perimeter of its convex hull in the plane, metres.
+    pub fn girth(&self, l: &Loop) -> f64 {
+        let hull = convex_hull(l.points.iter().map(|p| self.flat(p)).collect());
+        hull.iter()
+            .zip(hull.iter().cycle().skip(1))
+            .map(|(a, b)| ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt())
+            .sum()
+    }
+
+    /// True when `p`, projected into the plane, lies inside the closed loop `l` (crossing
+    /// number, half-open rule).
+    pub fn encloses(&self, l: &Loop, p: &Point3<f64>) -> bool {
+        if !l.closed || l.points.len() < 3 {
+            return false;
+        }
+        let [px, py] = self.flat(p);
+        let flat: Vec<[f64; 2]> = l.points.iter().map(|q| self.flat(q)).collect();
+        let mut inside = false;
+        for (a, b) in flat.iter().zip(flat.iter().cycle().skip(1)) {
+            if (a[1] > py) != (b[1] > py) {
+                let x = a[0] + (b[0] - a[0]) * (py - a[1]) / (b[1] - a[1]);
+                if x > px {
+                    inside = !inside;
+                }
+            }
+        }
+        inside
+    }
+}
+
+impl Loop {
+    /// The mean of its points, weighted by the length of the path around each: the loop's
+    /// centre, independent of how densely the mesh is cut there.
+    pub fn centre(&self) -> Point3<f64> {
+        let n = self.points.len();
+        let mut sum = Vector3::zeros();
+        let mut total = 0.0;
+        for k in 0..n {
+            let (a, b) = (self.points[k], self.points[(k + 1) % n]);
+            let w = (b - a).norm();
+            sum += (a.coords + b.coords) * (w / 2.0);
+            total += w;
+        }
+        if total > 0.0 {
+            Point3::from(sum / total)
+        } else {
+            self.points.first().copied().unwrap_or_else(Point3::origin)
+        }
+    }
+}
+
+/// Walks the joins into loops (see module docs). A walk that comes back to a point it passed
+/// closes a loop there and goes on from it, so a fin hanging off a loop (a non-manifold edge)
+/// leaves the loop closed and itself an open tail. An open chain whose ends are within
+/// [`SMALL_GAP_M`] and a tenth of its length of each other (a small hole in the skin) counts as
+/// closed.
+fn walk_loops(points: &[Point3<f64>], joins: &[[usize; 2]]) -> Vec<Loop> {
+    let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); points.len()];
+    for (k, &[a, b]) in joins.iter().enumerate() {
+        neighbours[a].push(k);
+        neighbours[b].push(k);
+    }
+    let mut used = vec![false; joins.len()];
+    let mut place: Vec<Option<usize>> = vec![None; points.len()];
+    let mut loops = Vec::new();
+    let mut walk = |start: usize, used: &mut Vec<bool>, loops: &mut Vec<Loop>| {
+        let mut chain = vec![start];
+        place[start] = Some(0);
+        let mut at = start;
+        while let Some(&k) = neighbours[at].iter().find(|&&k| !used[k]) {
+            used[k] = true;
+            let [a, b] = joins[k];
+            at = if a == at { b } else { a };
+            if let Some(i) = place[at] {
+                let cycle: Vec<usize> = chain.drain(i..).collect();
+                for &n in &cycle {
+                    place[n] = None;
+                }
+                loops.push(Loop {
+                    points: cycle.iter().map(|&n| points[n]).collect(),
+                    closed: true,
+                });
+            }
+            place[at] = Some(chain.len());
+            chain.push(at);
+        }
+        for &n in &chain {
+            place[n] = None;
+        }
+        if chain.len() >= 2 {
+            let points: Vec<Point3<f64>> = chain.iter().map(|&n| points[n]).collect();
+            let length: f64 = points.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+            let gap = (points[points.len() - 1] - points[0]).norm();
+            loops.push(Loop {
+                points,
+                closed: gap <= SMALL_GAP_M.min(0.1 * length),
+            });
+        }
+    };
+    // Open chains from their ends first, so a chain is walked whole; then the closed loops.
+    let ends: Vec<usize> = (0..points.len())
+        .filter(|&n| neighbours[n].len() == 1)
+        .collect();
+    for start in ends {
+        if !used[neighbours[start][0]] {
+            walk(start, &mut used, &mut loops);
+        }
+    }
+    for (start, joined) in neighbours.iter().enumerate() {
+        if joined.iter().any(|&k| !used[k]) {
+            walk(start, &mut used, &mut loops);
+        }
+    }
+    loops
+}
+
+/// The convex hull of `points` (Andrew's monotone chain), counter-clockwise, no repeats.
+fn convex_hull(mut points: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
+    points.sort_unstable_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
+    points.dedup();
+    if points.len() < 3 {
+        return points;
+    }
+    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    };
+    let mut hull: Vec<[f64; 2]> = Vec::with_capacity(2 * points.len());
+    for pass in 0..2 {
+        let start = hull.len();
+        let ordered: Box<dyn Iterator<Item = &[f64; 2]>> = if pass == 0 {
+            Box::new(points.iter())
+        } else {
+            Box::new(points.iter().rev())
+        };
+        for &p in ordered {
+            while hull.len() >= start + 2
+                && cross(hull[hull.len() - 2], hull[hull.len() - 1], p) <= 0.0
+            {
+                hull.pop();
+            }
+            hull.push(p);
+        }
+        hull.pop();
+    }
+    hull
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A closed box from y = 0 to 1 with a square cross-section of side `w`, centred on x.
+    fn square_tube(x: f64, w: f64, first: u32) -> (Vec<Point3<f64>>, Vec<[u32; 3]>) {
+        let h = w / 2.0;
+        let corners = [(h, h), (-h, h), (-h, -h), (h, -h)];
+        let mut positions = Vec::new();
+        for y in [0.0, 1.0] {
+            for (cx, cz) in corners {
+                positions.push(Point3::new(x + cx, y, cz));
+            }
+        }
+        let triangles = (0..4u32)
+            .flat_map(|i| {
+                let (a, b) = (first + i, first + (i + 1) % 4);
+                [[a, b, b + 4], [a, b + 4, a + 4]]
+            })
+            .collect();
+        (positions, triangles)
+    }
+
+    #[test]
+    fn two_limbs_give_two_loops_with_their_girths_and_centres() {
+        let (mut positions, mut triangles) = square_tube(0.0, 0.1, 0);
+        let (p, t) = square_tube(0.5, 0.2, 8);
+        positions.extend(p);
+        triangles.extend(t);
+        let slicer = Slicer::new(&positions, &triangles, Vector3::y());
+        let mut loops = slicer.loops_at(0.5);
+        assert_eq!(loops.len(), 2);
+        loops.sort_by(|a, b| a.centre().x.total_cmp(&b.centre().x));
+        for (l, (x, w)) in loops.iter().zip([(0.0, 0.1), (0.5, 0.2)]) {
+            assert!(l.closed);
+            assert!((slicer.girth(l) - 4.0 * w).abs() < 1e-12);
+            assert!((l.centre() - Point3::new(x, 0.5, 0.0)).norm() < 1e-12);
+            assert!(slicer.encloses(l, &Point3::new(x, 0.3, 0.0)));
+            assert!(!slicer.encloses(l, &Point3::new(x + 0.2, 0.3, 0.0)));
+        }
+        assert_eq!(slicer.range(), (0.0, 1.0));
+        assert!(slicer.loops_at(1.5).is_empty());
+    }
+
+    #[test]
+    fn an_open_surface_gives_an_open_chain() {
+        let (positions, mut triangles) = square_tube(0.0, 0.1, 0);
+        triangles.truncate(6);
+        let slicer = Slicer::new(&positions, &triangles, Vector3::y());
+        let loops = slicer.loops_at(0.5);
+        assert_eq!(loops.len(), 1);
+        assert!(!loops[0].closed);
+        // Three sides, each crossed at its two vertical edges and its diagonal: 4 + 3 points.
+        assert_eq!(loops[0].points.len(), 7);
+    }
+}
