@@ -1,10 +1,11 @@
-//! The leg: glTF loading into world space (metres, Y up), the long axis, and the collider the
-//! yarn slides on.
+//! The leg: loading from glTF or PLY into world space (metres, Y up), the long axis, and the
+//! collider the yarn slides on.
 
 pub mod axis;
 pub mod collider;
 pub mod load;
 pub mod orient;
+pub mod ply;
 pub mod section;
 pub mod settings;
 pub mod weld;
