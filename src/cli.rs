@@ -31,7 +31,8 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
-    /// Fit the stocking onto a leg from a glTF file; write stocking.glb, stocking.ply, leg.ply.
+    /// Fit the stocking onto a leg from a glTF or PLY file; write stocking.glb, stocking.ply,
+    /// leg.ply.
     Fit(FitArgs),
     /// The paper's flat-patch experiment: hold two edges of a knit patch, pull them apart, relax.
     Patch(PatchArgs),
@@ -114,7 +115,7 @@ pub struct RenderArgs {
 pub struct FitArgs {
     /// Scene file (JSON). Default: the bundled samples/scene.json.
     pub scene: Option<PathBuf>,
-    /// Leg file (.glb or .gltf). Overrides leg.file.
+    /// Leg file (.glb, .gltf or .ply). Overrides leg.file.
     #[arg(long)]
     pub leg: Option<PathBuf>,
     /// Tube size, WALESxCOURSES (e.g. 150x150). Overrides tube.wales and tube.courses.

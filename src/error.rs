@@ -61,6 +61,10 @@ pub enum Error {
         path: PathBuf,
         source: std::io::Error,
     },
+    /// The output directory is a file, or lies under one (`file`); give `--out` a directory,
+    /// or a path where one can be made.
+    #[error("{path}: cannot be the output directory: {file} is a file, not a directory")]
+    OutputNotDirectory { path: PathBuf, file: PathBuf },
     /// An output would replace an input file.
     #[error("{path}: refusing to overwrite an input file with an output")]
     WouldOverwriteInput { path: PathBuf },
@@ -140,6 +144,7 @@ impl Error {
             | Error::RenderInput { .. }
             | Error::TooLarge { .. }
             | Error::OutputDir { .. }
+            | Error::OutputNotDirectory { .. }
             | Error::WouldOverwriteInput { .. }
             | Error::TimeStepTooLarge { .. } => 2,
             Error::Write { .. }

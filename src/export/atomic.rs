@@ -11,20 +11,91 @@ use crate::error::{Error, Result};
 /// any work is done, so that a run whose outputs cannot be written fails at once and writes
 /// nothing.
 ///
+/// The directories this call creates (`dir` and any missing parents) are removed again when the
+/// returned [`PreparedDir`] is dropped before [`PreparedDir::keep`], as far as they are still
+/// empty: a run that fails leaves no directory of its own making behind, and one that existed
+/// before is left as it was.
+///
 /// Errors: [`Error::WouldOverwriteInput`] for an output that is an input (same file once
-/// canonicalized, so links count), [`Error::OutputDir`] when the directory cannot be created or
-/// written to.
-pub fn prepare_dir(dir: &Path, files: &[&str], inputs: &[PathBuf]) -> Result<()> {
+/// canonicalized, so links count), [`Error::OutputNotDirectory`] when `dir` or one of its
+/// parents is a file, [`Error::OutputDir`] when the directory cannot be created or written to.
+pub fn prepare_dir(dir: &Path, files: &[&str], inputs: &[PathBuf]) -> Result<PreparedDir> {
     let fail = |source| Error::OutputDir {
         path: dir.to_path_buf(),
         source,
     };
     refuse_inputs(dir, files.iter().copied(), inputs)?;
-    std::fs::create_dir_all(dir).map_err(fail)?;
+    if let Some(file) = dir
+        .ancestors()
+        .filter(|p| !p.as_os_str().is_empty())
+        .find_map(|p| std::fs::metadata(p).ok().map(|m| (p, m)))
+        .filter(|(_, m)| !m.is_dir())
+        .map(|(p, _)| p)
+    {
+        return Err(Error::OutputNotDirectory {
+            path: dir.to_path_buf(),
+            file: file.to_path_buf(),
+        });
+    }
+    let prepared = PreparedDir {
+        created: create_dirs(dir).map_err(fail)?,
+    };
     let probe = dir.join(format!(".knitfit-probe-{}", std::process::id()));
     std::fs::File::create(&probe).map_err(fail)?;
     std::fs::remove_file(&probe).map_err(fail)?;
-    Ok(())
+    Ok(prepared)
+}
+
+/// An output directory [`prepare_dir`] checked, and the directories it created for it.
+#[must_use = "dropping it removes the directories it created"]
+#[derive(Debug)]
+pub struct PreparedDir {
+    /// The directories created, outermost first.
+    created: Vec<PathBuf>,
+}
+
+impl PreparedDir {
+    /// Keeps the directories created: the run they were made for has written into them.
+    pub fn keep(mut self) {
+        self.created.clear();
+    }
+}
+
+impl Drop for PreparedDir {
+    /// Removes the directories created, innermost first, each only if empty (`remove_dir`
+    /// refuses one that is not, so nothing anyone wrote is ever removed).
+    fn drop(&mut self) {
+        for dir in self.created.iter().rev() {
+            if std::fs::remove_dir(dir).is_err() {
+                break;
+            }
+        }
+    }
+}
+
+/// Creates `dir` and its missing parents, as `create_dir_all` does, and returns the ones this
+/// call made, outermost first (one that another process makes meanwhile is not counted). On
+/// failure, removes those it made.
+fn create_dirs(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let missing: Vec<&Path> = dir
+        .ancestors()
+        .filter(|p| !p.as_os_str().is_empty())
+        .take_while(|p| {
+            matches!(std::fs::symlink_metadata(p), Err(e) if e.kind() == std::io::ErrorKind::NotFound)
+        })
+        .collect();
+    let mut created = PreparedDir {
+        created: Vec::new(),
+    };
+    for p in missing.into_iter().rev() {
+        match std::fs::create_dir(p) {
+            Ok(()) => created.created.push(p.to_path_buf()),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && p.is_dir() => {}
+            // Dropping `created` removes what was made so far.
+            Err(e) => return Err(e),
+        }
+    }
+    Ok(std::mem::take(&mut created.created))
 }
 
 /// Writes every `(file name, bytes)` into `dir` (which must exist, see [`prepare_dir`]) and
@@ -124,23 +195,74 @@ mod tests {
     fn writes_every_file_and_leaves_no_temporaries() {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("new/sub");
-        prepare_dir(&out, &["a.txt", "b.txt"], &[]).unwrap();
+        let prepared = prepare_dir(&out, &["a.txt", "b.txt"], &[]).unwrap();
         let files = vec![
             ("a.txt".to_string(), b"A".to_vec()),
             ("b.txt".to_string(), b"B".to_vec()),
         ];
         let written = write_all(&out, &files, &[]).unwrap();
+        prepared.keep();
         assert_eq!(written, vec![out.join("a.txt"), out.join("b.txt")]);
         assert_eq!(names(&out), ["a.txt", "b.txt"]);
         assert_eq!(std::fs::read(out.join("b.txt")).unwrap(), b"B");
     }
 
     #[test]
-    fn directory_under_a_file_is_refused() {
+    fn directory_under_a_file_is_refused_naming_the_file() {
         let dir = tempfile::tempdir().unwrap();
-        std::fs::write(dir.path().join("f"), "x").unwrap();
-        let err = prepare_dir(&dir.path().join("f/out"), &[], &[]).unwrap_err();
-        assert!(matches!(err, Error::OutputDir { .. }), "{err}");
+        let file = dir.path().join("f");
+        std::fs::write(&file, "x").unwrap();
+        let err = prepare_dir(&file.join("out"), &[], &[]).unwrap_err();
+        assert!(
+            matches!(&err, Error::OutputNotDirectory { file: f, .. } if *f == file),
+            "{err}"
+        );
+    }
+
+    #[test]
+    fn a_file_named_as_the_directory_is_refused_and_left_alone() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("f");
+        std::fs::write(&file, "x").unwrap();
+        let err = prepare_dir(&file, &["a.txt"], &[]).unwrap_err();
+        assert!(matches!(err, Error::OutputNotDirectory { .. }), "{err}");
+        assert!(
+            err.to_string().contains("is a file, not a directory"),
+            "{err}"
+        );
+        assert_eq!(std::fs::read(&file).unwrap(), b"x");
+    }
+
+    #[test]
+    fn directories_it_created_are_removed_unless_kept() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("new/sub/out");
+        drop(prepare_dir(&out, &["a.txt"], &[]).unwrap());
+        assert!(names(dir.path()).is_empty(), "{:?}", names(dir.path()));
+        prepare_dir(&out, &["a.txt"], &[]).unwrap().keep();
+        assert!(out.is_dir());
+    }
+
+    #[test]
+    fn a_directory_that_existed_is_left_as_it_was() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("old");
+        std::fs::create_dir(&out).unwrap();
+        drop(prepare_dir(&out.join("new"), &["a.txt"], &[]).unwrap());
+        assert_eq!(names(dir.path()), ["old"]);
+        assert!(names(&out).is_empty());
+        drop(prepare_dir(&out, &["a.txt"], &[]).unwrap());
+        assert!(out.is_dir());
+    }
+
+    #[test]
+    fn a_created_directory_that_is_no_longer_empty_stays() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("new/out");
+        let prepared = prepare_dir(&out, &["a.txt"], &[]).unwrap();
+        std::fs::write(out.join("a.txt"), "A").unwrap();
+        drop(prepared);
+        assert_eq!(names(&out), ["a.txt"]);
     }
 
     #[test]

@@ -1,11 +1,13 @@
-//! Loading a leg from glTF 2.0 (`.glb`, or `.gltf` with external or embedded buffers).
+//! Loading a leg from glTF 2.0 (`.glb`, or `.gltf` with external or embedded buffers) or PLY
+//! (`.ply`, read by [`super::ply`]), the format chosen by the file's extension.
 //!
-//! Every triangle primitive under the default scene's nodes is taken, with node transforms
-//! applied, scaled to metres, cleaned ([`super::clean`]: repeated vertices and faces, slivers,
-//! debris), and turned so that the file's up axis is +Y (glTF's own convention, so a well-formed
-//! glTF file needs no turning). With `up_axis: auto` the up axis is the file axis nearest the
-//! body's own up ([`anatomical_up`]). The mesh is checked: it must have triangles, finite
-//! coordinates, no compressed geometry, and a plausible height.
+//! From glTF, every triangle primitive under the default scene's nodes is taken, with node
+//! transforms applied; from PLY, every face, fanned into triangles. Either way the mesh is then
+//! handled here, in one place: scaled to metres, cleaned ([`super::clean`]: repeated vertices and
+//! faces, slivers, debris), and turned so that the file's up axis is +Y (glTF's own convention,
+//! so a well-formed glTF file needs no turning; PLY has none). With `up_axis: auto` the up axis is
+//! the file axis nearest the body's own up ([`anatomical_up`]). The mesh is checked: it must have
+//! triangles, finite coordinates, no compressed geometry, and a plausible height.
 
 use std::path::{Path, PathBuf};
 
@@ -14,6 +16,7 @@ use nalgebra::{Matrix4, Point3, Vector3};
 use super::clean::{clean_mesh, Cleaned};
 use super::landmarks::anatomical_up;
 use super::orient::orient_outward;
+use super::ply::{self, PlyHeader};
 use crate::error::{Error, Result};
 use crate::leg::{Units, UpAxis, UpChoice};
 
@@ -159,26 +162,81 @@ pub fn load_leg(path: &Path, units: Units, up: UpChoice) -> Result<Leg> {
     decode_leg(read_leg_file(path)?, units, up)
 }
 
-/// A leg file whose glTF document has been read and checked, before any geometry is decoded:
-/// what a fit looks at to estimate the memory the leg will take ([`crate::limits`]).
+/// A leg file whose document (a glTF document, or a PLY header) has been read and checked,
+/// before any geometry is decoded: what a fit looks at to estimate the memory the leg will take
+/// ([`crate::limits`]).
 pub struct LegFile {
     path: PathBuf,
-    gltf: gltf::Gltf,
+    document: Document,
 }
 
-/// Reads the leg file `path` and checks its document: glTF, valid, no compressed geometry.
+/// A leg file's document, by format.
+enum Document {
+    Gltf(Box<gltf::Gltf>),
+    /// The whole file, and what its header declares.
+    Ply {
+        bytes: Vec<u8>,
+        header: PlyHeader,
+    },
+}
+
+/// The leg file formats, by extension.
+#[derive(Clone, Copy)]
+enum Format {
+    Gltf,
+    Ply,
+}
+
+/// The format of the leg file `path`, from its extension (in any case).
+fn format_of(path: &Path) -> Result<Format> {
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match extension.as_deref() {
+        Some("glb" | "gltf") => Ok(Format::Gltf),
+        Some("ply") => Ok(Format::Ply),
+        other => Err(Error::Leg {
+            path: path.to_path_buf(),
+            message: match other {
+                Some(ext) => format!("knitfit reads .glb, .gltf and .ply leg files, not .{ext}"),
+                None => {
+                    "knitfit reads .glb, .gltf and .ply leg files; this one has no extension".into()
+                }
+            },
+        }),
+    }
+}
+
+/// Reads the leg file `path` and checks its document: by extension, glTF (valid, no compressed
+/// geometry) or PLY (a header [`ply::read_header`] accepts).
 pub fn read_leg_file(path: &Path) -> Result<LegFile> {
-    let fail = |message: String| Error::Leg {
-        path: path.to_path_buf(),
-        message,
-    };
+    let format = format_of(path)?;
     let bytes = std::fs::read(path).map_err(|source| Error::Read {
         path: path.to_path_buf(),
         source,
     })?;
+    let document = match format {
+        Format::Gltf => Document::Gltf(Box::new(read_gltf(path, &bytes)?)),
+        Format::Ply => {
+            let header = ply::read_header(path, &bytes)?;
+            Document::Ply { bytes, header }
+        }
+    };
+    Ok(LegFile {
+        path: path.to_path_buf(),
+        document,
+    })
+}
+
+/// Reads and checks the glTF document in `bytes`.
+fn read_gltf(path: &Path, bytes: &[u8]) -> Result<gltf::Gltf> {
+    let fail = |message: String| Error::Leg {
+        path: path.to_path_buf(),
+        message,
+    };
     // Look at the extensions before validating: the validator rejects unsupported required
     // extensions with a message that does not say which one.
-    let unchecked = gltf::Gltf::from_slice_without_validation(&bytes)
+    let unchecked = gltf::Gltf::from_slice_without_validation(bytes)
         .map_err(|e| fail(format!("not a readable glTF file: {e}")))?;
     let mut extensions: Vec<&str> = unchecked
         .extensions_used()
@@ -196,57 +254,125 @@ pub fn read_leg_file(path: &Path) -> Result<LegFile> {
         )));
     }
     check_position_accessors(unchecked.document.as_json()).map_err(fail)?;
-    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| fail(invalid_gltf(&e)))?;
-    Ok(LegFile {
-        path: path.to_path_buf(),
-        gltf,
-    })
+    gltf::Gltf::from_slice(bytes).map_err(|e| fail(invalid_gltf(&e)))
 }
 
 impl LegFile {
-    /// Triangles the primitives under the default scene declare, from their accessors' counts
-    /// alone (a mesh instanced by two nodes counts twice, as it is loaded twice).
+    /// Triangles the file declares, before decoding: for glTF, from the accessors' counts of the
+    /// primitives under the default scene (a mesh instanced by two nodes counts twice, as it is
+    /// loaded twice); for PLY, the header's face count (a polygon fans into more than one).
     pub fn declared_triangles(&self) -> usize {
-        use gltf::mesh::Mode;
-        let document = &self.gltf.document;
-        let Some(scene) = document
-            .default_scene()
-            .or_else(|| document.scenes().next())
-        else {
-            return 0;
-        };
-        let mut stack: Vec<gltf::Node> = scene.nodes().collect();
-        // glTF nodes form a tree, so a well-formed file visits each node at most once; the
-        // bound keeps a malformed one (a node its own ancestor) from looping.
-        let mut visits_left = document.nodes().len();
-        let mut triangles = 0usize;
-        while let Some(node) = stack.pop() {
-            if visits_left == 0 {
-                break;
-            }
-            visits_left -= 1;
-            for prim in node.mesh().iter().flat_map(|m| m.primitives()) {
-                let vertices = prim
-                    .indices()
-                    .or_else(|| prim.get(&gltf::Semantic::Positions))
-                    .map_or(0, |a| a.count());
-                triangles = triangles.saturating_add(match prim.mode() {
-                    Mode::Triangles => vertices / 3,
-                    Mode::TriangleStrip | Mode::TriangleFan => vertices.saturating_sub(2),
-                    _ => 0,
-                });
-            }
-            stack.extend(node.children());
+        match &self.document {
+            Document::Gltf(gltf) => declared_gltf_triangles(gltf),
+            Document::Ply { header, .. } => header.faces,
         }
-        triangles
     }
 }
 
-/// Decodes the triangles of a leg file into world space, read in `units` with `up` as its up
-/// axis, cleans and checks them.
+/// Triangles the primitives under `gltf`'s default scene declare.
+fn declared_gltf_triangles(gltf: &gltf::Gltf) -> usize {
+    use gltf::mesh::Mode;
+    let document = &gltf.document;
+    let Some(scene) = document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+    else {
+        return 0;
+    };
+    let mut stack: Vec<gltf::Node> = scene.nodes().collect();
+    // glTF nodes form a tree, so a well-formed file visits each node at most once; the
+    // bound keeps a malformed one (a node its own ancestor) from looping.
+    let mut visits_left = document.nodes().len();
+    let mut triangles = 0usize;
+    while let Some(node) = stack.pop() {
+        if visits_left == 0 {
+            break;
+        }
+        visits_left -= 1;
+        for prim in node.mesh().iter().flat_map(|m| m.primitives()) {
+            let vertices = prim
+                .indices()
+                .or_else(|| prim.get(&gltf::Semantic::Positions))
+                .map_or(0, |a| a.count());
+            triangles = triangles.saturating_add(match prim.mode() {
+                Mode::Triangles => vertices / 3,
+                Mode::TriangleStrip | Mode::TriangleFan => vertices.saturating_sub(2),
+                _ => 0,
+            });
+        }
+        stack.extend(node.children());
+    }
+    triangles
+}
+
+/// Decodes the triangles of a leg file into world space, read in `units` with `choice` as its
+/// up axis, cleans and checks them.
 pub fn decode_leg(file: LegFile, units: Units, choice: UpChoice) -> Result<Leg> {
-    let LegFile { path, gltf } = file;
-    let path = path.as_path();
+    let LegFile { path, document } = file;
+    let mesh = match document {
+        Document::Gltf(gltf) => decode_gltf(&path, *gltf)?,
+        Document::Ply { bytes, .. } => {
+            let mesh = ply::decode(&path, &bytes)?;
+            FileMesh {
+                positions_file: mesh.positions,
+                triangles: mesh.triangles,
+            }
+        }
+    };
+    let fail = |message: String| Error::Leg {
+        path: path.clone(),
+        message,
+    };
+    let scaled: Vec<Point3<f64>> = mesh
+        .positions_file
+        .iter()
+        .map(|p| Point3::from(p.coords * units.metres()))
+        .collect();
+    let (scaled, mut triangles, cleaned) = clean_mesh(&scaled, &mesh.triangles);
+    if triangles.is_empty() {
+        return Err(fail("has no triangles with area".into()));
+    }
+    let (up_axis, up) = match choice {
+        UpChoice::Axis(axis) => (axis, Vector3::y()),
+        UpChoice::Auto => {
+            let body_up = anatomical_up(&scaled, &triangles).ok_or_else(|| {
+                fail(
+                    "cannot tell which way is up: no cross-section of the mesh is closed; set \
+                     leg.up_axis (or --up-axis)"
+                        .into(),
+                )
+            })?;
+            let axis = nearest_axis(&body_up);
+            (axis, turn(axis, &Point3::from(body_up)).coords)
+        }
+    };
+    let positions: Vec<Point3<f64>> = scaled.iter().map(|p| turn(up_axis, p)).collect();
+    let reoriented_triangles = orient_outward(&positions, &mut triangles);
+    let leg = Leg {
+        path,
+        positions,
+        triangles,
+        reoriented_triangles,
+        units,
+        up_axis,
+        up_detected: choice == UpChoice::Auto,
+        up,
+        cleaned,
+    };
+    check_height(&leg)?;
+    Ok(leg)
+}
+
+/// A leg file's triangles as the file gives them, before the conversion to world space.
+struct FileMesh {
+    /// Vertex positions, file coordinates and units.
+    positions_file: Vec<Point3<f64>>,
+    /// Triangles as indices into `positions_file`, wound as in the file.
+    triangles: Vec<[u32; 3]>,
+}
+
+/// The triangles under `gltf`'s default scene, node transforms applied.
+fn decode_gltf(path: &Path, gltf: gltf::Gltf) -> Result<FileMesh> {
     let fail = |message: String| Error::Leg {
         path: path.to_path_buf(),
         message,
@@ -273,44 +399,10 @@ pub fn decode_leg(file: LegFile, units: Units, choice: UpChoice) -> Result<Leg> 
             "has no triangles under its default scene".into()
         }));
     }
-    let scaled: Vec<Point3<f64>> = mesh
-        .positions
-        .iter()
-        .map(|p| Point3::from(p.coords * units.metres()))
-        .collect();
-    let (scaled, mut triangles, cleaned) = clean_mesh(&scaled, &mesh.triangles);
-    if triangles.is_empty() {
-        return Err(fail("has no triangles with area".into()));
-    }
-    let (up_axis, up) = match choice {
-        UpChoice::Axis(axis) => (axis, Vector3::y()),
-        UpChoice::Auto => {
-            let body_up = anatomical_up(&scaled, &triangles).ok_or_else(|| {
-                fail(
-                    "cannot tell which way is up: no cross-section of the mesh is closed; set \
-                     leg.up_axis (or --up-axis)"
-                        .into(),
-                )
-            })?;
-            let axis = nearest_axis(&body_up);
-            (axis, turn(axis, &Point3::from(body_up)).coords)
-        }
-    };
-    let positions: Vec<Point3<f64>> = scaled.iter().map(|p| turn(up_axis, p)).collect();
-    let reoriented_triangles = orient_outward(&positions, &mut triangles);
-    let leg = Leg {
-        path: path.to_path_buf(),
-        positions,
-        triangles,
-        reoriented_triangles,
-        units,
-        up_axis,
-        up_detected: choice == UpChoice::Auto,
-        up,
-        cleaned,
-    };
-    check_height(&leg)?;
-    Ok(leg)
+    Ok(FileMesh {
+        positions_file: mesh.positions,
+        triangles: mesh.triangles,
+    })
 }
 
 /// The message for a document gltf refuses: its validation errors already say "invalid glTF:"

@@ -1,4 +1,4 @@
-//! The leg: loading (glTF) into world space (metres, Y up), cleaning, the landmarks that say
+//! The leg: loading (glTF or PLY) into world space (metres, Y up), cleaning, the landmarks that say
 //! where the stocking goes, the axis it is stretched along, and the collider the yarn slides on.
 
 pub mod axis;
@@ -7,6 +7,7 @@ pub mod collider;
 pub mod landmarks;
 pub mod load;
 pub mod orient;
+pub mod ply;
 pub mod section;
 pub mod settings;
 pub mod slice;

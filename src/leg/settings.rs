@@ -180,8 +180,8 @@ pub struct LegAxis {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct LegSettings {
-    /// glTF file (`.glb` or `.gltf`), relative to the scene file (default:
-    /// `"procedural_leg.glb"`, next to the bundled scene).
+    /// Leg mesh file, glTF (`.glb` or `.gltf`) or PLY (`.ply`), told apart by extension,
+    /// relative to the scene file (default: `"procedural_leg.glb"`, next to the bundled scene).
     pub file: String,
     /// Units of the file's coordinates (default: `"m"`, as glTF specifies).
     pub units: Units,
@@ -246,7 +246,7 @@ impl LegSettings {
     /// Checks every value; the error names the field under `leg`.
     pub fn validate(&self) -> Result<(), Invalid> {
         if self.file.is_empty() {
-            return Err(Invalid::new("file", "must name a .glb or .gltf file"));
+            return Err(Invalid::new("file", "must name a .glb, .gltf or .ply file"));
         }
         if let Some(axis) = &self.axis {
             axis.validate().map_err(|e| e.within("axis"))?;

@@ -160,7 +160,7 @@ pub fn bench_cases(options: &BenchOptions) -> (Vec<BenchCase>, Vec<SkippedCase>)
 /// Runs the sweep, writes `bench.md`, `bench.csv` and `bench.png` into `options.out_dir`.
 pub fn run_bench(options: &BenchOptions, progress: &mut dyn Progress) -> Result<BenchOutcome> {
     let files = ["bench.md", "bench.csv", "bench.png"];
-    export::atomic::prepare_dir(&options.out_dir, &files, &[])?;
+    let prepared = export::atomic::prepare_dir(&options.out_dir, &files, &[])?;
     let (cases, skipped) = bench_cases(options);
     let base = Scene::load(None)?;
     progress.begin("bench", cases.len() as u64);
@@ -220,6 +220,7 @@ pub fn run_bench(options: &BenchOptions, progress: &mut dyn Progress) -> Result<
         ],
         &[],
     )?;
+    prepared.keep();
     Ok(BenchOutcome {
         rows,
         skipped,

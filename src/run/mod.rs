@@ -65,10 +65,13 @@ pub struct Outcome<D> {
 /// The frame every command runs in: the plan's stages timed as they run, the output directory
 /// checked before the work starts, the files encoded in memory and written together at the end
 /// (each to a temporary name, then renamed; never over an input), then the report. A run that
-/// fails at any stage writes nothing.
+/// fails at any stage writes nothing, and removes the output directory again if it made it.
 pub(crate) struct Run<'p> {
     plan: &'p Plan,
     out_dir: PathBuf,
+    /// The checked output directory, once [`Run::prepare`] has run: dropped with the run, it
+    /// removes the directories it created unless the run finished.
+    prepared: Option<atomic::PreparedDir>,
     inputs: Vec<PathBuf>,
     /// The stages' times, against the plan.
     pub clock: StageClock,
@@ -81,6 +84,7 @@ impl<'p> Run<'p> {
         Run {
             plan,
             out_dir: out_dir.to_path_buf(),
+            prepared: None,
             inputs,
             clock: StageClock::new(plan),
             files: Vec::new(),
@@ -88,9 +92,15 @@ impl<'p> Run<'p> {
     }
 
     /// Checks the output directory can take the plan's files (creating it if needed) before any
-    /// work is done, so a run that could not write fails at once.
-    pub fn prepare(&self) -> Result<()> {
-        atomic::prepare_dir(&self.out_dir, &self.plan.file_names(), &self.inputs)
+    /// work is done, so a run that could not write fails at once. A directory created here is
+    /// removed again if the run fails before [`Run::finish`] has written into it.
+    pub fn prepare(&mut self) -> Result<()> {
+        self.prepared = Some(atomic::prepare_dir(
+            &self.out_dir,
+            &self.plan.file_names(),
+            &self.inputs,
+        )?);
+        Ok(())
     }
 
     /// Runs `work` as `stage`, timed.
@@ -147,6 +157,9 @@ impl<'p> Run<'p> {
             &[(self.plan.report.clone(), report.to_json())],
             &self.inputs,
         )?);
+        if let Some(prepared) = self.prepared.take() {
+            prepared.keep();
+        }
         Ok(Outcome { report, written })
     }
 }

@@ -360,18 +360,87 @@ fn missing_scene_file_is_refused() {
 }
 
 #[test]
-fn unwritable_output_directory_is_refused_and_nothing_is_written() {
+fn output_directory_under_a_file_is_refused_naming_the_file() {
     let dir = tempfile::tempdir().unwrap();
     write(dir.path(), "file", "not a directory");
     let out = knitfit(dir.path(), &["patch", "--out", "file/out"]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert_eq!(stderr(&out).lines().count(), 1);
     assert!(
-        stderr(&out).contains("file/out: output directory is not writable"),
+        stderr(&out).contains("file/out: cannot be the output directory: file is a file"),
         "{}",
         stderr(&out)
     );
     assert_eq!(files_in(dir.path()), ["file"]);
+}
+
+/// Found by hand: `--out` naming a file was refused as "output directory is not writable: File
+/// exists", which sent users looking at permissions.
+#[test]
+fn out_naming_a_file_says_it_is_a_file_and_writes_nothing() {
+    for args in [&["patch", "--out", "f"][..], &["fit", "--out", "f", "-q"]] {
+        let dir = tempfile::tempdir().unwrap();
+        write(dir.path(), "f", "mine");
+        let out = knitfit(dir.path(), args);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(
+            err.contains("f: cannot be the output directory: f is a file, not a directory"),
+            "{err}"
+        );
+        assert!(!err.contains("not writable"), "{err}");
+        assert_eq!(files_in(dir.path()), ["f"]);
+        assert_eq!(
+            std::fs::read_to_string(dir.path().join("f")).unwrap(),
+            "mine"
+        );
+    }
+}
+
+/// Found by hand: `knitfit fit --leg missing.glb --out x` left an empty `x` behind.
+#[test]
+fn a_failed_run_leaves_no_output_directory_it_made() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "cut.glb", "glTF");
+    let scene = r#"{"solver": {"time_step": 2.0, "on_unstable": "ignore"}}"#;
+    write(dir.path(), "diverges.json", scene);
+    let runs: [&[&str]; 4] = [
+        &["fit", "--leg", "missing.glb", "--out", "x"],
+        &["fit", "--leg", "cut.glb", "--out", "new/deeper/x"],
+        &["fit", "--leg", "missing.glb"],
+        // A run that fails in its solver, long after the directory was checked.
+        &["patch", "diverges.json", "--out", "y"],
+    ];
+    for args in runs {
+        let out = knitfit(dir.path(), args);
+        assert!(!out.status.success(), "{args:?}");
+        assert_eq!(
+            files_in(dir.path()),
+            ["cut.glb", "diverges.json"],
+            "{args:?}: {}",
+            stderr(&out)
+        );
+    }
+}
+
+#[test]
+fn a_failed_run_leaves_an_existing_output_directory_as_it_was() {
+    let dir = tempfile::tempdir().unwrap();
+    for existing in ["empty", "full"] {
+        std::fs::create_dir(dir.path().join(existing)).unwrap();
+    }
+    write(&dir.path().join("full"), "keep.txt", "kept");
+    for out_dir in ["empty", "full"] {
+        let out = knitfit(
+            dir.path(),
+            &["fit", "--leg", "missing.glb", "--out", out_dir],
+        );
+        assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    }
+    assert_eq!(files_in(dir.path()), ["empty", "full"]);
+    assert!(files_in(&dir.path().join("empty")).is_empty());
+    assert_eq!(files_in(&dir.path().join("full")), ["keep.txt"]);
 }
 
 #[test]

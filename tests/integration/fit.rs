@@ -1,14 +1,15 @@
 //! The fit on every sample leg (paper §6.1–6.2): invariants checked on the written files against
-//! the exact leg, and clean refusals of bad leg files.
+//! the exact leg, legs read from PLY as from glTF, and clean refusals of bad leg files.
 
 use std::path::{Path, PathBuf};
 
-use knitfit::leg::{load_leg, Collider, ContactMethod, Units, UpAxis, UpChoice};
+use knitfit::leg::{load_leg, read_leg_file, Collider, ContactMethod, Units, UpAxis, UpChoice};
 use nalgebra::Point3;
+use ply_rs_bw::ply::Encoding;
 
 use crate::support::{
-    base64, files_in, fit, float, knitfit, point, procedural_leg, read_ply, report, sample_legs,
-    stderr, write_tube_leg,
+    base64, files_in, fit, float, knitfit, leg_as_ply, load_sample, point, procedural_leg,
+    read_ply, report, sample_legs, stderr, write_tube_leg,
 };
 
 #[test]
@@ -147,6 +148,11 @@ fn ply_and_gltf_outputs_agree_and_read_back_with_their_counts() {
         legply.payload["face"].len() as u64,
         r["metrics"]["leg_triangles"].as_u64().unwrap()
     );
+    // leg.ply reads back as the leg it was fitted on.
+    let leg = load_sample(leg_path);
+    let again = load_sample(&out.join("leg.ply"));
+    assert_eq!(again.triangles, leg.triangles);
+    assert_eq!(again.positions, leg.positions);
 
     let (doc, buffers, _) = gltf::import(out.join("stocking.glb")).unwrap();
     let names: Vec<_> = doc.nodes().map(|n| n.name().unwrap().to_string()).collect();
@@ -313,6 +319,106 @@ fn compressed_geometry_is_refused_by_name() {
 fn non_finite_coordinates_are_refused() {
     let nan = [["0", "0", "0"], ["nan", "0", "0"], ["0", "1", "0"]];
     bad_leg("nan.gltf", gltf_text(nan, 4, "").as_bytes(), "non-finite");
+}
+
+#[test]
+fn a_sample_leg_written_as_ply_reads_back_the_same_in_every_encoding() {
+    let glb = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/makehuman_leg_coarse.glb");
+    let leg = load_sample(&glb);
+    let dir = tempfile::tempdir().unwrap();
+    for encoding in [
+        Encoding::BinaryLittleEndian,
+        Encoding::BinaryBigEndian,
+        Encoding::Ascii,
+    ] {
+        let path = dir.path().join("leg.ply");
+        std::fs::write(&path, leg_as_ply(&leg, encoding)).unwrap();
+        let file = read_leg_file(&path).unwrap();
+        assert_eq!(
+            file.declared_triangles(),
+            leg.triangles.len(),
+            "{encoding:?}"
+        );
+        let again = load_leg(&path, Units::Metres, UpChoice::Axis(UpAxis::PosY)).unwrap();
+        assert_eq!(again.triangles, leg.triangles, "{encoding:?}");
+        // The glTF file holds single-precision positions, and PLY writes them as floats.
+        assert_eq!(again.positions, leg.positions, "{encoding:?}");
+        assert_eq!(again.reoriented_triangles, 0, "{encoding:?}");
+    }
+}
+
+#[test]
+fn a_ply_leg_fits_as_its_gltf_original_does() {
+    let dir = tempfile::tempdir().unwrap();
+    let leg = load_sample(&procedural_leg());
+    let ply = dir.path().join("leg.ply");
+    std::fs::write(&ply, leg_as_ply(&leg, Encoding::Ascii)).unwrap();
+    let (glb_dir, glb_report) = fit(&procedural_leg(), "16x12", &[]);
+    let (ply_dir, ply_report) = fit(&ply, "16x12", &[]);
+    assert_eq!(glb_report["metrics"], ply_report["metrics"]);
+    let a = read_ply(&glb_dir.path().join("out/stocking.ply"));
+    let b = read_ply(&ply_dir.path().join("out/stocking.ply"));
+    assert_eq!(a.payload["vertex"], b.payload["vertex"]);
+}
+
+#[test]
+fn a_ply_leg_in_a_scene_file_is_read_with_its_units_and_up_axis() {
+    // The sample leg in centimetres with +Z up, as a scanner might write it.
+    let leg = load_sample(&procedural_leg());
+    let mut turned = leg.clone();
+    for p in &mut turned.positions {
+        *p = Point3::new(p.x * 100.0, -p.z * 100.0, p.y * 100.0);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scan.ply");
+    std::fs::write(&path, leg_as_ply(&turned, Encoding::BinaryBigEndian)).unwrap();
+    let back = load_leg(&path, Units::Centimetres, UpChoice::Axis(UpAxis::PosZ)).unwrap();
+    assert_eq!(back.triangles, leg.triangles);
+    for (p, q) in back.positions.iter().zip(&leg.positions) {
+        assert!((p - q).norm() < 1e-6, "{p} vs {q}");
+    }
+    let refused = load_leg(&path, Units::Metres, UpChoice::Axis(UpAxis::PosY)).unwrap_err();
+    assert!(refused.to_string().contains("leg.up_axis"), "{refused}");
+}
+
+#[test]
+fn malformed_ply_legs_are_refused_in_one_line() {
+    let leg = load_sample(&procedural_leg());
+    let binary = leg_as_ply(&leg, Encoding::BinaryLittleEndian);
+    bad_leg("cut.ply", &binary[..binary.len() / 2], "is truncated");
+    let ascii = String::from_utf8(leg_as_ply(&leg, Encoding::Ascii)).unwrap();
+    bad_leg(
+        "header.ply",
+        ascii.replacen("format ascii", "format asci", 1).as_bytes(),
+        "not a readable PLY file",
+    );
+    let last_face = ascii.trim_end().rsplit_once('\n').unwrap().0;
+    bad_leg(
+        "index.ply",
+        format!("{last_face}\n3 0 1 99999999\n").as_bytes(),
+        "names vertex 99999999",
+    );
+    let header_end = ascii.find("end_header\n").unwrap() + "end_header\n".len();
+    let (header, body) = ascii.split_at(header_end);
+    // ASCII PLY has no NaN token; a float past its range reads as an infinity.
+    let (first, rest) = body.split_once('\n').unwrap();
+    let mut values: Vec<&str> = first.split(' ').collect();
+    values[1] = "1e39";
+    bad_leg(
+        "inf.ply",
+        format!("{header}{}\n{rest}", values.join(" ")).as_bytes(),
+        "non-finite coordinate",
+    );
+}
+
+#[test]
+fn a_leg_file_of_another_format_is_refused_by_its_extension() {
+    bad_leg(
+        "leg.obj",
+        b"v 0 0 0\n",
+        "knitfit reads .glb, .gltf and .ply leg files, not .obj",
+    );
+    bad_leg("leg", b"ply\n", "this one has no extension");
 }
 
 #[test]

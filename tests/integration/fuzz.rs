@@ -1,7 +1,8 @@
 //! Fuzzing the readers and the PLY writer with proptest over mutated inputs: the glTF leg loader
 //! (the bundled legs and a small tube, bit-flipped, truncated, with JSON chunks spliced from
 //! another file or edited at random, and binary data overwritten with NaN, infinities and
-//! out-of-range indices), the scene parser (the bundled scene, edited and mangled), and the PLY
+//! out-of-range indices), the PLY leg loader (the small tube in each encoding, bit-flipped,
+//! truncated, with header lines replaced and payload overwritten), the scene parser (the bundled scene, edited and mangled), and the PLY
 //! writers' inputs (non-finite values, empty parts, bad attributes). Nothing may panic; a
 //! refusal is one line naming the file; what is accepted or written holds no NaN. The command
 //! line's side of it (exit code 2, nothing written) is checked on a few of the malformed files.
@@ -15,11 +16,14 @@ use knitfit::export::ply::{write_mesh_ply, write_ply};
 use knitfit::leg::load::PLAUSIBLE_HEIGHT_M;
 use knitfit::leg::{load_leg, Collider, ContactMethod, Leg, Units, UpAxis, UpChoice};
 use knitfit::{Error, Scene};
+use ply_rs_bw::ply::Encoding;
 use proptest::prelude::*;
 use serde_json::{json, Value};
 
 use crate::support::prop_config::config;
-use crate::support::{base64, files_in, knitfit, sample_legs, stderr, write_tube_leg};
+use crate::support::{
+    base64, files_in, knitfit, leg_as_ply, load_sample, sample_legs, stderr, write_tube_leg,
+};
 
 // ---------------------------------------------------------------------------------------------
 // GLB files and how to take them apart
@@ -369,6 +373,137 @@ proptest! {
         let bytes = &originals()[if small { 0 } else { original }];
         let (damaged, extension) = mutate(bytes, &m);
         check_loader(&damaged, extension)?;
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// PLY leg files
+
+/// The small tube as PLY, in each encoding: binary little-endian (knitfit's own writer), binary
+/// big-endian and ASCII.
+fn ply_originals() -> &'static [Vec<u8>] {
+    static ORIGINALS: OnceLock<Vec<Vec<u8>>> = OnceLock::new();
+    ORIGINALS.get_or_init(|| {
+        let dir = tempfile::tempdir().unwrap();
+        let glb = dir.path().join("tube.glb");
+        std::fs::write(&glb, small_tube_glb()).unwrap();
+        let tube = load_sample(&glb);
+        [
+            Encoding::BinaryLittleEndian,
+            Encoding::BinaryBigEndian,
+            Encoding::Ascii,
+        ]
+        .map(|encoding| leg_as_ply(&tube, encoding))
+        .to_vec()
+    })
+}
+
+/// Header lines that break a PLY reader's assumptions: huge or zero counts, elements without
+/// properties, coordinates and indices of the wrong type, lists counted by floats, another
+/// encoding than the payload's.
+const NASTY_HEADER_LINES: [&str; 14] = [
+    "element vertex 4294967296",
+    "element vertex 0",
+    "element face 18446744073709551615",
+    "element face 0",
+    "element junk 1000000000",
+    "element junk 3\nproperty list uint uchar stuff",
+    "property int x",
+    "property double y",
+    "property list uint int vertex_indices",
+    "property list float int vertex_indices",
+    "property list uchar float vertex_indices",
+    "format binary_big_endian 1.0",
+    "format ascii 1.0",
+    "",
+];
+
+/// How a PLY file is damaged.
+#[derive(Clone, Debug)]
+enum PlyMutation {
+    /// Bits flipped at these places (fractions of the length) and bit numbers.
+    FlipBits(Vec<(f64, u8)>),
+    /// Cut at this fraction of the length.
+    Truncate(f64),
+    /// Header lines (at these fractions of the header's lines) replaced by nasty ones.
+    Header(Vec<(f64, usize)>),
+    /// 4-byte words of the payload (at these fractions) overwritten: NaN, infinities, and
+    /// indices past any vertex, as in the binary buffer of a GLB.
+    Payload(Vec<(f64, u32)>),
+}
+
+fn ply_mutation() -> impl Strategy<Value = PlyMutation> {
+    let word = prop_oneof![
+        Just(f32::NAN.to_bits()),
+        Just(f32::INFINITY.to_bits()),
+        Just(u32::MAX),
+        Just(0x8000_0000),
+        Just(0x0000_ffff),
+        any::<u32>(),
+    ];
+    prop_oneof![
+        proptest::collection::vec((0.0f64..1.0, 0u8..8), 1..16).prop_map(PlyMutation::FlipBits),
+        (0.0f64..1.0).prop_map(PlyMutation::Truncate),
+        proptest::collection::vec((0.0f64..1.0, 0..NASTY_HEADER_LINES.len()), 1..4)
+            .prop_map(PlyMutation::Header),
+        proptest::collection::vec((0.0f64..1.0, word), 1..8).prop_map(PlyMutation::Payload),
+    ]
+}
+
+fn mutate_ply(original: &[u8], m: &PlyMutation) -> Vec<u8> {
+    let at = |f: f64, len: usize| ((f * len as f64) as usize).min(len.saturating_sub(1));
+    let marker = b"end_header\n";
+    let payload = marker.len()
+        + original
+            .windows(marker.len())
+            .position(|w| w == marker)
+            .unwrap();
+    match m {
+        PlyMutation::FlipBits(flips) => {
+            let mut bytes = original.to_vec();
+            for &(f, bit) in flips {
+                let i = at(f, bytes.len());
+                bytes[i] ^= 1 << bit;
+            }
+            bytes
+        }
+        PlyMutation::Truncate(f) => original[..at(*f, original.len())].to_vec(),
+        PlyMutation::Header(edits) => {
+            let header = std::str::from_utf8(&original[..payload]).unwrap();
+            let mut lines: Vec<&str> = header.lines().collect();
+            for &(f, nasty) in edits {
+                // Never the first line ("ply") or the last ("end_header").
+                let i = 1 + at(f, lines.len() - 2);
+                lines[i] = NASTY_HEADER_LINES[nasty];
+            }
+            let mut bytes = format!("{}\n", lines.join("\n")).into_bytes();
+            bytes.extend(&original[payload..]);
+            bytes
+        }
+        PlyMutation::Payload(words) => {
+            let mut bytes = original.to_vec();
+            let body = bytes.len() - payload;
+            for &(f, w) in words {
+                let i = payload + at(f, body / 4) * 4;
+                bytes[i..i + 4].copy_from_slice(&w.to_le_bytes());
+            }
+            bytes
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(config(1500))]
+
+    /// Whatever is done to a PLY leg file, loading it either gives a usable leg or refuses it
+    /// with one line naming the file; it never panics, loops or allocates past the file.
+    #[test]
+    fn a_damaged_ply_leg_file_loads_or_is_refused_cleanly(
+        original in 0..ply_originals().len(),
+        m in ply_mutation(),
+    ) {
+        let damaged = mutate_ply(&ply_originals()[original], &m);
+        check_loader(&damaged, "ply")?;
     }
 }
 

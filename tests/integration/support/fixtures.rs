@@ -1,13 +1,15 @@
 //! The meshes the tests fit, query and damage: the bundled sample legs, closed surfaces made on
 //! a grid (a sphere, a rod, a torus, a leg-like body of revolution), and an open tube, written
-//! as GLB files by knitfit's own writer (no hand-written glTF).
+//! as GLB files by knitfit's own writer (no hand-written glTF), and legs as PLY in each encoding.
 
 use std::path::{Path, PathBuf};
 
 use knitfit::base::{SurfaceMesh, Vec3};
 use knitfit::export::gltf::{write_nodes_glb, GlbNode};
+use knitfit::export::ply::write_mesh_ply;
 use knitfit::leg::{load_leg, Leg, Units, UpAxis, UpChoice};
 use nalgebra::Point3;
+use ply_rs_bw::ply::{DefaultElement, Encoding};
 
 /// Every bundled sample leg.
 pub fn sample_legs() -> Vec<PathBuf> {
@@ -173,4 +175,24 @@ pub fn landmark_axis(leg: &Leg) -> knitfit::leg::Axis {
     use knitfit::leg::{find_landmarks, Side};
     let landmarks = find_landmarks(&leg.positions, &leg.triangles, leg.up, Side::Left).unwrap();
     tube_axis(&landmarks, TubeBottom::Ankle, TubeTop::default()).unwrap()
+}
+
+/// `leg`'s mesh as a PLY file in `encoding`: written by knitfit's own writer (binary
+/// little-endian, as `leg.ply`), then re-encoded by the PLY crate for the other encodings.
+pub fn leg_as_ply(leg: &Leg, encoding: Encoding) -> Vec<u8> {
+    let positions = leg.positions.iter().map(|p| p.coords.into()).collect();
+    let mesh = SurfaceMesh::new("leg", positions, leg.triangles.clone());
+    let bytes = write_mesh_ply(&mesh, &[]).unwrap();
+    if encoding == Encoding::BinaryLittleEndian {
+        return bytes;
+    }
+    let mut ply = ply_rs_bw::parser::Parser::<DefaultElement>::new()
+        .read_ply(&mut &bytes[..])
+        .unwrap();
+    ply.header.encoding = encoding;
+    let mut out = Vec::new();
+    ply_rs_bw::writer::Writer::new()
+        .write_ply(&mut out, &mut ply)
+        .unwrap();
+    out
 }

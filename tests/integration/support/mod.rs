@@ -8,8 +8,8 @@ pub mod prop_config;
 
 pub use files::{base64, float, point, read_ply, rust_files};
 pub use fixtures::{
-    grid_surface, load_sample, procedural_leg, revolved, sample_legs, write_mesh, write_meshes,
-    write_tube_leg,
+    grid_surface, leg_as_ply, load_sample, procedural_leg, revolved, sample_legs, write_mesh,
+    write_meshes, write_tube_leg,
 };
 pub use process::{
     files_in, fit, knitfit, knitfit_env, report, stage_names, stderr, stdout, write,
