@@ -116,16 +116,34 @@ pub enum Error {
     /// than nylon, or a relaxed circumference far below the leg's girth).
     #[error(
         "the fit is not a stocking: {bunched} of its {courses} courses came to rest below courses \
-         before them, from course {course} on (the courses slid down the leg and bunched); \
-         nothing was written. The yarn is too tight for this leg: lower yarns.support.stiffness \
+         before them, from course {course} on, {place} (the courses slid down the leg and \
+         bunched); nothing was written. The yarn is too tight for this leg: lower yarns.support.stiffness \
          (now {ratio}× nylon's) or raise tube.relaxed_circumference_m (now {circumference_m} m)"
     )]
     Bunched {
         course: usize,
         bunched: usize,
         courses: usize,
+        place: String,
         ratio: f64,
         circumference_m: f64,
+    },
+    /// The solver stopped early because it was going nowhere: its momentum restarted on almost
+    /// every iteration and the residual stopped falling (a tube that cannot pass the foot, or is
+    /// far too small for the leg). Exit code 3, as for a fit that did not converge, but nothing
+    /// is written: the state is no stocking.
+    #[error(
+        "the fit is going nowhere and was stopped: on the {grid} grid after {iterations} \
+         iterations ({seconds:.1} s) the residual stays near {residual:.1e}; {place}; nothing was \
+         written. {advice}"
+    )]
+    Stalled {
+        grid: String,
+        iterations: usize,
+        seconds: f64,
+        residual: f64,
+        place: String,
+        advice: String,
     },
     /// Encoding an output (PNG, glTF) failed.
     #[error("{what}: {message}")]
@@ -133,7 +151,8 @@ pub enum Error {
 }
 
 impl Error {
-    /// Process exit code: 2 for bad input (files, flags, values), 1 for a run that failed.
+    /// Process exit code: 2 for bad input (files, flags, values), 1 for a run that failed, 3
+    /// for a fit stopped short of converging.
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Read { .. }
@@ -152,6 +171,7 @@ impl Error {
             | Error::SolverDiverged { .. }
             | Error::Bunched { .. }
             | Error::Encode { .. } => 1,
+            Error::Stalled { .. } => 3,
         }
     }
 }
@@ -181,6 +201,7 @@ mod tests {
                 course: 4,
                 bunched: 11,
                 courses: 100,
+                place: "gathered 1–6 cm above the stocking's bottom end".into(),
                 ratio: 1000.0,
                 circumference_m: 0.2,
             },
@@ -188,6 +209,14 @@ mod tests {
                 time_step: 0.4,
                 limit: 0.2,
                 stiffest: 10.0,
+            },
+            Error::Stalled {
+                grid: "38×39".into(),
+                iterations: 200,
+                seconds: 0.1,
+                residual: 0.12,
+                place: "courses 0–9 of 39 are out of balance".into(),
+                advice: "Raise tube.relaxed_circumference_m.".into(),
             },
         ];
         for e in errors {

@@ -31,6 +31,7 @@ use knitfit::run::{
     plan_fit, plan_patch, run_bench, run_fit, run_patch, run_render, run_spp_sweep, BenchOptions,
 };
 use knitfit::scene::Scene;
+use knitfit::sim::SolverMethod;
 use knitfit::Error;
 
 /// Exit code of a run that finished but did not converge (its files are written and its report
@@ -78,11 +79,16 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
         );
         print_written(&args.out_dir(), &outcome.written);
     }
-    Ok(finish(
-        m.converged,
-        scene,
-        "raise solver.max_steps, or solver.damping if the residual oscillates",
-    ))
+    // Damping shapes only the paper solver's steps; the multilevel solver has none to tune.
+    let hint = match scene.solver.method {
+        SolverMethod::Multilevel => {
+            "raise solver.max_steps, or loosen solver.tolerance (--tolerance)"
+        }
+        SolverMethod::Paper => {
+            "raise solver.max_steps, or solver.damping if the residual oscillates"
+        }
+    };
+    Ok(finish(m.converged, scene, hint))
 }
 
 fn patch(args: PatchArgs, quiet: bool) -> Result<ExitCode, Error> {

@@ -5,10 +5,10 @@
 
 use std::path::{Path, PathBuf};
 
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 
 use super::{Outcome, Progress, Run, StepProgress};
-use crate::base::{SurfaceMesh, YarnGeometry, YarnKind};
+use crate::base::{SurfaceMesh, Vec3, YarnGeometry, YarnKind};
 use crate::draw;
 use crate::draw::density_map::{self, DensityPictureStyle};
 use crate::error::{Error, Result};
@@ -34,8 +34,8 @@ use crate::report::{
 use crate::scene::{LoadedScene, Scene, LEG_AXIS};
 use crate::sim::contact::{ContactCounters, LegContact};
 use crate::sim::{
-    relax_constrained, relax_multilevel, Constraints, Levels, MultilevelStats, RelaxStats,
-    SolverMethod,
+    relax_constrained, relax_multilevel, Constraints, LevelStats, Levels, MultilevelStats,
+    RelaxStats, SolverMethod,
 };
 
 /// Where the leg comes from and who chose the axis.
@@ -296,6 +296,7 @@ pub fn solve_fit(
         leg: &leg,
         collider: &collider,
         offset,
+        support_ratio: scene.yarns.support.stiffness / scene.yarns.nylon.stiffness,
         contact: None,
         retired: ContactCounters::default(),
     };
@@ -334,6 +335,9 @@ pub fn solve_fit(
             (knit, SolverRun::Multilevel(stats))
         }
     };
+    if let Some(level) = solver.stalled() {
+        return Err(stalled(scene, &leg, &axis, landmarks.as_ref(), level));
+    }
     let mut contact = levels
         .contact
         .take()
@@ -344,21 +348,35 @@ pub fn solve_fit(
 
     let mut counters = levels.retired;
     counters.add(&contact.counters());
-    let (max_penetration_m, axial_range_m) = clock.time(Stage::CheckPenetration, || {
-        (max_penetration(&knit, &collider), axial_range(&knit, &axis))
-    });
-    let (bunched, first) = bunched_courses(&knit, &axis.direction());
-    if let Some(course) =
-        first.filter(|_| bunched as f64 > MAX_BUNCHED_FRACTION * knit.courses as f64)
-    {
-        return Err(Error::Bunched {
-            course,
-            bunched,
-            courses: knit.courses,
-            ratio: scene.yarns.support.stiffness / scene.yarns.nylon.stiffness,
-            circumference_m: spec.relaxed_circumference_m,
+    let ((max_penetration_m, touching), axial_range_m) =
+        clock.time(Stage::CheckPenetration, || {
+            (
+                skin_contact(&knit, &collider),
+                axial_range(&knit.particles.x, &axis),
+            )
+        });
+    if touching < MIN_TOUCHING_FRACTION {
+        return Err(Error::Leg {
+            path: leg.path.clone(),
+            message: format!(
+                "the fitted stocking is not on the leg: only {:.0}% of its points came to rest \
+                 on the skin (a fit touches it nearly everywhere); the axis ({}) misses the leg or \
+                 the stocking is far too wide for it",
+                100.0 * touching,
+                match axis.source {
+                    AxisSource::CommandLine => "--axis",
+                    AxisSource::Scene => "leg.axis",
+                    AxisSource::Landmarks => "placed on the landmarks",
+                }
+            ),
         });
     }
+    let bunched = refuse_bunched(
+        &knit,
+        &axis,
+        spec.relaxed_circumference_m,
+        levels.support_ratio,
+    )?;
     Ok(SolvedFit {
         leg,
         landmarks,
@@ -374,6 +392,36 @@ pub fn solve_fit(
         bunched_courses: bunched,
         memory,
     })
+}
+
+/// How many of `knit`'s courses came to rest below a course before them; refused as
+/// [`Error::Bunched`] above [`MAX_BUNCHED_FRACTION`] of them.
+fn refuse_bunched(
+    knit: &Knit,
+    axis: &Axis,
+    circumference_m: f64,
+    support_ratio: f64,
+) -> Result<usize> {
+    let (bunched, first) = bunched_courses(knit, &axis.direction());
+    match first.filter(|_| bunched as f64 > MAX_BUNCHED_FRACTION * knit.courses as f64) {
+        Some(course) => Err(Error::Bunched {
+            course,
+            bunched,
+            courses: knit.courses,
+            place: {
+                // Where the courses from the first out of order on came to rest.
+                let [lo, hi] = axial_range(&knit.particles.x[course * knit.wales..], axis);
+                format!(
+                    "gathered {:.0}–{:.0} cm above the stocking's bottom end",
+                    100.0 * lo.max(0.0),
+                    100.0 * hi.max(0.0)
+                )
+            },
+            ratio: support_ratio,
+            circumference_m,
+        }),
+        None => Ok(bunched),
+    }
 }
 
 /// The fit's memory check: its tube, leg and files against the scene's limits.
@@ -397,6 +445,8 @@ struct TubeLevels<'a> {
     collider: &'a Collider,
     /// Distance kept between yarn centre line and skin, metres.
     offset: f64,
+    /// Support yarn's stiffness over nylon's, for the bunched refusal.
+    support_ratio: f64,
     /// Contact of the level being solved.
     contact: Option<LegContact<'a>>,
     /// Counters of the levels solved before it.
@@ -426,6 +476,16 @@ impl<'a> Levels for TubeLevels<'a> {
             self.axis.direction(),
             end_rings(knit),
         ))
+    }
+
+    fn accept(&mut self, knit: &Knit) -> Result<()> {
+        refuse_bunched(
+            knit,
+            self.axis,
+            self.spec.relaxed_circumference_m,
+            self.support_ratio,
+        )
+        .map(|_| ())
     }
 }
 
@@ -467,6 +527,14 @@ impl SolverRun {
         match self {
             SolverRun::Paper(_) => None,
             SolverRun::Multilevel(s) => Some(s.fine().force_step),
+        }
+    }
+
+    /// The level that stopped as futile, if one did (multilevel only).
+    pub fn stalled(&self) -> Option<&LevelStats> {
+        match self {
+            SolverRun::Paper(_) => None,
+            SolverRun::Multilevel(s) => s.levels.last().filter(|l| l.stall.is_some()),
         }
     }
 
@@ -530,14 +598,102 @@ fn choose_axis(
             AxisSource::Landmarks => "the axis placed on the landmarks",
         };
         return Err(fail(format!(
-            "the leg does not go around {given} {:.0}% of the way from its bottom to its top: \
-             the axis misses the leg, or runs between two legs; check its coordinates (file \
-             units, {} up)",
+            "{given} runs outside the leg {:.0}% of the way from its bottom end to its top: it \
+             misses the leg, or runs between two legs; check its coordinates (file units, {} up)",
             100.0 * at,
             leg.up_axis.name()
         )));
     }
     Ok(axis)
+}
+
+/// The error of a fit stopped as futile on `level`: where along the stocking its courses are out
+/// of balance, near which landmark, and what to change.
+fn stalled(
+    scene: &Scene,
+    leg: &Leg,
+    axis: &Axis,
+    landmarks: Option<&Landmarks>,
+    level: &LevelStats,
+) -> Error {
+    let stall = level.stall.expect("a stalled level says where");
+    let last = level.courses.saturating_sub(1).max(1) as f64;
+    let [from, to] = stall.courses.map(|c| c as f64 / last * axis.length());
+    // Landmarks name the place; a given axis has none yet, so they are looked for here.
+    let found;
+    let landmarks = match landmarks {
+        Some(l) => Some(l),
+        None => {
+            found = find_landmarks(&leg.positions, &leg.triangles, leg.up, scene.leg.side).ok();
+            found.as_ref()
+        }
+    };
+    let worst = Point3::from(stall.worst_point);
+    let mut place = format!(
+        "courses {}–{} of {} ({:.0}–{:.0} cm up the stocking from its bottom end) are out of \
+         balance",
+        stall.courses[0],
+        stall.courses[1],
+        level.courses,
+        100.0 * from,
+        100.0 * to
+    );
+    if let Some(l) = landmarks {
+        let up = Vector3::from(l.up);
+        let height = worst.coords.dot(&up) - l.sole_s();
+        let named = [
+            ("the foot", l.sole_s()),
+            ("the ankle", l.ankle.s),
+            ("the knee", l.knee.s),
+            ("the top of the thigh", l.thigh_top.s),
+        ];
+        let (name, _) = named
+            .iter()
+            .min_by(|a, b| {
+                let d = |s: f64| (worst.coords.dot(&up) - s).abs();
+                d(a.1).total_cmp(&d(b.1))
+            })
+            .expect("four landmarks");
+        place += &format!(", worst {:.0} cm above the sole, at {name}", 100.0 * height);
+    }
+    let circumference = scene.tube.relaxed_circumference_m;
+    let advice = match (landmarks, axis.source) {
+        (Some(l), _) if circumference < 0.5 * l.ankle.girth_m => format!(
+            "The stocking is far too small for this leg: relaxed {circumference} m around, \
+             against an ankle of {:.3} m; raise tube.relaxed_circumference_m.",
+            l.ankle.girth_m
+        ),
+        (_, AxisSource::CommandLine | AxisSource::Scene) => {
+            let flag = if axis.source == AxisSource::CommandLine {
+                "--axis"
+            } else {
+                "leg.axis"
+            };
+            let ankle = landmarks.map_or(String::new(), |l| {
+                let at = leg.file_from_world(&Point3::from(l.ankle.centre));
+                format!(
+                    " (here about {:.3}, {:.3}, {:.3} in the file)",
+                    at.x, at.y, at.z
+                )
+            });
+            format!(
+                "Check {flag}: a straight stocking cannot be pulled over a foot, so its bottom \
+                 belongs at the ankle{ankle}; leave {flag} out and knitfit places the stocking on \
+                 the leg's landmarks."
+            )
+        }
+        _ => "The leg is too thin or bent here for the stocking: lower tube.top, or raise \
+              tube.relaxed_circumference_m."
+            .into(),
+    };
+    Error::Stalled {
+        grid: format!("{}×{}", level.wales, level.courses),
+        iterations: level.iterations,
+        seconds: level.seconds,
+        residual: level.residual,
+        place,
+        advice,
+    }
 }
 
 /// The stocking's relaxed length: given (and shorter than the axis), or a fraction of the axis.
@@ -558,21 +714,33 @@ fn relaxed_length(scene: &Scene, axis: &Axis, scene_name: &str) -> Result<f64> {
     }
 }
 
-/// Deepest yarn point inside the leg, metres (0 when none is), from exact closest-point queries.
-fn max_penetration(knit: &Knit, collider: &Collider) -> f64 {
+/// A fit whose yarn rests on the skin at fewer than this fraction of its points is no stocking
+/// on this leg: a tight fit touches nearly everywhere, and even one far wider than the leg
+/// (support yarn 1000× nylon's relaxed at the thigh's girth) rests on a fifth of its points.
+pub const MIN_TOUCHING_FRACTION: f64 = 0.1;
+/// A point within this distance of the skin rests on it, metres.
+const TOUCHING_M: f64 = 0.002;
+
+/// From exact closest-point queries: the deepest yarn point inside the leg, metres (0 when none
+/// is), and the fraction of points within [`TOUCHING_M`] of the skin.
+fn skin_contact(knit: &Knit, collider: &Collider) -> (f64, f64) {
     use rayon::prelude::*;
-    knit.particles
+    let (deepest, touching) = knit
+        .particles
         .x
         .par_iter()
-        .map(|p| (-collider.closest(&Point3::from(*p)).signed_distance).max(0.0))
-        .reduce(|| 0.0, f64::max)
+        .map(|p| {
+            let d = collider.closest(&Point3::from(*p)).signed_distance;
+            ((-d).max(0.0), usize::from(d <= TOUCHING_M))
+        })
+        .reduce(|| (0.0, 0), |a, b| (a.0.max(b.0), a.1 + b.1));
+    (deepest, touching as f64 / knit.len().max(1) as f64)
 }
 
-/// Lowest and highest position of the yarn along the axis, metres from the bottom point.
-fn axial_range(knit: &Knit, axis: &Axis) -> [f64; 2] {
+/// Lowest and highest of `points` along the axis, metres from the bottom point.
+fn axial_range(points: &[Vec3], axis: &Axis) -> [f64; 2] {
     let a = axis.direction();
-    knit.particles
-        .x
+    points
         .iter()
         .fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], p| {
             let s = (p - axis.bottom().coords).dot(&a);

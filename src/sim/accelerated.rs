@@ -34,9 +34,12 @@
 //! the grid can still be coasting forward while a few hundred points (just off the skin at the
 //! top of the inner thigh) oscillate with the momentum weight near 1. So the iteration also
 //! watches the *unsettled* points, those whose force step (below) is above the tolerance: when
-//! their power, taken together, has been negative for `STALL_ITERATIONS` (12) iterations in a
-//! row, the momentum restarts as it does for the grid. Why 12, and the rules measured against
-//! it: docs/decisions/0047.
+//! their power, taken together, has been negative for 12 iterations in a row, the momentum
+//! restarts as it does for the grid (why 12: docs/decisions/0047).
+//!
+//! **The futility watch.** Two windows of 100 iterations in a row with restarts on 80 % of them
+//! and no 10 % gain on the best residual (a tube that cannot pass a foot, or far too small for
+//! the leg) stop the iteration with the courses still out of balance ([`Stall`]).
 //!
 //! **Convergence.** The relative residual is the paper solver's (RMS unheld net force over RMS
 //! spring force); with it, the *force step* must be below the tolerance: the largest move the
@@ -49,7 +52,8 @@
 use std::time::Instant;
 
 use super::evaluation::{
-    evaluate_and_step, residual_of, rest_force_floor, shortest_rest, MomentumStep, Workspace,
+    evaluate, evaluate_and_step, residual_of, rest_force_floor, shortest_rest, unheld_forces,
+    MomentumStep, Workspace,
 };
 use super::{Constraints, ForceTerms, RelaxObserver};
 use crate::error::{Error, Result};
@@ -63,6 +67,68 @@ const RUNAWAY_GROWTH: f64 = 1e6;
 /// The stall test: after this many iterations in a row in which the unsettled points, together,
 /// moved against their force, the momentum is restarted (module docs).
 const STALL_ITERATIONS: usize = 12;
+
+/// The futility watch looks at the iterations in windows of this many.
+const WATCH_WINDOW: usize = 100;
+/// A window is futile when the momentum restarted on at least this fraction of its
+/// iterations...
+const FUTILE_RESTARTS: f64 = 0.8;
+/// ...and its best residual is not below this fraction of the best before it.
+const FUTILE_PROGRESS: f64 = 0.9;
+/// This many futile windows in a row stop the iteration: it is not going anywhere.
+const FUTILE_WINDOWS: usize = 2;
+
+/// The futility watch (module docs): restarts and the best residual, window by window.
+#[derive(Clone, Copy, Debug)]
+struct FutilityWatch {
+    iterations: usize,
+    restarts: usize,
+    best_before: f64,
+    best_in: f64,
+    futile_windows: usize,
+}
+
+impl Default for FutilityWatch {
+    fn default() -> Self {
+        FutilityWatch {
+            iterations: 0,
+            restarts: 0,
+            best_before: f64::INFINITY,
+            best_in: f64::INFINITY,
+            futile_windows: 0,
+        }
+    }
+}
+
+impl FutilityWatch {
+    /// Takes one iteration's residual and whether it restarted; true once the iteration has
+    /// been futile for [`FUTILE_WINDOWS`] windows in a row.
+    fn observe(&mut self, residual: f64, restarted: bool) -> bool {
+        self.iterations += 1;
+        self.restarts += usize::from(restarted);
+        self.best_in = self.best_in.min(residual);
+        if self.iterations < WATCH_WINDOW {
+            return false;
+        }
+        let futile = self.restarts as f64 >= FUTILE_RESTARTS * WATCH_WINDOW as f64
+            && self.best_in >= FUTILE_PROGRESS * self.best_before;
+        self.futile_windows = if futile { self.futile_windows + 1 } else { 0 };
+        self.best_before = self.best_before.min(self.best_in);
+        (self.iterations, self.restarts, self.best_in) = (0, 0, f64::INFINITY);
+        self.futile_windows >= FUTILE_WINDOWS
+    }
+}
+
+/// Where an iteration stopped as futile: the courses still far from balance.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Stall {
+    /// Lowest and highest course (0 = the bottom ring) whose force step is above the tolerance.
+    pub courses: [usize; 2],
+    /// The point with the largest force step, world space.
+    pub worst_point: [f64; 3],
+    /// Its force step (over the shortest rest length).
+    pub worst_force_step: f64,
+}
 
 /// Why the momentum restarts.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -128,6 +194,9 @@ pub struct LevelStats {
     pub max_move: f64,
     /// True when both went below the tolerance.
     pub converged: bool,
+    /// Where the iteration stopped early because it was going nowhere (module docs); `null`
+    /// when it did not.
+    pub stall: Option<Stall>,
     /// Wall-clock seconds the level took.
     pub seconds: f64,
 }
@@ -156,6 +225,8 @@ pub fn relax_accelerated(
     let mut since_restart = 0usize;
     let (mut restarts, mut stall_restarts) = (0, 0);
     let mut rules = RestartRules::default();
+    let mut watch = FutilityWatch::default();
+    let mut stall = None;
     // A point whose force step is above the tolerance is unsettled.
     let unsettled_above = tolerance * shortest_rest / STEP;
     let mut start_residual = None;
@@ -190,7 +261,7 @@ pub fn relax_accelerated(
             )));
         }
         let converged = residual < tolerance && force_step < tolerance;
-        if converged || iteration >= max_iterations {
+        if converged || iteration >= max_iterations || stall.is_some() {
             return Ok(LevelStats {
                 wales: knit.wales,
                 courses: knit.courses,
@@ -202,11 +273,22 @@ pub fn relax_accelerated(
                 force_step,
                 max_move,
                 converged,
+                stall,
                 seconds: started.elapsed().as_secs_f64(),
             });
         }
 
-        if let Some(why) = rules.observe(sums.power, sums.unsettled_power) {
+        let restart = rules.observe(sums.power, sums.unsettled_power);
+        if watch.observe(residual, restart.is_some()) {
+            stall = Some(where_stalled(
+                knit,
+                terms,
+                &mut ws,
+                &*constraints,
+                tolerance,
+            ));
+        }
+        if let Some(why) = restart {
             since_restart = 0;
             restarts += 1;
             stall_restarts += usize::from(why == Restart::Stall);
@@ -223,6 +305,46 @@ pub fn relax_accelerated(
         constraints.constrain(&from, &mut p.x, &p.inv_mass);
         since_restart += 1;
         iteration += 1;
+    }
+}
+
+/// The courses whose force step is above `tolerance`, and the worst point.
+fn where_stalled(
+    knit: &Knit,
+    terms: &ForceTerms,
+    ws: &mut Workspace,
+    constraints: &dyn Constraints,
+    tolerance: f64,
+) -> Stall {
+    evaluate(knit, terms, ws);
+    unheld_forces(knit, ws, constraints);
+    let shortest = shortest_rest(knit);
+    let step = |i: usize| {
+        let bound = ws.stiffness_bound[i];
+        if bound > 0.0 {
+            STEP * ws.unheld[i].norm() / bound / shortest
+        } else {
+            0.0
+        }
+    };
+    let (mut courses, mut worst) = ([usize::MAX, 0], (0, 0.0));
+    for i in 0..knit.len() {
+        let s = step(i);
+        if s > tolerance {
+            let c = i / knit.wales;
+            courses = [courses[0].min(c), courses[1].max(c)];
+        }
+        if s > worst.1 {
+            worst = (i, s);
+        }
+    }
+    if courses[0] == usize::MAX {
+        courses = [0, knit.courses.saturating_sub(1)];
+    }
+    Stall {
+        courses,
+        worst_point: knit.particles.x[worst.0].into(),
+        worst_force_step: worst.1,
     }
 }
 
@@ -253,6 +375,25 @@ mod tests {
             assert_eq!(rules.observe(1.0, breaker), None);
             assert_eq!(rules.observe(1.0, -1.0), None);
         }
+    }
+
+    #[test]
+    fn the_watch_stops_only_after_windows_of_restarts_without_progress() {
+        let mut watch = FutilityWatch::default();
+        // Restarting every iteration while the residual falls steadily is progress.
+        let mut residual = 1.0;
+        for _ in 0..10 * WATCH_WINDOW {
+            residual *= 0.998;
+            assert!(!watch.observe(residual, true));
+        }
+        // A flat residual with rare restarts is a slow fit, not a futile one.
+        for k in 0..10 * WATCH_WINDOW {
+            assert!(!watch.observe(residual, k % 20 == 0));
+        }
+        // A flat residual restarted on every iteration: stopped at the end of the second
+        // window in a row.
+        let stopped = (1..=10 * WATCH_WINDOW).find(|_| watch.observe(residual, true));
+        assert_eq!(stopped, Some(FUTILE_WINDOWS * WATCH_WINDOW));
     }
 
     #[test]

@@ -47,6 +47,11 @@ pub trait Levels {
     /// Fresh constraints for `knit` (per-point state belongs to one level), keeping any counters
     /// the caller reports.
     fn constraints(&mut self, knit: &Knit) -> &mut dyn Constraints;
+    /// Checks a level's rest state before a finer level starts from it: the caller refuses
+    /// what is no use (a fit bunched on a coarse grid stays bunched on the finer ones).
+    fn accept(&mut self, _knit: &Knit) -> Result<()> {
+        Ok(())
+    }
 }
 
 /// What a multilevel relaxation did, level by level.
@@ -96,11 +101,13 @@ pub fn grid_sizes(wales: usize, courses: usize) -> Vec<(usize, usize)> {
 }
 
 /// Relaxes a `wales × courses` knit coarse to fine (module docs); returns the fine knit at rest
-/// and each level's figures. The finest level runs to `tolerance` or `max_iterations`; coarser
+/// and each level's figures, or, where a level stopped as futile ([`LevelStats::stall`]), that
+/// level's knit and the figures so far. The finest level runs to `tolerance` or `max_iterations`; coarser
 /// levels to [`COARSE_TOLERANCE_FACTOR`] times `tolerance`, in at most
 /// [`COARSE_LEVEL_ITERATIONS`].
 ///
-/// Errors: those of [`relax_accelerated`].
+/// Errors: those of [`relax_accelerated`], and a coarser level's state that
+/// [`Levels::accept`] refuses.
 pub fn relax_multilevel(
     levels: &mut dyn Levels,
     wales: usize,
@@ -141,8 +148,16 @@ pub fn relax_multilevel(
             observer,
             stats.total_iterations(),
         )?;
+        let stalled = level.stall.is_some();
         stats.levels.push(level);
+        if !finest && !stalled {
+            levels.accept(&knit)?;
+        }
         coarser = Some(knit);
+        // A level going nowhere hands nothing useful on: the finer ones would only spin longer.
+        if stalled {
+            break;
+        }
     }
     Ok((coarser.expect("at least one level"), stats))
 }
