@@ -125,6 +125,17 @@ pub struct FitArgs {
     /// BX,BY,BZ,TX,TY,TZ. Overrides leg.axis.
     #[arg(long, value_name = "BX,BY,BZ,TX,TY,TZ", allow_hyphen_values = true)]
     pub axis: Option<String>,
+    /// Units of the leg file's coordinates: m, dm, cm, mm or in. Overrides leg.units.
+    #[arg(long, value_name = "m|dm|cm|mm|in")]
+    pub units: Option<String>,
+    /// Which file axis points up: auto (found from the anatomy), +y, -y, +z, -z, +x or -x.
+    /// Overrides leg.up_axis.
+    #[arg(long, value_name = "AXIS", allow_hyphen_values = true)]
+    pub up_axis: Option<String>,
+    /// Which leg to dress where the file holds both: the character's own left or right.
+    /// Overrides leg.side.
+    #[arg(long, value_name = "left|right")]
+    pub side: Option<String>,
     /// Contact queries: bvh (fast) or brute (the paper's all-triangles test). Overrides
     /// contact.method.
     #[arg(long, value_name = "bvh|brute")]
@@ -168,6 +179,9 @@ impl FitArgs {
             leg,
             resolution,
             axis,
+            units,
+            up_axis,
+            side,
             contact,
             solver,
             tolerance,
@@ -179,6 +193,9 @@ impl FitArgs {
             || leg.is_some()
             || resolution.is_some()
             || axis.is_some()
+            || units.is_some()
+            || up_axis.is_some()
+            || side.is_some()
             || contact.is_some()
             || solver.is_some()
             || tolerance.is_some()
@@ -208,6 +225,15 @@ impl FitArgs {
             let [bx, by, bz, tx, ty, tz] = parse_axis(text)?;
             let axis = json!({ "bottom": [bx, by, bz], "top": [tx, ty, tz] });
             set.push(Override::new("--axis", LEG_AXIS, axis));
+        }
+        for (flag, field, value) in [
+            ("--units", "leg.units", &self.units),
+            ("--up-axis", "leg.up_axis", &self.up_axis),
+            ("--side", "leg.side", &self.side),
+        ] {
+            if let Some(value) = value {
+                set.push(Override::new(flag, field, value.as_str()));
+            }
         }
         if let Some(method) = &self.contact {
             set.push(Override::new(
@@ -428,7 +454,7 @@ pub fn print_written(out: &Path, written: &[PathBuf]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use knitfit::leg::ContactMethod;
+    use knitfit::leg::{ContactMethod, Side, Units, UpAxis, UpChoice};
     use knitfit::preview::{RenderMode, View};
     use knitfit::sim::SolverMethod;
 
@@ -447,6 +473,12 @@ mod tests {
             "30x20",
             "--axis",
             "0,0.1,0,0,0.9,-0.1",
+            "--units",
+            "cm",
+            "--up-axis",
+            "-z",
+            "--side",
+            "right",
             "--contact",
             "brute",
             "--solver",
@@ -468,6 +500,9 @@ mod tests {
         let axis = s.leg.axis.unwrap();
         assert_eq!((axis.bottom, axis.top), ([0.0, 0.1, 0.0], [0.0, 0.9, -0.1]));
         assert_eq!(loaded.set_by(LEG_AXIS), Some("--axis"));
+        assert_eq!(s.leg.units, Units::Centimetres);
+        assert_eq!(s.leg.up_axis, UpChoice::Axis(UpAxis::NegZ));
+        assert_eq!(s.leg.side, Side::Right);
         assert_eq!(s.contact.method, ContactMethod::Brute);
         assert_eq!(s.solver.method, SolverMethod::Paper);
         assert_eq!(s.solver.tolerance, 0.01);
@@ -533,6 +568,22 @@ mod tests {
                 "--solver: unknown variant `fast`",
             ),
             (
+                &["fit", "--units", "km"][..],
+                "--units: unknown variant `km`, expected one of `m`, `dm`, `cm`, `mm`, `in`",
+            ),
+            (
+                &["fit", "--up-axis", "up"][..],
+                "--up-axis: unknown up axis \"up\": expected \"auto\", \"+y\"",
+            ),
+            (
+                &["fit", "--up-axis", "y"][..],
+                "--up-axis: unknown up axis \"y\"",
+            ),
+            (
+                &["fit", "--side", "middle"][..],
+                "--side: unknown variant `middle`, expected `left` or `right`",
+            ),
+            (
                 &["patch", "--stretch", "course"][..],
                 "--stretch: expected course=S",
             ),
@@ -543,6 +594,39 @@ mod tests {
                 _ => unreachable!("only fits and patches listed"),
             };
             assert!(err.to_string().starts_with(expect), "{args:?}: {err}");
+        }
+    }
+
+    #[test]
+    fn the_leg_flags_take_every_name_the_scene_does() {
+        for up in ["auto", "+y", "-y", "+z", "-z", "+x", "-x"] {
+            for form in [vec!["--up-axis", up], vec![&format!("--up-axis={up}")[..]]] {
+                let args = [&["fit"][..], &form].concat();
+                let Command::Fit(fit) = parse(&args) else {
+                    panic!("not a fit")
+                };
+                assert_eq!(fit.load().unwrap().scene.leg.up_axis.name(), up, "{args:?}");
+            }
+        }
+        for units in ["m", "dm", "cm", "mm", "in"] {
+            let Command::Fit(fit) = parse(&["fit", "--units", units]) else {
+                panic!("not a fit")
+            };
+            assert_eq!(fit.load().unwrap().scene.leg.units.name(), units);
+        }
+        // `plan` takes the fit's flags, before or after `fit`.
+        for args in [
+            &["plan", "--side", "right"][..],
+            &["plan", "fit", "--side", "right"],
+        ] {
+            let Command::Plan(plan) = parse(args) else {
+                panic!("not a plan")
+            };
+            let fit = match &plan.of {
+                Some(PlanOf::Fit(fit)) => fit,
+                _ => &plan.fit,
+            };
+            assert_eq!(fit.load().unwrap().scene.leg.side, Side::Right, "{args:?}");
         }
     }
 

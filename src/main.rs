@@ -27,6 +27,7 @@ use clap::Parser;
 use cli::{
     print_written, Bar, BenchArgs, Cli, Command, FitArgs, PatchArgs, PlanArgs, PlanOf, RenderArgs,
 };
+use knitfit::report::stocking_extent;
 use knitfit::run::{
     plan_fit, plan_patch, run_bench, run_fit, run_patch, run_render, run_spp_sweep, BenchOptions,
 };
@@ -76,6 +77,11 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
             m.max_penetration_m.unwrap_or(0.0) * 1000.0,
             converged_word(m.converged),
             report.wall_seconds
+        );
+        let d = &report.details;
+        say!(
+            "stocking: {}",
+            stocking_extent(&d.axis, d.leg.landmarks.as_ref())
         );
         print_written(&args.out_dir(), &outcome.written);
     }

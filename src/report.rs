@@ -5,12 +5,14 @@
 
 use std::time::Instant;
 
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 use serde::Serialize;
 
 use crate::knit::{Pattern, Stretch};
 use crate::leg::landmarks::Ring;
-use crate::leg::{Axis, Cleaned, ContactMethod, Landmarks, Leg, Side, ThighTopKind, Units, UpAxis};
+use crate::leg::{
+    Axis, AxisSource, Cleaned, ContactMethod, Landmarks, Leg, Side, ThighTopKind, Units, UpAxis,
+};
 use crate::limits::MemoryCheck;
 use crate::plan::{Plan, PlannedStage, Stage};
 use crate::post::penetration::PenetrationStats;
@@ -203,6 +205,52 @@ impl LandmarkDetails {
             thigh_top_kind: landmarks.thigh_top_kind,
         }
     }
+
+    /// Height of `p_m` (world space, metres) above the sole, along up, metres.
+    pub fn height_m(&self, p_m: [f64; 3]) -> f64 {
+        (Vector3::from(p_m) - Vector3::from(self.sole.m)).dot(&Vector3::from(self.up))
+    }
+}
+
+/// How near the ankle's height the stocking's bottom must be to be called the ankle, metres.
+const AT_THE_ANKLE_M: f64 = 0.005;
+
+/// Where the stocking runs, in words, metres to the millimetre: `the left leg, from the ankle
+/// (0.117 m above the sole) to 0.050 m below the crotch, 0.580 m long`, or `along --axis,
+/// 0.432 m long`. `landmarks` are those `axis` was placed on (`None` for a given axis). What
+/// `knitfit fit` prints after its summary and `knitfit plan` shows.
+pub fn stocking_extent(axis: &Axis, landmarks: Option<&LandmarkDetails>) -> String {
+    let length = axis.length();
+    let Some(l) = landmarks else {
+        let given = match axis.source {
+            AxisSource::CommandLine => "--axis",
+            AxisSource::Scene => "leg.axis",
+            AxisSource::Landmarks => "the landmarks",
+        };
+        return format!("along {given}, {length:.3} m long");
+    };
+    let leg = l
+        .side
+        .map(|side| format!("the {} leg, ", side.name()))
+        .unwrap_or_default();
+    let bottom = l.height_m(axis.bottom);
+    let from = if (bottom - l.ankle.height_m).abs() <= AT_THE_ANKLE_M {
+        format!("the ankle ({bottom:.3} m above the sole)")
+    } else {
+        format!("{bottom:.3} m above the sole")
+    };
+    let below = l.thigh_top.height_m - l.height_m(axis.top);
+    let thigh_top = match l.thigh_top_kind {
+        ThighTopKind::Crotch => "the crotch",
+        ThighTopKind::Cut => "the cut",
+    };
+    // A top at the thigh top itself is not "-0.000 m below" it.
+    let to = if below < 0.0005 {
+        thigh_top.to_string()
+    } else {
+        format!("{below:.3} m below {thigh_top}")
+    };
+    format!("{leg}from {from} to {to}, {length:.3} m long")
 }
 
 /// An axis-aligned box, metres.

@@ -263,20 +263,7 @@ pub fn solve_fit(
             memory,
         ))
     })?;
-    let landmarks = match scene.leg.axis {
-        Some(_) => None,
-        None => Some(clock.time(Stage::FindLandmarks, || {
-            find_landmarks(&leg.positions, &leg.triangles, leg.up, scene.leg.side).map_err(
-                |message| Error::Leg {
-                    path: leg.path.clone(),
-                    message: format!("cannot find the leg's landmarks: {message}"),
-                },
-            )
-        })?),
-    };
-    let axis = clock.time(Stage::FindAxis, || {
-        choose_axis(scene, inputs, &leg, &landmarks)
-    })?;
+    let (landmarks, axis) = place_axis(scene, inputs, &leg, clock)?;
     let collider = clock.time(Stage::BuildCollider, || {
         Collider::new(&leg, scene.contact.method)
     })?;
@@ -422,6 +409,35 @@ fn refuse_bunched(
         }),
         None => Ok(bunched),
     }
+}
+
+/// Finds the leg's landmarks when the scene gives no axis, and places the stocking's axis: the
+/// [`Stage::FindLandmarks`] and [`Stage::FindAxis`] of a fit, timed on `clock`. `knitfit plan`
+/// runs the same, so a plan shows what the fit will dress or refuses what it will refuse.
+///
+/// Errors: [`Error::Leg`] when the landmarks cannot be found, the axis cannot be placed on them,
+/// or the leg does not go around the axis.
+pub fn place_axis(
+    scene: &Scene,
+    inputs: &FitInputs,
+    leg: &Leg,
+    clock: &mut StageClock,
+) -> Result<(Option<Landmarks>, Axis)> {
+    let landmarks = match scene.leg.axis {
+        Some(_) => None,
+        None => Some(clock.time(Stage::FindLandmarks, || {
+            find_landmarks(&leg.positions, &leg.triangles, leg.up, scene.leg.side).map_err(
+                |message| Error::Leg {
+                    path: leg.path.clone(),
+                    message: format!("cannot find the leg's landmarks: {message}"),
+                },
+            )
+        })?),
+    };
+    let axis = clock.time(Stage::FindAxis, || {
+        choose_axis(scene, inputs, leg, &landmarks)
+    })?;
+    Ok((landmarks, axis))
 }
 
 /// The fit's memory check: its tube, leg and files against the scene's limits.

@@ -1,17 +1,21 @@
 //! `knitfit plan`: what a fit or patch would do, without doing it. Shows the [`Plan`] (effects,
 //! force terms, stages with why each runs, what is left out and why, files) and, for a fit, the
-//! memory estimate against the limit ([`crate::limits`]). Reads the scene and the leg file's
-//! document (to count its triangles); simulates nothing and writes nothing.
+//! memory estimate against the limit ([`crate::limits`]) and where the stocking goes. Reads the
+//! scene and the leg file; unless the memory check would refuse the fit, decodes the leg and
+//! finds its landmarks and axis as the fit does ([`place_axis`]), so a plan refuses a leg the
+//! fit would refuse. Simulates nothing and writes nothing.
 
 use std::path::{Path, PathBuf};
 
+use nalgebra::Point3;
 use serde::Serialize;
 
-use super::fit::{memory_check, FitInputs};
+use super::fit::{memory_check, place_axis, FitInputs};
 use crate::error::Result;
-use crate::leg::read_leg_file;
+use crate::leg::{decode_leg, read_leg_file, Axis, Landmarks, Leg, ThighTopKind, Units, UpAxis};
 use crate::limits::{MemoryCheck, MemoryEstimate, MemoryLimit};
 use crate::plan::{LeftOut, Plan, PlannedStage};
+use crate::report::{stocking_extent, LandmarkDetails, LandmarkRing, StageClock};
 use crate::scene::{Effect, LoadedScene};
 use crate::sim::ForceTerms;
 
@@ -26,25 +30,85 @@ pub struct PlanOutcome {
     pub leg: Option<(PathBuf, usize)>,
     /// Fit only: the memory estimate against the limit.
     pub memory: Option<MemoryCheck>,
+    /// Fit only: where the stocking goes.
+    pub placement: Option<Placement>,
     /// The files the run would write, report included, in its output directory.
     pub files: Vec<PathBuf>,
 }
 
+/// Where a planned fit puts the stocking.
+#[derive(Clone, Debug)]
+pub enum Placement {
+    /// The fit would be refused for memory before decoding the leg, so the plan does not
+    /// decode it either.
+    NotDecoded,
+    /// The leg decoded and the axis placed (on the landmarks, or given), as the fit will.
+    Placed(Box<Placed>),
+}
+
+/// The leg of a planned fit as decoded, its landmarks, and the stocking's axis.
+#[derive(Clone, Debug)]
+pub struct Placed {
+    /// Unit vector up the body, world space.
+    pub up: [f64; 3],
+    /// The file's up axis: given, or the nearest to the body's up.
+    pub up_axis: UpAxis,
+    /// True when `up_axis` was found from the anatomy.
+    pub up_axis_found: bool,
+    /// The units the file was read in.
+    pub units: Units,
+    /// The landmarks, as `report.json` has them; `None` where the axis is given.
+    pub landmarks: Option<LandmarkDetails>,
+    /// The stocking's axis, world space.
+    pub axis: Axis,
+    /// The axis's bottom and top in the leg file's coordinates and units (what `--axis` takes).
+    pub axis_file: [[f64; 3]; 2],
+}
+
 /// The plan of `knitfit fit` for `loaded`, writing into `out_dir`.
 ///
-/// Errors: the leg file's, as the fit would meet them (unreadable, not glTF, compressed).
+/// Errors: the leg file's, as the fit would meet them (unreadable, not glTF or PLY, compressed);
+/// unless the fit would be refused for memory first, the fit's refusals of the decoded leg as
+/// well (implausible height, no landmarks, an axis the leg does not go around).
 pub fn plan_fit(loaded: &LoadedScene, out_dir: &Path) -> Result<PlanOutcome> {
     let scene = &loaded.scene;
     let plan = Plan::fit(scene);
-    let leg = FitInputs::of(loaded).leg;
-    let triangles = read_leg_file(&leg)?.declared_triangles();
+    let inputs = FitInputs::of(loaded);
+    let file = read_leg_file(&inputs.leg)?;
+    let triangles = file.declared_triangles();
+    // As the fit does: the memory check before the leg is decoded.
+    let memory = memory_check(scene, &plan, triangles);
+    let placement = if memory.enforce(&inputs.leg.display().to_string()).is_err() {
+        Placement::NotDecoded
+    } else {
+        let leg = decode_leg(file, scene.leg.units, scene.leg.up_axis)?;
+        // The fit's own stages, on a clock nobody reads.
+        let (landmarks, axis) = place_axis(scene, &inputs, &leg, &mut StageClock::new(&plan))?;
+        Placement::Placed(Box::new(Placed::new(&leg, landmarks.as_ref(), axis)))
+    };
     Ok(PlanOutcome {
-        memory: Some(memory_check(scene, &plan, triangles)),
-        leg: Some((leg, triangles)),
+        memory: Some(memory),
+        leg: Some((inputs.leg, triangles)),
+        placement: Some(placement),
         files: files(&plan, out_dir),
         scene: loaded.name.clone(),
         plan,
     })
+}
+
+impl Placed {
+    fn new(leg: &Leg, landmarks: Option<&Landmarks>, axis: Axis) -> Placed {
+        let file = |p: Point3<f64>| leg.file_from_world(&p).coords.into();
+        Placed {
+            up: leg.up.into(),
+            up_axis: leg.up_axis,
+            up_axis_found: leg.up_detected,
+            units: leg.units,
+            landmarks: landmarks.map(|l| LandmarkDetails::of(l, leg)),
+            axis_file: [file(axis.bottom()), file(axis.top())],
+            axis,
+        }
+    }
 }
 
 /// The plan of `knitfit patch` for `loaded`, writing into `out_dir`.
@@ -53,6 +117,7 @@ pub fn plan_patch(loaded: &LoadedScene, out_dir: &Path) -> PlanOutcome {
     PlanOutcome {
         memory: None,
         leg: None,
+        placement: None,
         files: files(&plan, out_dir),
         scene: loaded.name.clone(),
         plan,
@@ -67,18 +132,28 @@ fn files(plan: &Plan, out_dir: &Path) -> Vec<PathBuf> {
 }
 
 impl PlanOutcome {
-    /// The plan as JSON, for scripts: `command`, `scene`, `leg` (`file`, `declared_triangles`;
-    /// null for a patch), `effects`, `forces`, `stages` and `left_out` (`name`, `why`), `files`,
-    /// `memory` (`estimate` by part with `total_bytes`, `limit`, `allow_large`, `fits`; null
-    /// for a patch).
+    /// The plan as JSON, for scripts: `command`, `scene`, `leg` (`file`, `declared_triangles`,
+    /// and as decoded `up_axis` and `up_axis_found`; null for a patch), `effects`, `forces`,
+    /// `stages` and `left_out` (`name`, `why`), `files`, `memory` (`estimate` by part with
+    /// `total_bytes`, `limit`, `allow_large`, `fits`; null for a patch), `landmarks` (as
+    /// `details.leg.landmarks` of `report.json`; null where the axis is given), `axis` (as
+    /// `details.axis`) and `axis_file` (its `bottom` and `top` in the leg file's coordinates).
+    /// What comes from the decoded leg is null for a patch and for a fit the memory check
+    /// would refuse.
     pub fn to_json(&self) -> serde_json::Value {
         let p = &self.plan;
+        let placed = match &self.placement {
+            Some(Placement::Placed(placed)) => Some(placed.as_ref()),
+            _ => None,
+        };
         let view = PlanJson {
             command: p.command,
             scene: &self.scene,
             leg: self.leg.as_ref().map(|(file, triangles)| LegJson {
                 file: file.display().to_string(),
                 declared_triangles: *triangles,
+                up_axis: placed.map(|p| p.up_axis),
+                up_axis_found: placed.map(|p| p.up_axis_found),
             }),
             effects: &p.effects,
             forces: &p.forces,
@@ -90,6 +165,12 @@ impl PlanOutcome {
                 limit: &m.limit,
                 allow_large: m.allow_large,
                 fits: m.fits(),
+            }),
+            landmarks: placed.and_then(|p| p.landmarks.as_ref()),
+            axis: placed.map(|p| &p.axis),
+            axis_file: placed.map(|p| AxisFileJson {
+                bottom: p.axis_file[0],
+                top: p.axis_file[1],
             }),
         };
         serde_json::to_value(view).expect("a plan always serialises")
@@ -145,7 +226,120 @@ impl PlanOutcome {
         if let Some(memory) = &self.memory {
             out += &format!("memory: {}\n", memory.summary());
         }
+        if let Some(placement) = &self.placement {
+            out += &placement.to_text();
+        }
         out
+    }
+}
+
+impl Placement {
+    /// Where the stocking goes, for a person: the landmarks in metres to the millimetre, the
+    /// stocking's extent and its axis (also as `--axis` takes it).
+    fn to_text(&self) -> String {
+        let placed = match self {
+            Placement::NotDecoded => {
+                return "stocking: not placed: the fit would be refused for memory before the \
+                        leg is decoded\n"
+                    .into()
+            }
+            Placement::Placed(placed) => placed,
+        };
+        let m = |p: [f64; 3]| point_text(p, 3);
+        let row = |name: &str, text: String| format!("  {name:<10} {text}\n");
+        let mut out = "leg (world space, metres; heights above the sole, along up):\n".to_string();
+        out += &row(
+            "up",
+            format!(
+                "{}, the file's {} ({})",
+                m(placed.up),
+                placed.up_axis.name(),
+                if placed.up_axis_found {
+                    "found from the anatomy"
+                } else {
+                    "leg.up_axis"
+                }
+            ),
+        );
+        let a = &placed.axis;
+        if let Some(l) = &placed.landmarks {
+            out += &landmark_rows(l, row);
+        } else {
+            out += &row("landmarks", "not looked for: the axis is given".into());
+        }
+        out += &format!(
+            "stocking: {}\n",
+            stocking_extent(a, placed.landmarks.as_ref())
+        );
+        out += &row("axis", format!("{} → {}", m(a.bottom), m(a.top)));
+        // Millimetres in the file's units, so the numbers can be given back as `--axis`.
+        let decimals = (-(0.001 / placed.units.metres()).log10()).ceil().max(0.0) as usize;
+        let [bottom, top] = placed.axis_file;
+        let file: Vec<String> = bottom
+            .iter()
+            .chain(&top)
+            .map(|&c| number_text(c, decimals))
+            .collect();
+        out += &row(
+            "as --axis",
+            format!("{} (the leg file's coordinates and units)", file.join(",")),
+        );
+        out
+    }
+}
+
+/// The landmark rows of the plan's text, each made by `row(name, text)`.
+fn landmark_rows(l: &LandmarkDetails, row: impl Fn(&str, String) -> String) -> String {
+    let m = |p: [f64; 3]| point_text(p, 3);
+    let mut out = row(
+        "legs",
+        match l.side {
+            Some(side) => format!(
+                "{} found, the {} dressed (leg.side)",
+                l.legs_found,
+                side.name()
+            ),
+            None => format!("{} found", l.legs_found),
+        },
+    );
+    out += &row("sole", m(l.sole.m));
+    out += &row(
+        "toe tip",
+        match (&l.toe_tip, l.foot_direction) {
+            (Some(toe), Some(direction)) => {
+                format!("{}, foot pointing {}", m(toe.m), m(direction))
+            }
+            _ => "no foot".into(),
+        },
+    );
+    let ring = |r: &LandmarkRing| {
+        format!(
+            "{:.3} m above the sole, girth {:.3} m",
+            r.height_m, r.girth_m
+        )
+    };
+    out += &row("ankle", ring(&l.ankle));
+    out += &row("knee", ring(&l.knee));
+    let kind = match l.thigh_top_kind {
+        ThighTopKind::Crotch => "the crotch",
+        ThighTopKind::Cut => "the cut",
+    };
+    out += &row("thigh top", format!("{kind}, {}", ring(&l.thigh_top)));
+    out
+}
+
+/// A point or vector as `(x, y, z)` with `decimals` decimals.
+fn point_text(p: [f64; 3], decimals: usize) -> String {
+    let [x, y, z] = p.map(|c| number_text(c, decimals));
+    format!("({x}, {y}, {z})")
+}
+
+/// `value` with `decimals` decimals, without the sign of a value that rounds to zero.
+fn number_text(value: f64, decimals: usize) -> String {
+    let text = format!("{value:.decimals$}");
+    match text.strip_prefix('-') {
+        Some(unsigned) if unsigned.chars().all(|c| c == '0' || c == '.') => unsigned.to_string(),
+        _ => text,
     }
 }
 
@@ -161,12 +355,23 @@ struct PlanJson<'a> {
     left_out: &'a [LeftOut],
     files: Vec<String>,
     memory: Option<MemoryJson<'a>>,
+    landmarks: Option<&'a LandmarkDetails>,
+    axis: Option<&'a Axis>,
+    axis_file: Option<AxisFileJson>,
 }
 
 #[derive(Serialize)]
 struct LegJson {
     file: String,
     declared_triangles: usize,
+    up_axis: Option<UpAxis>,
+    up_axis_found: Option<bool>,
+}
+
+#[derive(Serialize)]
+struct AxisFileJson {
+    bottom: [f64; 3],
+    top: [f64; 3],
 }
 
 #[derive(Serialize)]

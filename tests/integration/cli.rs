@@ -22,6 +22,14 @@ fn no_arguments_fits_the_bundled_sample_and_says_where_outputs_went() {
     let text = stdout(&out);
     assert!(text.contains("wrote to out/"), "{text}");
     assert!(text.contains("converged"), "{text}");
+    // The second line says where the stocking went: the bundled leg has no foot and is cut.
+    let extent = text.lines().nth(1).unwrap();
+    assert!(
+        extent.starts_with(
+            "stocking: from the ankle (0.030 m above the sole) to 0.050 m below the cut, "
+        ),
+        "{text}"
+    );
 }
 
 /// The lines of a `--help` section (`Commands:`, `Arguments:`, `Options:`), each split into
@@ -290,6 +298,54 @@ fn fails(code: i32, args: &[&str], files: &[(&str, &str)], expect: &str) {
     assert!(
         files_in(&dir.path().join("out")).is_empty(),
         "nothing written for {args:?}"
+    );
+}
+
+#[test]
+fn a_bad_units_up_axis_or_side_is_refused_naming_the_flag() {
+    for command in ["fit", "plan"] {
+        for (flag, value, expect) in [
+            (
+                "--units",
+                "km",
+                "--units: unknown variant `km`, expected one of `m`, `dm`",
+            ),
+            (
+                "--up-axis",
+                "y",
+                "--up-axis: unknown up axis \"y\": expected \"auto\", \"+y\"",
+            ),
+            (
+                "--side",
+                "both",
+                "--side: unknown variant `both`, expected `left` or `right`",
+            ),
+        ] {
+            refused(&[command, flag, value], &[], expect);
+        }
+    }
+}
+
+#[test]
+fn units_up_axis_and_side_flags_reach_the_fit() {
+    let leg = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/makehuman_hips_heavy.glb");
+    let (_dir, r) = crate::support::fit(
+        &leg,
+        "32x32",
+        &["--side", "right", "--up-axis", "+y", "--units", "m"],
+    );
+    let l = &r["details"]["leg"];
+    assert_eq!(
+        (l["units"].as_str(), l["up_axis"].as_str()),
+        (Some("m"), Some("+y"))
+    );
+    assert_eq!(l["up_axis_found"], false);
+    assert_eq!(l["landmarks"]["side"], "right");
+    // The character's right is -X (glTF characters face +Z, their left on +X).
+    assert!(
+        r["details"]["axis"]["bottom"][0].as_f64().unwrap() < 0.0,
+        "{}",
+        r["details"]["axis"]
     );
 }
 

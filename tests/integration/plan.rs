@@ -4,7 +4,8 @@
 use std::path::Path;
 
 use crate::support::{
-    files_in, knitfit, procedural_leg, report, stage_names, stderr, stdout, write,
+    files_in, knitfit, procedural_leg, report, revolved, stage_names, stderr, stdout, write,
+    write_mesh,
 };
 
 /// Fits the procedural leg at 20×12 with the scene `scene` (written to `dir/NAME.json`) and
@@ -311,4 +312,210 @@ fn plan_says_why_each_stage_runs_and_writes_nothing() {
     assert_eq!(missing.status.code(), Some(2));
     assert!(stderr(&missing).contains("missing.glb"));
     assert!(files_in(dir.path()).is_empty());
+}
+
+fn sample(name: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("samples")
+        .join(name)
+}
+
+/// The line of `text` that starts with `start`.
+fn line_starting<'a>(text: &'a str, start: &str) -> &'a str {
+    text.lines()
+        .find(|l| l.starts_with(start))
+        .unwrap_or_else(|| panic!("no line starting {start:?} in\n{text}"))
+}
+
+#[test]
+fn plan_shows_the_landmarks_and_the_axis_the_fit_then_uses() {
+    let dir = tempfile::tempdir().unwrap();
+    for (leg, side, extent) in [
+        (
+            "makehuman_body.glb",
+            "left",
+            "stocking: the left leg, from the ankle (",
+        ),
+        (
+            "makehuman_hips_heavy.glb",
+            "right",
+            "stocking: the right leg, from the ankle (",
+        ),
+        ("makehuman_leg.glb", "left", "stocking: from the ankle ("),
+    ] {
+        let leg = sample(leg);
+        let args = [
+            "--leg",
+            leg.to_str().unwrap(),
+            "--side",
+            side,
+            "--resolution",
+            // The heavy sample does not converge on coarser grids.
+            "32x32",
+        ];
+        let plan = plan_json(dir.path(), &args);
+        let text = stdout(&knitfit(dir.path(), &[&["plan"][..], &args].concat()));
+        let fit = knitfit(
+            dir.path(),
+            &[&["fit"][..], &args, &["--out", side]].concat(),
+        );
+        assert!(fit.status.success(), "{}", stderr(&fit));
+        let r = report(&dir.path().join(side));
+        // The same landmarks and axis, to the last digit, and the same words for the extent.
+        assert_eq!(
+            plan["landmarks"], r["details"]["leg"]["landmarks"],
+            "{leg:?}"
+        );
+        assert_eq!(plan["axis"], r["details"]["axis"], "{leg:?}");
+        assert_eq!(plan["axis"]["source"], "landmarks");
+        assert_eq!(plan["leg"]["up_axis"], r["details"]["leg"]["up_axis"]);
+        assert_eq!(plan["leg"]["up_axis_found"], true);
+        let extent = line_starting(&text, extent);
+        assert_eq!(
+            extent,
+            line_starting(&stdout(&fit), "stocking: "),
+            "{leg:?}"
+        );
+        assert!(extent.ends_with(" m long"), "{extent}");
+        for row in [
+            "  up ",
+            "  legs ",
+            "  sole ",
+            "  toe tip ",
+            "  ankle ",
+            "  knee ",
+        ] {
+            line_starting(&text, row);
+        }
+        // The axis as --axis takes it, in file coordinates (these files are in metres, +Y up).
+        let as_axis = line_starting(&text, "  as --axis");
+        let file = &plan["axis_file"];
+        let x = file["bottom"][0].as_f64().unwrap();
+        assert!(as_axis.contains(&format!("{x:.3},")), "{as_axis} vs {file}");
+    }
+    // Both legs found on the body, the side asked for dressed; the character's left is +X.
+    let body = plan_json(
+        dir.path(),
+        &["--leg", sample("makehuman_body.glb").to_str().unwrap()],
+    );
+    let l = &body["landmarks"];
+    assert_eq!(
+        (l["legs_found"].as_u64(), l["side"].as_str()),
+        (Some(2), Some("left"))
+    );
+    assert_eq!(l["thigh_top_kind"], "crotch");
+    assert!(
+        l["toe_tip"]["m"].is_array() && l["foot_direction"].is_array(),
+        "{l}"
+    );
+    assert!(
+        body["axis"]["bottom"][0].as_f64().unwrap() > 0.0,
+        "{}",
+        body["axis"]
+    );
+    let cut = plan_json(
+        dir.path(),
+        &["--leg", sample("makehuman_leg.glb").to_str().unwrap()],
+    );
+    assert!(cut["landmarks"]["toe_tip"].is_null() && cut["landmarks"]["side"].is_null());
+    let text = stdout(&knitfit(
+        dir.path(),
+        &[
+            "plan",
+            "--leg",
+            sample("makehuman_leg.glb").to_str().unwrap(),
+        ],
+    ));
+    assert!(
+        line_starting(&text, "  toe tip ").ends_with("no foot"),
+        "{text}"
+    );
+    assert!(
+        line_starting(&text, "  thigh top ").contains("the cut"),
+        "{text}"
+    );
+    assert!(files_in(dir.path())
+        .iter()
+        .all(|f| f == "left" || f == "right"));
+}
+
+#[test]
+fn plan_of_a_given_axis_shows_it_in_world_and_file_coordinates() {
+    let dir = tempfile::tempdir().unwrap();
+    let leg = procedural_leg();
+    let args = ["--leg", leg.to_str().unwrap(), "--axis", "0,0.1,0,0,0.8,0"];
+    let plan = plan_json(dir.path(), &args);
+    assert!(plan["landmarks"].is_null(), "{}", plan["landmarks"]);
+    assert_eq!(plan["axis"]["source"], "command_line");
+    assert_eq!(
+        plan["axis_file"]["bottom"],
+        serde_json::json!([0.0, 0.1, 0.0])
+    );
+    assert_eq!(plan["axis_file"]["top"], serde_json::json!([0.0, 0.8, 0.0]));
+    let text = stdout(&knitfit(dir.path(), &[&["plan"][..], &args].concat()));
+    assert_eq!(
+        line_starting(&text, "stocking: "),
+        "stocking: along --axis, 0.700 m long"
+    );
+    assert!(line_starting(&text, "  landmarks ").contains("the axis is given"));
+    assert!(line_starting(&text, "  as --axis ").contains("0.000,0.100,0.000,0.000,0.800,0.000"));
+}
+
+/// Found in review: `knitfit plan` read only the leg file's header, so it said "fits" for a leg
+/// whose landmarks the fit then could not find, or whose axis it refused.
+#[test]
+fn plan_refuses_a_leg_the_fit_refuses_with_the_same_line() {
+    let dir = tempfile::tempdir().unwrap();
+    // A rod 1 cm across: closed sections, none as thick as a leg.
+    let rod = revolved("rod", 24, 40, (0.0, 0.5), |_| 0.005);
+    let rod = write_mesh(dir.path(), "rod.glb", &rod.positions, rod.triangles);
+    let short = write(
+        dir.path(),
+        "short.json",
+        r#"{"tube": {"top": {"fraction": 0.05}}, "outputs": []}"#,
+    );
+    let leg = procedural_leg();
+    let (leg, rod, short) = (
+        leg.to_str().unwrap(),
+        rod.to_str().unwrap(),
+        short.to_str().unwrap(),
+    );
+    let before = files_in(dir.path());
+    for (args, expect) in [
+        (
+            &["--leg", rod][..],
+            "cannot find the leg's landmarks: no closed cross-section",
+        ),
+        (&[short, "--leg", leg][..], "the stocking would run only"),
+        (
+            &["--leg", leg, "--axis", "0.3,0.1,0,0.3,0.8,0"][..],
+            "--axis runs outside the leg",
+        ),
+        (
+            &["--leg", leg, "--units", "cm"][..],
+            "outside the plausible",
+        ),
+    ] {
+        let plan = knitfit(dir.path(), &[&["plan"][..], args].concat());
+        let fit = knitfit(
+            dir.path(),
+            &[&["fit"][..], args, &["--resolution", "12x12", "-q"]].concat(),
+        );
+        assert_eq!(
+            plan.status.code(),
+            Some(2),
+            "plan {args:?}: {}",
+            stderr(&plan)
+        );
+        assert_eq!(fit.status.code(), Some(2), "fit {args:?}: {}", stderr(&fit));
+        assert_eq!(stderr(&plan), stderr(&fit), "{args:?}");
+        assert_eq!(stderr(&plan).lines().count(), 1, "{}", stderr(&plan));
+        assert!(
+            stderr(&plan).contains(expect),
+            "{args:?}: {}",
+            stderr(&plan)
+        );
+        assert!(stdout(&plan).is_empty(), "{}", stdout(&plan));
+    }
+    assert_eq!(files_in(dir.path()), before);
 }
