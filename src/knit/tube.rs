@@ -89,7 +89,8 @@ pub fn tube_axis(landmarks: &Landmarks, bottom: TubeBottom, top: TubeTop) -> Res
     if top_s - bottom_s < MIN_TUBE_LENGTH_M {
         return Err(format!(
             "the stocking would run only {:.3} m, from the ankle ({:.3} m above the sole) to \
-             {:.3} m above the sole; lower tube.top",
+             {:.3} m above the sole; end it higher (a smaller tube.top.below_crotch_m, or a \
+             larger tube.top.fraction)",
             (top_s - bottom_s).max(0.0),
             bottom_s - sole,
             top_s - sole

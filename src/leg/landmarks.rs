@@ -259,7 +259,11 @@ pub fn find_landmarks(
         ThighTopKind::Cut
     };
     let foot = feet[chosen];
-    let sole = sole(positions, &up, &profile, foot.is_some());
+    let others: Vec<Ring> = (0..seeds.len())
+        .filter(|&i| i != chosen)
+        .map(|i| seeds[i])
+        .collect();
+    let sole = sole(positions, &up, &profile, &others, foot.is_some());
     let sole_s = sole.coords.dot(&up);
     let top = *profile
         .last()
@@ -281,6 +285,14 @@ pub fn find_landmarks(
     let lowest = profile[0].s;
     let ankle =
         narrowest((sole_s + 0.03).max(lowest), sole_s + leg_height / 3.0).unwrap_or(profile[0]);
+    if top.girth_m <= ankle.girth_m {
+        return Err(format!(
+            "the leg found narrows upwards (ankle {:.3} m around, top of the thigh {:.3} m): \
+             up is probably the wrong way; leave leg.up_axis (--up-axis) at \"auto\" or give \
+             the file's real up axis",
+            ankle.girth_m, top.girth_m
+        ));
+    }
     let span = top.s - ankle.s;
     let knee = narrowest(ankle.s + 0.35 * span, ankle.s + 0.7 * span)
         .unwrap_or(profile[profile.len() / 2]);
@@ -439,6 +451,7 @@ fn sole(
     positions: &[Point3<f64>],
     up: &Vector3<f64>,
     profile: &[Ring],
+    others: &[Ring],
     has_foot: bool,
 ) -> Point3<f64> {
     let bottom = profile[0];
@@ -448,11 +461,19 @@ fn sole(
     } else {
         bottom.girth_m / std::f64::consts::PI
     };
+    let across = |p: &Point3<f64>, c: &Vector3<f64>| {
+        let d = p.coords - c;
+        (d - up * d.dot(up)).norm()
+    };
     positions
         .iter()
         .filter(|p| {
-            let d = p.coords - centre;
-            (d - up * d.dot(up)).norm() <= reach
+            // This leg's, not the other foot's.
+            let d = across(p, &centre);
+            d <= reach
+                && others
+                    .iter()
+                    .all(|r| across(p, &Vector3::from(r.centre)) >= d)
         })
         .min_by(|a, b| a.coords.dot(up).total_cmp(&b.coords.dot(up)))
         .copied()

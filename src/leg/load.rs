@@ -485,11 +485,14 @@ fn check_height(leg: &Leg) -> Result<()> {
     .map(Units::name)
     .collect();
     let hint = if fitting.is_empty() {
-        format!("check leg.up_axis (now \"{}\")", leg.up_axis.name())
+        format!(
+            "check leg.up_axis or --up-axis (now \"{}\")",
+            leg.up_axis.name()
+        )
     } else {
         format!(
-            "it is probably in other units: set leg.units to \"{}\" (now \"{}\"), or check \
-             leg.up_axis (now \"{}\")",
+            "it is probably in other units: set leg.units or --units to \"{}\" (now \"{}\"), \
+             or check leg.up_axis (now \"{}\")",
             fitting[0],
             leg.units.name(),
             leg.up_axis.name()

@@ -323,6 +323,9 @@ pub fn solve_fit(
         }
     };
     if let Some(level) = solver.stalled() {
+        // A stocking stopped while bunched is refused as that: it says more.
+        let ratio = levels.support_ratio;
+        refuse_bunched(&knit, &axis, spec.relaxed_circumference_m, ratio)?;
         return Err(stalled(scene, &leg, &axis, landmarks.as_ref(), level));
     }
     let mut contact = levels
@@ -623,6 +626,10 @@ fn choose_axis(
     Ok(axis)
 }
 
+/// Below this many points around, a grid's rings are polygons coarse enough to catch on a knee
+/// (a heavy knee is about 40 cm around: 1.6 cm a side at 24).
+const COARSE_GRID_WALES: usize = 40;
+
 /// The error of a fit stopped as futile on `level`: where along the stocking its courses are out
 /// of balance, near which landmark, and what to change.
 fn stalled(
@@ -698,8 +705,18 @@ fn stalled(
                  the leg's landmarks."
             )
         }
-        _ => "The leg is too thin or bent here for the stocking: lower tube.top, or raise \
-              tube.relaxed_circumference_m."
+        _ if scene.yarns.support.stiffness >= 100.0 * scene.yarns.nylon.stiffness => format!(
+            "The support yarn ({}× nylon's) barely stretches: lower yarns.support.stiffness, or \
+             raise tube.relaxed_circumference_m (now {circumference} m).",
+            scene.yarns.support.stiffness / scene.yarns.nylon.stiffness
+        ),
+        _ if level.wales < COARSE_GRID_WALES => format!(
+            "The {}×{} grid is coarse for this leg: its rings are polygons whose corners catch \
+             on it; give a finer grid (--resolution, tube.wales and tube.courses).",
+            level.wales, level.courses
+        ),
+        _ => "The leg is too thin or bent here for the stocking: end it lower (tube.top), or \
+              raise tube.relaxed_circumference_m."
             .into(),
     };
     Error::Stalled {

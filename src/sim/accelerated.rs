@@ -38,8 +38,8 @@
 //! restarts as it does for the grid (why 12: docs/decisions/0047).
 //!
 //! **The futility watch.** Two windows of 100 iterations in a row with restarts on 80 % of them
-//! and no 10 % gain on the best residual (a tube that cannot pass a foot, or far too small for
-//! the leg) stop the iteration with the courses still out of balance ([`Stall`]).
+//! and no 10 % gain on the best residual (a tube that cannot pass a foot), or ten windows with
+//! no 10 % gain at all, stop the iteration with the courses out of balance ([`Stall`]).
 //!
 //! **Convergence.** The relative residual is the paper solver's (RMS unheld net force over RMS
 //! spring force); with it, the *force step* must be below the tolerance: the largest move the
@@ -77,15 +77,20 @@ const FUTILE_RESTARTS: f64 = 0.8;
 const FUTILE_PROGRESS: f64 = 0.9;
 /// This many futile windows in a row stop the iteration: it is not going anywhere.
 const FUTILE_WINDOWS: usize = 2;
+/// Nor is one whose best residual has not gained [`FUTILE_PROGRESS`] over this many windows,
+/// however seldom it restarts (a few points chattering against the skin).
+const STAGNANT_WINDOWS: usize = 10;
 
 /// The futility watch (module docs): restarts and the best residual, window by window.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct FutilityWatch {
     iterations: usize,
     restarts: usize,
     best_before: f64,
     best_in: f64,
     futile_windows: usize,
+    /// The best residual before each of the last [`STAGNANT_WINDOWS`] windows, oldest first.
+    history: std::collections::VecDeque<f64>,
 }
 
 impl Default for FutilityWatch {
@@ -96,6 +101,7 @@ impl Default for FutilityWatch {
             best_before: f64::INFINITY,
             best_in: f64::INFINITY,
             futile_windows: 0,
+            history: std::collections::VecDeque::with_capacity(STAGNANT_WINDOWS + 1),
         }
     }
 }
@@ -113,9 +119,15 @@ impl FutilityWatch {
         let futile = self.restarts as f64 >= FUTILE_RESTARTS * WATCH_WINDOW as f64
             && self.best_in >= FUTILE_PROGRESS * self.best_before;
         self.futile_windows = if futile { self.futile_windows + 1 } else { 0 };
+        self.history.push_back(self.best_before);
+        if self.history.len() > STAGNANT_WINDOWS {
+            self.history.pop_front();
+        }
         self.best_before = self.best_before.min(self.best_in);
         (self.iterations, self.restarts, self.best_in) = (0, 0, f64::INFINITY);
-        self.futile_windows >= FUTILE_WINDOWS
+        let stagnant = self.history.len() == STAGNANT_WINDOWS
+            && self.best_before >= FUTILE_PROGRESS * self.history[0];
+        self.futile_windows >= FUTILE_WINDOWS || stagnant
     }
 }
 
@@ -386,14 +398,22 @@ mod tests {
             residual *= 0.998;
             assert!(!watch.observe(residual, true));
         }
-        // A flat residual with rare restarts is a slow fit, not a futile one.
-        for k in 0..10 * WATCH_WINDOW {
+        // A residual gaining 2 % a window with rare restarts is a slow fit, not a futile one.
+        for k in 0..30 * WATCH_WINDOW {
+            if k % WATCH_WINDOW == 0 {
+                residual *= 0.98;
+            }
             assert!(!watch.observe(residual, k % 20 == 0));
         }
         // A flat residual restarted on every iteration: stopped at the end of the second
         // window in a row.
         let stopped = (1..=10 * WATCH_WINDOW).find(|_| watch.observe(residual, true));
         assert_eq!(stopped, Some(FUTILE_WINDOWS * WATCH_WINDOW));
+        // A flat residual with rare restarts: stopped after ten windows without a 10 % gain on
+        // the first one's best.
+        let mut watch = FutilityWatch::default();
+        let stopped = (1..=20 * WATCH_WINDOW).find(|k| watch.observe(residual, k % 20 == 0));
+        assert_eq!(stopped, Some((STAGNANT_WINDOWS + 1) * WATCH_WINDOW));
     }
 
     #[test]

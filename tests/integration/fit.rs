@@ -447,7 +447,7 @@ fn a_leg_in_millimetres_read_as_metres_is_refused_with_the_units_that_fit() {
     bad_leg(
         "leg_mm.glb",
         &std::fs::read(&path).unwrap(),
-        "set leg.units to \"mm\"",
+        "set leg.units or --units to \"mm\"",
     );
 }
 
