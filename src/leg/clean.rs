@@ -1,24 +1,31 @@
 //! The skin a fit can trust, cleaned of what character exports carry besides it.
 //!
 //! Exporters write a vertex once per face corner (flat shading, UV seams), repeat faces, leave
-//! zero-area slivers, and put eyes, teeth, nails or stray debris in the same file. Each of these
-//! breaks a question the fit asks of the leg: a repeated face makes its edges non-manifold, so
-//! the pseudo-normals that tell inside from outside (Bærentzen & Aanæs) and the cross-section
-//! loops both go wrong there; a piece of debris inside the leg is a second surface that contact
-//! may snap to. So, before anything else looks at the mesh:
+//! zero-area slivers and T-junctions, and put eyes, teeth, nails or stray debris in the same
+//! file. Each of these breaks a question the fit asks of the leg: a repeated face makes its edges
+//! non-manifold, so the pseudo-normals that tell inside from outside (Bærentzen & Aanæs) and the
+//! cross-section loops both go wrong there; a piece of debris inside the leg is a second surface
+//! that contact may snap to. So, before anything else looks at the mesh:
 //!
 //! 1. vertices at exactly the same position become one (the first of them);
-//! 2. triangles with two corners on one vertex, or with no area to speak of ([`SLIVER`]), are
-//!    dropped;
+//! 2. triangles with two corners on one vertex, or with no area to speak of (a corner within
+//!    [`SLIVER`] of the longest edge's length, or within [`F32_ROUNDING`] of the coordinates'
+//!    size, of the line through that edge), are dropped;
 //! 3. a triangle on the same three vertices as an earlier one, in either winding, is dropped;
-//! 4. connected pieces (sharing vertices) with less than [`DEBRIS_AREA_FRACTION`] of the largest
+//! 4. T-junctions are closed: where a vertex at the end of an open edge lies on another open
+//!    edge, between its ends (as a sliver's corner would, by the test of step 2), the triangle of
+//!    that edge is split there, fanned from its opposite corner. Exporters leave these where one
+//!    side of a seam was subdivided and the other not; the surface is closed, but its sides share
+//!    no vertices along the seam, so each section loop crossing it would break into open chains
+//!    there, and the seam's edges would be open to the pseudo-normals;
+//! 5. connected pieces (sharing vertices) with less than [`DEBRIS_AREA_FRACTION`] of the largest
 //!    piece's area are dropped: eyes, teeth, nails, debris. The legs of a body exported in
 //!    pieces that do not share vertices stay, each being a large share of the whole.
 //!
 //! The result is what every later stage sees: orientation, landmarks, tube, contact, and the
 //! leg written with the fit's attributes. The counts go to the report.
 
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use nalgebra::Point3;
 use serde::Serialize;
@@ -27,9 +34,16 @@ use serde::Serialize;
 pub const DEBRIS_AREA_FRACTION: f64 = 0.02;
 
 /// A triangle whose area is at most this times its longest edge squared has no area worth the
-/// name: its third corner lies within a millionth of an edge from the line of the other two (a
-/// point on an edge, rounded to 32-bit floats).
+/// name: its third corner lies within a millionth of an edge from the line of the other two.
 pub const SLIVER: f64 = 1e-6;
+
+/// A triangle whose third corner lies within this times its largest coordinate (in absolute
+/// value) of the line through its longest edge has no area either: that is a point on the edge
+/// rounded to 32-bit floats, as glTF stores positions. Rounding moves each coordinate by up to
+/// half an f32 epsilon of its size, which on a 5 mm edge 0.8 m from the origin is a few
+/// millionths of the edge, more than [`SLIVER`] allows; twice the epsilon covers all three
+/// coordinates' rounding with room to spare, and is 0.24 µm at 1 m.
+pub const F32_ROUNDING: f64 = 2.0 * f32::EPSILON as f64;
 
 /// What cleaning removed from the file's mesh.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -40,6 +54,8 @@ pub struct Cleaned {
     pub degenerate_triangles: usize,
     /// Triangles on the same vertices as an earlier one.
     pub duplicate_triangles: usize,
+    /// Triangles split at the T-junctions on their edges.
+    pub split_triangles: usize,
     /// Triangles of pieces too small to be the skin.
     pub debris_triangles: usize,
     /// Pieces dropped as debris.
@@ -70,15 +86,7 @@ pub fn clean_mesh(
     for t in triangles {
         let w = t.map(|i| welded[i as usize]);
         let [a, b, c] = w.map(|i| positions[i as usize]);
-        let longest = (b - a)
-            .norm_squared()
-            .max((c - b).norm_squared())
-            .max((a - c).norm_squared());
-        if w[0] == w[1]
-            || w[1] == w[2]
-            || w[2] == w[0]
-            || (b - a).cross(&(c - a)).norm() <= SLIVER * longest
-        {
+        if w[0] == w[1] || w[1] == w[2] || w[2] == w[0] || is_sliver(&a, &b, &c) {
             cleaned.degenerate_triangles += 1;
             continue;
         }
@@ -90,7 +98,9 @@ pub fn clean_mesh(
         }
         kept.push(w);
     }
-    // 4. Pieces, by shared vertices; the small ones go.
+    // 4. T-junctions closed.
+    cleaned.split_triangles = close_t_junctions(positions, &mut kept);
+    // 5. Pieces, by shared vertices; the small ones go.
     let piece = pieces(positions.len(), &kept);
     let mut piece_area: HashMap<u32, f64> = HashMap::new();
     for (t, p) in kept.iter().zip(&piece) {
@@ -119,6 +129,147 @@ pub fn clean_mesh(
         *i = new_id[*i as usize];
     }
     (kept_positions, kept, cleaned)
+}
+
+/// True when the triangle `a b c` has no area worth the name: twice its area, over its longest
+/// edge, is the height of the third corner over that edge.
+fn is_sliver(a: &Point3<f64>, b: &Point3<f64>, c: &Point3<f64>) -> bool {
+    let longest = (b - a).norm().max((c - b).norm()).max((a - c).norm());
+    (b - a).cross(&(c - a)).norm() <= flat_height(longest, [a, b, c]) * longest
+}
+
+/// The height over its longest edge (of length `longest`) up to which a triangle with
+/// `corners` is flat ([`SLIVER`], [`F32_ROUNDING`]).
+fn flat_height(longest: f64, corners: [&Point3<f64>; 3]) -> f64 {
+    let size = corners
+        .iter()
+        .flat_map(|p| p.iter())
+        .fold(0.0f64, |m, x| m.max(x.abs()));
+    (SLIVER * longest).max(F32_ROUNDING * size)
+}
+
+/// Closes the T-junctions of `triangles` (step 4 of the module docs) and returns how many
+/// triangles were split. A triangle with T-junctions on more than one edge is split one edge per
+/// pass, its pieces' edges then looked at again.
+fn close_t_junctions(positions: &[Point3<f64>], triangles: &mut Vec<[u32; 3]>) -> usize {
+    let mut split = 0;
+    for _pass in 0..3 {
+        let open = open_edges(triangles);
+        // Vertices at the ends of open edges, in cells as wide as the longest open edge, so an
+        // edge's own box meets at most two cells a side.
+        let cell = open
+            .iter()
+            .map(|e| (positions[e.b as usize] - positions[e.a as usize]).norm())
+            .fold(0.0, f64::max);
+        if open.is_empty() || !(cell > 0.0 && cell.is_finite()) {
+            break;
+        }
+        let cell_of = |p: &Point3<f64>| p.coords.map(|c| (c / cell).floor() as i64);
+        let mut grid: HashMap<[i64; 3], Vec<u32>> = HashMap::new();
+        let mut listed = HashSet::new();
+        for e in &open {
+            for v in [e.a, e.b] {
+                if listed.insert(v) {
+                    let c = cell_of(&positions[v as usize]);
+                    grid.entry([c.x, c.y, c.z]).or_default().push(v);
+                }
+            }
+        }
+        let mut done = vec![false; triangles.len()];
+        let mut added = Vec::new();
+        for e in &open {
+            if done[e.triangle] {
+                continue;
+            }
+            let (pa, pb) = (positions[e.a as usize], positions[e.b as usize]);
+            let ab = pb - pa;
+            let length = ab.norm();
+            let (lo, hi) = (cell_of(&pa.inf(&pb)), cell_of(&pa.sup(&pb)));
+            let mut on_edge: Vec<(f64, u32)> = Vec::new();
+            for x in lo.x - 1..=hi.x + 1 {
+                for y in lo.y - 1..=hi.y + 1 {
+                    for z in lo.z - 1..=hi.z + 1 {
+                        for &v in grid.get(&[x, y, z]).into_iter().flatten() {
+                            let pv = positions[v as usize];
+                            let along = (pv - pa).dot(&ab) / length;
+                            let height = (pv - pa).cross(&ab).norm() / length;
+                            let flat = flat_height(length, [&pa, &pb, &pv]);
+                            if v != e.a
+                                && v != e.b
+                                && along > flat
+                                && along < length - flat
+                                && height <= flat
+                            {
+                                on_edge.push((along, v));
+                            }
+                        }
+                    }
+                }
+            }
+            if on_edge.is_empty() {
+                continue;
+            }
+            on_edge.sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
+            // Fanned from the opposite corner, in the triangle's winding.
+            let t = triangles[e.triangle];
+            let c = t[(t.iter().position(|&i| i == e.b).unwrap() + 1) % 3];
+            let chain: Vec<u32> = std::iter::once(e.a)
+                .chain(on_edge.iter().map(|&(_, v)| v))
+                .chain(std::iter::once(e.b))
+                .collect();
+            triangles[e.triangle] = [chain[0], chain[1], c];
+            added.extend(chain[1..].windows(2).map(|w| [w[0], w[1], c]));
+            done[e.triangle] = true;
+            split += 1;
+        }
+        if added.is_empty() {
+            break;
+        }
+        triangles.extend(added);
+    }
+    split
+}
+
+/// An edge used by one triangle only, as that triangle runs along it (`a` then `b`).
+struct OpenEdge {
+    a: u32,
+    b: u32,
+    triangle: usize,
+}
+
+/// The open edges of `triangles`, in the order of the triangles and their edges.
+fn open_edges(triangles: &[[u32; 3]]) -> Vec<OpenEdge> {
+    // Every edge once per use, by its ends in either order, sorted: an edge used once is open.
+    // (Sorting is several times faster than hashing here, on the millions of edges of a large
+    // leg that almost never has an open one.)
+    let mut uses: Vec<(u64, usize)> = Vec::with_capacity(3 * triangles.len());
+    for (k, t) in triangles.iter().enumerate() {
+        for slot in 0..3 {
+            let (a, b) = (t[slot], t[(slot + 1) % 3]);
+            uses.push((
+                (u64::from(a.min(b)) << 32) | u64::from(a.max(b)),
+                3 * k + slot,
+            ));
+        }
+    }
+    uses.sort_unstable_by_key(|u| u.0);
+    let mut open: Vec<usize> = uses
+        .chunk_by(|u, v| u.0 == v.0)
+        .filter(|run| run.len() == 1)
+        .map(|run| run[0].1)
+        .collect();
+    open.sort_unstable();
+    open.into_iter()
+        .map(|w| {
+            let (triangle, slot) = (w / 3, w % 3);
+            let t = triangles[triangle];
+            OpenEdge {
+                a: t[slot],
+                b: t[(slot + 1) % 3],
+                triangle,
+            }
+        })
+        .collect()
 }
 
 fn area(positions: &[Point3<f64>], t: &[u32; 3]) -> f64 {
@@ -154,6 +305,65 @@ mod tests {
     }
 
     #[test]
+    fn a_short_edge_far_out_with_its_midpoint_rounded_to_f32_is_a_sliver() {
+        // A 5 mm edge 0.9 m from the origin, as a glTF file stores it, and its midpoint rounded
+        // to f32: about 1e-8 m off the edge, more than SLIVER edge lengths (so the relative test
+        // alone keeps it), far less than f32 rounding at that size.
+        let a = Point3::new(0.8123f32, -0.4531, 0.1017).cast::<f64>();
+        let b = Point3::new(0.815_001_55f32, -0.449_245_75, 0.103_994_53).cast::<f64>();
+        let mid = nalgebra::center(&a, &b).cast::<f32>().cast::<f64>();
+        let off = (mid - a).cross(&(b - a)).norm() / (b - a).norm();
+        assert!(off > SLIVER * (b - a).norm() && off < 1e-7, "{off}");
+        let c = Point3::new(0.81, -0.44, 0.11);
+        let (_, kept, cleaned) = clean_mesh(&[a, b, c, mid], &[[0, 1, 2], [0, 3, 1]]);
+        assert_eq!(kept, [[0, 1, 2]]);
+        assert_eq!(cleaned.degenerate_triangles, 1);
+        // A thin triangle that is not a rounding artefact stays: 1 µm high on a 5 mm edge.
+        let thin = nalgebra::center(&a, &b) + (c - a).normalize() * 1e-6;
+        let (_, kept, _) = clean_mesh(&[a, b, c, thin], &[[0, 1, 2], [0, 3, 1]]);
+        assert_eq!(kept.len(), 2);
+    }
+
+    #[test]
+    fn a_t_junction_splits_the_triangle_across_it_so_both_sides_share_the_vertex() {
+        // Two triangles on the edge 0–1; the one above it subdivided at the edge's midpoint 4
+        // (rounded to f32, as a file stores it), twice over on the next edge, the one below not.
+        let a = Point3::new(0.8123f32, -0.4531, 0.1017).cast::<f64>();
+        let b = Point3::new(0.815_001_55f32, -0.449_245_75, 0.103_994_53).cast::<f64>();
+        let mid =
+            |p: &Point3<f64>, q: &Point3<f64>| nalgebra::center(p, q).cast::<f32>().cast::<f64>();
+        let above = Point3::new(0.81, -0.44, 0.11);
+        let below = Point3::new(0.82, -0.46, 0.10);
+        let positions = vec![a, b, above, below, mid(&a, &b)];
+        let triangles = vec![[0, 4, 2], [4, 1, 2], [1, 0, 3]];
+        let (_, kept, cleaned) = clean_mesh(&positions, &triangles);
+        assert_eq!(cleaned.split_triangles, 1);
+        assert_eq!(kept, [[0, 4, 2], [4, 1, 2], [1, 4, 3], [4, 0, 3]]);
+        assert!(open_edges(&kept).iter().all(|e| ![e.a, e.b].contains(&4)));
+        // Three vertices on one edge, in any order, split it into four, in order along it.
+        let quarter = |k: f64| (a + (b - a) * k).cast::<f32>().cast::<f64>();
+        let positions = vec![
+            a,
+            b,
+            above,
+            below,
+            quarter(0.75),
+            quarter(0.25),
+            quarter(0.5),
+        ];
+        let triangles = vec![[0, 5, 2], [5, 6, 2], [6, 4, 2], [4, 1, 2], [1, 0, 3]];
+        let (_, kept, cleaned) = clean_mesh(&positions, &triangles);
+        assert_eq!(cleaned.split_triangles, 1);
+        assert_eq!(kept[4..], [[1, 4, 3], [4, 6, 3], [6, 5, 3], [5, 0, 3]]);
+        // A vertex near an edge but off it by more than rounding is no T-junction.
+        let off = nalgebra::center(&a, &b) + (above - a).normalize() * 1e-5;
+        let positions = vec![a, b, above, below, off];
+        let (_, kept, cleaned) = clean_mesh(&positions, &[[0, 4, 2], [4, 1, 2], [1, 0, 3]]);
+        assert_eq!(cleaned.split_triangles, 0);
+        assert_eq!(kept.len(), 3);
+    }
+
+    #[test]
     fn repeats_slivers_and_debris_go_and_the_skin_stays() {
         // A unit square in two triangles, each corner written twice (flat shading), one face
         // repeated the other way round, a sliver, and a speck far away.
@@ -186,6 +396,7 @@ mod tests {
                 merged_vertices: 2,
                 degenerate_triangles: 2,
                 duplicate_triangles: 1,
+                split_triangles: 0,
                 debris_triangles: 1,
                 debris_pieces: 1,
             }

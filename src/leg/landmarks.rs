@@ -19,7 +19,9 @@
 //! - **Ankle**: the smallest girth between the foot and a third of the way up; **knee**: the
 //!   smallest between 35 % and 70 % of the way from ankle to thigh top; **toe**: the foot's
 //!   vertex furthest from the ankle's centre line; a foot is there when that reaches more than
-//!   [`FOOT_REACH`] ankle radii.
+//!   [`FOOT_REACH`] ankle radii; **sole**: the lowest vertex within the foot's reach (or under
+//!   the leg's lowest section). Toe and sole are taken only from vertices nearer the leg's own
+//!   centre line than another leg's: the other foot is within reach, and may be lower.
 //!
 //! Why this holds on character exports: girths are convex-hull perimeters of loops, so folds,
 //! dents and small self-intersections do not move them; loops are walked on the cleaned mesh
@@ -259,11 +261,7 @@ pub fn find_landmarks(
         ThighTopKind::Cut
     };
     let foot = feet[chosen];
-    let others: Vec<Ring> = (0..seeds.len())
-        .filter(|&i| i != chosen)
-        .map(|i| seeds[i])
-        .collect();
-    let sole = sole(positions, &up, &profile, &others, foot.is_some());
+    let sole = sole(positions, &up, &profile, foot.is_some(), &seeds, chosen);
     let sole_s = sole.coords.dot(&up);
     let top = *profile
         .last()
@@ -285,7 +283,8 @@ pub fn find_landmarks(
     let lowest = profile[0].s;
     let ankle =
         narrowest((sole_s + 0.03).max(lowest), sole_s + leg_height / 3.0).unwrap_or(profile[0]);
-    if top.girth_m <= ankle.girth_m {
+    // A thigh is wider than an ankle; one clearly narrower means the body is upside down.
+    if top.girth_m < 0.9 * ankle.girth_m {
         return Err(format!(
             "the leg found narrows upwards (ankle {:.3} m around, top of the thigh {:.3} m): \
              up is probably the wrong way; leave leg.up_axis (--up-axis) at \"auto\" or give \
@@ -430,11 +429,7 @@ fn foot(
             continue;
         }
         let d = across(&p, &centre).norm();
-        let nearer_other = seeds
-            .iter()
-            .enumerate()
-            .any(|(k, r)| k != i && across(&p, &Vector3::from(r.centre)).norm() < d);
-        if d > reach && d <= FOOT_MAX_M && !nearer_other {
+        if d > reach && d <= FOOT_MAX_M && !nearer_other_limb(&p, up, d, seeds, i) {
             (toe, reach) = (Some(p), d);
         }
     }
@@ -446,36 +441,112 @@ fn foot(
     })
 }
 
-/// The leg's lowest point: the lowest vertex under its rings (its foot's reach when it has one).
+/// True when `p`, `d` across from limb `i`'s centre line, is nearer another limb's (the lines
+/// through `seeds`' centres along `up`): it belongs to that limb's foot, not limb `i`'s.
+fn nearer_other_limb(
+    p: &Vector3<f64>,
+    up: &Vector3<f64>,
+    d: f64,
+    seeds: &[Ring],
+    i: usize,
+) -> bool {
+    seeds.iter().enumerate().any(|(k, r)| {
+        let q = p - Vector3::from(r.centre);
+        k != i && (q - up * q.dot(up)).norm() < d
+    })
+}
+
+/// The lowest point of limb `chosen` (of `seeds`): the lowest vertex under its rings (its
+/// foot's reach when it has one) that is not nearer another limb. The other foot of a body is
+/// well within a foot's reach, and is the lowest point where the body stands on it or leans
+/// that way, so without the second rule the sole, and the ankle found above it, would be read
+/// off the wrong foot.
 fn sole(
     positions: &[Point3<f64>],
     up: &Vector3<f64>,
     profile: &[Ring],
-    others: &[Ring],
     has_foot: bool,
+    seeds: &[Ring],
+    chosen: usize,
 ) -> Point3<f64> {
     let bottom = profile[0];
     let centre = Vector3::from(bottom.centre);
+    let seed = Vector3::from(seeds[chosen].centre);
     let reach = if has_foot {
         FOOT_MAX_M
     } else {
         bottom.girth_m / std::f64::consts::PI
     };
-    let across = |p: &Point3<f64>, c: &Vector3<f64>| {
-        let d = p.coords - c;
+    let across = |p: &Vector3<f64>, c: &Vector3<f64>| {
+        let d = p - c;
         (d - up * d.dot(up)).norm()
     };
     positions
         .iter()
         .filter(|p| {
-            // This leg's, not the other foot's.
-            let d = across(p, &centre);
-            d <= reach
-                && others
-                    .iter()
-                    .all(|r| across(p, &Vector3::from(r.centre)) >= d)
+            across(&p.coords, &centre) <= reach
+                && !nearer_other_limb(&p.coords, up, across(&p.coords, &seed), seeds, chosen)
         })
         .min_by(|a, b| a.coords.dot(up).total_cmp(&b.coords.dot(up)))
         .copied()
         .unwrap_or(Point3::from(bottom.centre))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Appends the closed box from `lo` to `hi` to `positions` and `triangles`, wound outwards.
+    fn add_box(
+        positions: &mut Vec<Point3<f64>>,
+        triangles: &mut Vec<[u32; 3]>,
+        lo: [f64; 3],
+        hi: [f64; 3],
+    ) {
+        let first = positions.len() as u32;
+        for k in 0..8 {
+            let pick = |axis: usize| {
+                if k >> axis & 1 == 0 {
+                    lo[axis]
+                } else {
+                    hi[axis]
+                }
+            };
+            positions.push(Point3::new(pick(0), pick(1), pick(2)));
+        }
+        let quads = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        for q in quads {
+            triangles.push([q[0], q[1], q[2]].map(|i| first + i));
+            triangles.push([q[0], q[2], q[3]].map(|i| first + i));
+        }
+    }
+
+    #[test]
+    fn the_sole_of_the_leg_dressed_is_on_its_own_foot_when_the_other_foot_is_lower() {
+        // Two legs 0.8 m tall, 0.3 m apart, each with a foot forward (+Z); the right one (−X,
+        // since the body faces +Z) stands 3 cm lower. Its foot is within a foot's reach of the
+        // left leg, and lower.
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        for (x, y) in [(0.15, 0.0), (-0.15, -0.03)] {
+            let leg = ([x - 0.05, y, -0.05], [x + 0.05, y + 0.8, 0.05]);
+            let foot = ([x - 0.05, y, 0.06], [x + 0.05, y + 0.04, 0.25]);
+            add_box(&mut positions, &mut triangles, leg.0, leg.1);
+            add_box(&mut positions, &mut triangles, foot.0, foot.1);
+        }
+        for (side, x, y) in [(Side::Left, 0.15, 0.0), (Side::Right, -0.15, -0.03)] {
+            let l = find_landmarks(&positions, &triangles, Vector3::y(), side).unwrap();
+            assert_eq!(l.legs_found, 2);
+            assert!(l.foot.is_some(), "{side:?}");
+            assert!((l.ankle.centre[0] - x).abs() < 1e-9, "{side:?}: {l:?}");
+            assert_eq!(l.sole[1], y, "{side:?}: sole {:?}", l.sole);
+            assert!(l.sole[0] * x > 0.0, "{side:?}: sole {:?}", l.sole);
+        }
+    }
 }

@@ -16,8 +16,8 @@ use nalgebra::{Point3, Rotation3, Unit, Vector3};
 use serde_json::{json, Value};
 
 use crate::support::{
-    files_in, float, knitfit, load_sample, point, procedural_leg, read_ply, report, revolved,
-    stderr, write_mesh, write_meshes,
+    files_in, float, load_sample, point, procedural_leg, read_ply, report, revolved, run_scene,
+    scene_for, stderr, write_mesh, write_meshes,
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -50,40 +50,6 @@ fn transformed(
 
 // ---------------------------------------------------------------------------------------------
 // Running fits and checking them.
-
-/// Runs `knitfit fit` on a scene in a fresh directory: `scene` is the scene file's JSON (the leg
-/// path in it may be absolute), written as `dir/scene.json`; outputs go to `dir/out`.
-fn run_scene(scene: &Value, resolution: &str, extra: &[&str]) -> (tempfile::TempDir, Output) {
-    let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("scene.json"), scene.to_string()).unwrap();
-    let mut args = vec!["fit", "scene.json", "--resolution", resolution, "-q"];
-    args.extend_from_slice(extra);
-    let out = knitfit(dir.path(), &args);
-    (dir, out)
-}
-
-/// A scene fitting `leg` (absolute path), with `leg_extra` merged into its `leg` object and
-/// `top` merged at the top level; writes only the PLYs (they hold every figure checked).
-fn scene_for(leg: &Path, leg_extra: Value, top: Value) -> Value {
-    let mut scene = json!({
-        "leg": { "file": leg.to_str().unwrap() },
-        "outputs": ["ply"],
-    });
-    merge(&mut scene["leg"], leg_extra);
-    merge(&mut scene, top);
-    scene
-}
-
-fn merge(into: &mut Value, from: Value) {
-    if let Value::Object(from) = from {
-        for (k, v) in from {
-            match (into.get_mut(&k), v) {
-                (Some(slot @ Value::Object(_)), v @ Value::Object(_)) => merge(slot, v),
-                (_, v) => into[&k] = v,
-            }
-        }
-    }
-}
 
 /// What a checked fit measured, printed by every test for the record.
 #[derive(Debug)]

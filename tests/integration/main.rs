@@ -1,6 +1,7 @@
 //! Integration tests: the physics the paper claims, the command line's contract, and the files.
 //! One test binary (see ripgrep); modules by topic.
 
+mod anatomy;
 mod cli;
 mod contact;
 mod docs;

@@ -1,6 +1,7 @@
-//! The meshes the tests fit, query and damage: the bundled sample legs, closed surfaces made on
-//! a grid (a sphere, a rod, a torus, a leg-like body of revolution), and an open tube, written
-//! as GLB files by knitfit's own writer (no hand-written glTF), and legs as PLY in each encoding.
+//! The meshes the tests fit, query and damage: the bundled sample legs (loaded as knitfit loads
+//! them, or raw, as their files hold them), closed surfaces made on a grid (a sphere, a rod, a
+//! torus, a leg-like body of revolution), and an open tube, written as GLB files by knitfit's own
+//! writer (no hand-written glTF), and legs as PLY in each encoding.
 
 use std::path::{Path, PathBuf};
 
@@ -8,7 +9,7 @@ use knitfit::base::{SurfaceMesh, Vec3};
 use knitfit::export::gltf::{write_nodes_glb, GlbNode};
 use knitfit::export::ply::write_mesh_ply;
 use knitfit::leg::{load_leg, Leg, Units, UpAxis, UpChoice};
-use nalgebra::Point3;
+use nalgebra::{Matrix4, Point3};
 use ply_rs_bw::ply::{DefaultElement, Encoding};
 
 /// Every bundled sample leg.
@@ -195,4 +196,86 @@ pub fn leg_as_ply(leg: &Leg, encoding: Encoding) -> Vec<u8> {
         .write_ply(&mut out, &mut ply)
         .unwrap();
     out
+}
+
+/// One mesh of a GLB file as the file holds it: nothing welded, cleaned or rewound.
+#[derive(Clone, Debug)]
+pub struct RawMesh {
+    /// The mesh's name (its node's where the mesh has none).
+    pub name: String,
+    /// Vertex positions, file coordinates (node transforms applied).
+    pub positions: Vec<Point3<f64>>,
+    /// Triangles as indices into `positions`, wound as in the file.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// The meshes under the default scene of the GLB `path`, one per node with a mesh, in the order
+/// knitfit's loader takes them (depth first, document order). Only triangle lists and
+/// transforms that keep handedness, as the sample legs have.
+pub fn read_glb_meshes(path: &Path) -> Vec<RawMesh> {
+    let (document, buffers, _) = gltf::import(path).unwrap();
+    let scene = document
+        .default_scene()
+        .or_else(|| document.scenes().next())
+        .unwrap();
+    let mut meshes = Vec::new();
+    let mut stack: Vec<(gltf::Node, Matrix4<f64>)> =
+        scene.nodes().map(|n| (n, Matrix4::identity())).collect();
+    stack.reverse();
+    while let Some((node, file_from_parent)) = stack.pop() {
+        let file_from_node =
+            file_from_parent * Matrix4::from(node.transform().matrix()).cast::<f64>();
+        assert!(file_from_node.fixed_view::<3, 3>(0, 0).determinant() > 0.0);
+        if let Some(mesh) = node.mesh() {
+            let name = mesh.name().or(node.name()).unwrap_or("mesh").to_string();
+            let mut raw = RawMesh {
+                name,
+                positions: Vec::new(),
+                triangles: Vec::new(),
+            };
+            for prim in mesh.primitives() {
+                assert_eq!(
+                    prim.mode(),
+                    gltf::mesh::Mode::Triangles,
+                    "{}",
+                    path.display()
+                );
+                let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+                let first = raw.positions.len() as u32;
+                raw.positions
+                    .extend(reader.read_positions().unwrap().map(|p| {
+                        file_from_node.transform_point(&Point3::new(p[0], p[1], p[2]).cast::<f64>())
+                    }));
+                let count = raw.positions.len() as u32 - first;
+                let indices: Vec<u32> = match reader.read_indices() {
+                    Some(i) => i.into_u32().collect(),
+                    None => (0..count).collect(),
+                };
+                raw.triangles.extend(
+                    indices
+                        .chunks_exact(3)
+                        .map(|t| [first + t[0], first + t[1], first + t[2]]),
+                );
+            }
+            meshes.push(raw);
+        }
+        let first_child = stack.len();
+        stack.extend(node.children().map(|c| (c, file_from_node)));
+        stack[first_child..].reverse();
+    }
+    assert!(!meshes.is_empty(), "{}", path.display());
+    meshes
+}
+
+/// Writes `meshes` as one GLB `dir/name`, a root node per mesh, positions as given (rounded to
+/// 32-bit floats, as glTF stores them).
+pub fn write_raw_meshes(dir: &Path, name: &str, meshes: &[RawMesh]) -> PathBuf {
+    let surfaces: Vec<SurfaceMesh> = meshes
+        .iter()
+        .map(|m| {
+            let positions = m.positions.iter().map(|p| p.coords.into()).collect();
+            SurfaceMesh::new(&m.name, positions, m.triangles.clone())
+        })
+        .collect();
+    write_meshes(dir, name, &surfaces)
 }

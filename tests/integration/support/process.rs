@@ -4,6 +4,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
+use serde_json::{json, Value};
+
 /// Runs the knitfit binary with `args` in directory `cwd`.
 pub fn knitfit(cwd: &Path, args: &[&str]) -> Output {
     knitfit_env(cwd, args, &[])
@@ -79,4 +81,39 @@ pub fn stage_names(report: &serde_json::Value) -> Vec<String> {
         .iter()
         .map(|s| s["name"].as_str().unwrap().to_string())
         .collect()
+}
+
+/// Runs `knitfit fit` on a scene in a fresh directory: `scene` is the scene file's JSON (the leg
+/// path in it may be absolute), written as `dir/scene.json`; outputs go to `dir/out`.
+pub fn run_scene(scene: &Value, resolution: &str, extra: &[&str]) -> (tempfile::TempDir, Output) {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("scene.json"), scene.to_string()).unwrap();
+    let mut args = vec!["fit", "scene.json", "--resolution", resolution, "-q"];
+    args.extend_from_slice(extra);
+    let out = knitfit(dir.path(), &args);
+    (dir, out)
+}
+
+/// A scene fitting `leg` (absolute path), with `leg_extra` merged into its `leg` object and
+/// `top` merged at the top level; writes only the PLYs (they hold every figure checked).
+pub fn scene_for(leg: &Path, leg_extra: Value, top: Value) -> Value {
+    let mut scene = json!({
+        "leg": { "file": leg.to_str().unwrap() },
+        "outputs": ["ply"],
+    });
+    merge(&mut scene["leg"], leg_extra);
+    merge(&mut scene, top);
+    scene
+}
+
+/// Merges `from` into `into`, objects key by key, anything else replacing what was there.
+pub fn merge(into: &mut Value, from: Value) {
+    if let Value::Object(from) = from {
+        for (k, v) in from {
+            match (into.get_mut(&k), v) {
+                (Some(slot @ Value::Object(_)), v @ Value::Object(_)) => merge(slot, v),
+                (_, v) => into[&k] = v,
+            }
+        }
+    }
 }

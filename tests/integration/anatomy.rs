@@ -1,0 +1,791 @@
+//! Anatomy: knitfit finds the leg to dress from the body's shape, so every sample leg must be
+//! found and dressed alike however its file is damaged (repeated, sliver, unwelded or flipped
+//! faces, debris, T-junctions), turned or moved, and in a file holding the whole body or both
+//! legs; and its landmarks must lie where a person measuring the mesh would put them.
+//!
+//! The variants are made from each sample's raw triangles (read with the gltf crate, so that no
+//! cleaning has happened before the damage is done) and written with knitfit's own GLB writer.
+//! Every fit is 40×40 and writes only its PLYs, so the module runs in seconds.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use knitfit::leg::{Collider, ContactMethod, Leg, Units, UpAxis};
+use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, Unit, Vector3};
+use serde_json::{json, Value};
+
+use crate::support::{
+    float, load_sample, point, read_glb_meshes, read_ply, report, run_scene, sample_legs,
+    scene_for, stderr, write_raw_meshes, RawMesh,
+};
+
+/// The tube of every fit here: small, as the figures compared do not need more.
+const RESOLUTION: &str = "40x40";
+
+// ---------------------------------------------------------------------------------------------
+// Fitting and reading a fit.
+
+/// What a fit wrote that the tests compare.
+struct Fit {
+    report: Value,
+    /// Stitch density (per cm²) of each leg.ply vertex, by the vertex's position (the bits of
+    /// its 32-bit coordinates, world space): what lets two fits of differently stored meshes be
+    /// compared vertex by vertex.
+    density: BTreeMap<[u32; 3], f64>,
+    /// Every point of stocking.ply, world space.
+    yarn: Vec<Point3<f64>>,
+}
+
+impl Fit {
+    fn landmarks(&self) -> &Value {
+        &self.report["details"]["leg"]["landmarks"]
+    }
+
+    /// Height above the sole of the landmark ring `name` (`ankle`, `thigh_top`), metres.
+    fn height_m(&self, name: &str) -> f64 {
+        self.landmarks()[name]["height_m"].as_f64().unwrap()
+    }
+
+    /// World y of the centre of the landmark ring `name`, metres.
+    fn ring_y(&self, name: &str) -> f64 {
+        self.landmarks()[name]["centre"]["m"][1].as_f64().unwrap()
+    }
+
+    /// Mean stitch density of the leg vertices the yarn covers, per cm².
+    fn mean_density(&self) -> f64 {
+        let covered: Vec<f64> = self
+            .density
+            .values()
+            .copied()
+            .filter(|&d| d > 0.0)
+            .collect();
+        assert!(!covered.is_empty());
+        covered.iter().sum::<f64>() / covered.len() as f64
+    }
+
+    /// The axis's bottom and top, world space.
+    fn axis_world(&self) -> [Point3<f64>; 2] {
+        let axis = &self.report["details"]["axis"];
+        ["bottom", "top"].map(|k| vec3(&axis[k]).into())
+    }
+
+    /// The axis's bottom and top in the leg file's coordinates (the fits here read metres).
+    fn axis_file(&self) -> [Point3<f64>; 2] {
+        let leg = &self.report["details"]["leg"];
+        assert_eq!(leg["units"], "m");
+        let up: UpAxis = serde_json::from_value(leg["up_axis"].clone()).unwrap();
+        // world_from_file turns by quarter turns; its transpose turns back.
+        let world_from_file = Matrix3::from_columns(&[0, 1, 2].map(|k| {
+            let e = Point3::from(Vector3::ith(k, 1.0));
+            knitfit::leg::load::world_from_file(Units::Metres, up, &e).coords
+        }));
+        self.axis_world()
+            .map(|p| Point3::from(world_from_file.transpose() * p.coords))
+    }
+}
+
+fn vec3(v: &Value) -> Vector3<f64> {
+    Vector3::from(std::array::from_fn(|i| v[i].as_f64().unwrap()))
+}
+
+/// Fits the leg file `leg` with `leg_extra` merged into the scene's `leg`, and checks what
+/// every fit here must do: exit 0, converge, and report no yarn point inside the leg.
+fn fit_checked(name: &str, leg: &Path, leg_extra: Value) -> Fit {
+    let (dir, out) = run_scene(&scene_for(leg, leg_extra, json!({})), RESOLUTION, &[]);
+    assert!(out.status.success(), "{name}: {}", stderr(&out));
+    let out_dir = dir.path().join("out");
+    let report = report(&out_dir);
+    let m = &report["metrics"];
+    assert_eq!(m["converged"], true, "{name}: {m}");
+    assert_eq!(m["max_penetration_m"], 0.0, "{name}: {m}");
+    let bits = |v: &ply_rs_bw::ply::DefaultElement| {
+        ["x", "y", "z"].map(|k| (float(v, k) as f32).to_bits())
+    };
+    let density = read_ply(&out_dir.join("leg.ply")).payload["vertex"]
+        .iter()
+        .map(|v| (bits(v), float(v, "stitch_density")))
+        .collect();
+    let yarn = read_ply(&out_dir.join("stocking.ply")).payload["vertex"]
+        .iter()
+        .map(point)
+        .collect();
+    Fit {
+        report,
+        density,
+        yarn,
+    }
+}
+
+/// The relative L2 difference of `got`'s stitch density from `want`'s over `want`'s leg
+/// vertices, each found in `got` at the same position.
+fn density_difference(name: &str, want: &Fit, got: &Fit) -> f64 {
+    let (mut difference, mut norm) = (0.0, 0.0);
+    for (key, w) in &want.density {
+        let g = got.density.get(key).unwrap_or_else(|| {
+            panic!(
+                "{name}: the clean leg's vertex {:?} is not in the fit's leg",
+                key.map(f32::from_bits)
+            )
+        });
+        difference += (g - w).powi(2);
+        norm += w * w;
+    }
+    (difference / norm).sqrt()
+}
+
+fn file_name(path: &Path) -> String {
+    path.file_name().unwrap().to_string_lossy().into_owned()
+}
+
+// ---------------------------------------------------------------------------------------------
+// Damaging a mesh as exporters do.
+
+/// About `percent` % of the indices `k`, a different choice per `salt`: SplitMix64 of both, so
+/// every run damages the same faces.
+fn chosen(k: usize, salt: u64, percent: u64) -> bool {
+    let mut z =
+        (k as u64 ^ salt.wrapping_mul(0xd1b5_4a32_d192_ed03)).wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    (z ^ (z >> 31)) % 100 < percent
+}
+
+/// The index of the mesh with the most triangles: the skin (the others are eyes, teeth and
+/// the like).
+fn skin(meshes: &[RawMesh]) -> usize {
+    (0..meshes.len())
+        .max_by_key(|&k| meshes[k].triangles.len())
+        .unwrap()
+}
+
+/// Where on the dressed leg the damage goes, file coordinates (the samples are Y-up files, so
+/// these are also world coordinates): from the clean fit's landmarks.
+struct Places {
+    up: Vector3<f64>,
+    /// Unit vector the foot points along (or +Z, glTF's facing), square to up.
+    forward: Vector3<f64>,
+    ankle: Point3<f64>,
+    knee: Point3<f64>,
+    thigh_top: Point3<f64>,
+}
+
+impl Places {
+    fn of(clean: &Fit) -> Places {
+        let l = clean.landmarks();
+        let up = vec3(&l["up"]);
+        let foot = if l["foot_direction"].is_null() {
+            Vector3::z()
+        } else {
+            vec3(&l["foot_direction"])
+        };
+        let centre = |k: &str| Point3::from(vec3(&l[k]["centre"]["file"]));
+        Places {
+            up,
+            forward: (foot - up * foot.dot(&up)).normalize(),
+            ankle: centre("ankle"),
+            knee: centre("knee"),
+            thigh_top: centre("thigh_top"),
+        }
+    }
+
+    fn calf(&self) -> Point3<f64> {
+        nalgebra::center(&self.ankle, &self.knee)
+    }
+
+    fn thigh(&self) -> Point3<f64> {
+        nalgebra::center(&self.knee, &self.thigh_top)
+    }
+}
+
+/// The kinds of damage character exports carry.
+#[derive(Clone, Copy, Debug)]
+enum Damage {
+    /// A tenth of the faces written again on fresh copies of their vertices, and a twentieth
+    /// again the other way round.
+    RepeatedFaces,
+    /// Every 50th face followed by two with no area: one with a repeated vertex, one through a
+    /// new vertex at the midpoint of an edge.
+    ZeroAreaFaces,
+    /// Every face on its own three vertices (a flat-shaded export).
+    Unwelded,
+    /// Three faces in ten wound the other way.
+    MixedWinding,
+    /// Closed 1 cm boxes as pieces of their own: three inside the leg, two just outside it.
+    Debris,
+    /// The faces a plane through the calf crosses, each split at the midpoint of one edge while
+    /// the face across that edge is not: T-junctions all around the leg (and the other leg).
+    TJunctions,
+}
+
+/// What a damage did, to compare with what cleaning reports.
+#[derive(Debug, Default)]
+struct Done {
+    /// Faces added, flipped or split (unwelding adds none).
+    faces: usize,
+    /// Vertices added.
+    vertices: usize,
+    /// Of `faces`, those on the skin.
+    skin_faces: usize,
+}
+
+impl Damage {
+    const ALL: [Damage; 6] = [
+        Damage::RepeatedFaces,
+        Damage::ZeroAreaFaces,
+        Damage::Unwelded,
+        Damage::MixedWinding,
+        Damage::Debris,
+        Damage::TJunctions,
+    ];
+
+    fn name(self) -> &'static str {
+        match self {
+            Damage::RepeatedFaces => "repeated faces",
+            Damage::ZeroAreaFaces => "zero-area faces",
+            Damage::Unwelded => "unwelded",
+            Damage::MixedWinding => "mixed winding",
+            Damage::Debris => "debris",
+            Damage::TJunctions => "T-junctions",
+        }
+    }
+
+    /// `meshes` with this damage done, and what was done.
+    fn apply(self, meshes: &[RawMesh], places: &Places) -> (Vec<RawMesh>, Done) {
+        let mut meshes = meshes.to_vec();
+        let mut done = Done::default();
+        match self {
+            Damage::RepeatedFaces => {
+                for m in &mut meshes {
+                    for k in 0..m.triangles.len() {
+                        for (salt, percent, reverse) in [(1, 10, false), (2, 5, true)] {
+                            if !chosen(k, salt, percent) {
+                                continue;
+                            }
+                            let t = m.triangles[k];
+                            let first = m.positions.len() as u32;
+                            m.positions.extend(t.map(|i| m.positions[i as usize]));
+                            m.triangles.push(if reverse {
+                                [first, first + 2, first + 1]
+                            } else {
+                                [first, first + 1, first + 2]
+                            });
+                            done.faces += 1;
+                            done.vertices += 3;
+                        }
+                    }
+                }
+            }
+            Damage::ZeroAreaFaces => {
+                for m in &mut meshes {
+                    for k in (0..m.triangles.len()).step_by(50) {
+                        let [a, b, _] = m.triangles[k];
+                        let mid =
+                            nalgebra::center(&m.positions[a as usize], &m.positions[b as usize]);
+                        m.positions.push(mid);
+                        let mid = m.positions.len() as u32 - 1;
+                        m.triangles.extend([[a, a, b], [a, mid, b]]);
+                        done.faces += 2;
+                        done.vertices += 1;
+                    }
+                }
+            }
+            Damage::Unwelded => {
+                for m in &mut meshes {
+                    m.positions = m
+                        .triangles
+                        .iter()
+                        .flat_map(|t| t.map(|i| m.positions[i as usize]))
+                        .collect();
+                    m.triangles = (0..m.triangles.len() as u32)
+                        .map(|k| [3 * k, 3 * k + 1, 3 * k + 2])
+                        .collect();
+                    done.vertices += m.positions.len();
+                }
+            }
+            Damage::MixedWinding => {
+                let skin_name = meshes[skin(&meshes)].name.clone();
+                for m in &mut meshes {
+                    for (k, t) in m.triangles.iter_mut().enumerate() {
+                        if chosen(k, 3, 30) {
+                            *t = [t[0], t[2], t[1]];
+                            done.faces += 1;
+                            done.skin_faces += usize::from(m.name == skin_name);
+                        }
+                    }
+                }
+            }
+            Damage::Debris => {
+                let k = skin(&meshes);
+                let m = &mut meshes[k];
+                for centre in debris_centres(m, places) {
+                    let (positions, triangles) = cube(&centre, DEBRIS_HALF_SIDE_M);
+                    let first = m.positions.len() as u32;
+                    m.positions.extend(positions);
+                    m.triangles
+                        .extend(triangles.iter().map(|t| t.map(|i| first + i)));
+                    done.faces += triangles.len();
+                    done.vertices += 8;
+                }
+            }
+            Damage::TJunctions => {
+                let k = skin(&meshes);
+                let m = &mut meshes[k];
+                done.faces = split_band(m, &places.calf(), &places.up);
+                done.vertices = done.faces;
+                done.skin_faces = done.faces;
+            }
+        }
+        (meshes, done)
+    }
+
+    /// Checks that cleaning saw the damage (`got`'s report against the clean fit's).
+    fn check_cleaned(self, name: &str, clean: &Fit, got: &Fit, done: &Done, raw: &[RawMesh]) {
+        let count = |fit: &Fit, key: &str| {
+            let leg = &fit.report["details"]["leg"];
+            leg["cleaned"]
+                .get(key)
+                .unwrap_or(&leg[key])
+                .as_u64()
+                .unwrap() as usize
+        };
+        let added = |key: &str| count(got, key) - count(clean, key);
+        match self {
+            Damage::RepeatedFaces => {
+                assert_eq!(added("duplicate_triangles"), done.faces, "{name}");
+                assert_eq!(added("merged_vertices"), done.vertices, "{name}");
+            }
+            Damage::ZeroAreaFaces => {
+                assert_eq!(added("degenerate_triangles"), done.faces, "{name}")
+            }
+            Damage::Unwelded => {
+                let raw_vertices: usize = raw.iter().map(|m| m.positions.len()).sum();
+                assert!(
+                    count(got, "merged_vertices") >= done.vertices - raw_vertices,
+                    "{name}"
+                );
+            }
+            Damage::MixedWinding => {
+                let flipped = added("reoriented_triangles");
+                assert!(
+                    (done.skin_faces..=done.faces).contains(&flipped),
+                    "{name}: {flipped} rewound of {done:?}"
+                );
+            }
+            Damage::Debris => {
+                assert_eq!(added("debris_pieces"), done.vertices / 8, "{name}");
+                assert_eq!(added("debris_triangles"), done.faces, "{name}");
+            }
+            Damage::TJunctions => {
+                // Each face across a split is split too, at the same midpoint, which stays.
+                assert_eq!(added("split_triangles"), done.faces, "{name}");
+                assert_eq!(
+                    got.density.len() - clean.density.len(),
+                    done.vertices,
+                    "{name}"
+                );
+            }
+        }
+    }
+}
+
+/// Half the side of a debris box, metres.
+const DEBRIS_HALF_SIDE_M: f64 = 0.005;
+
+/// Centres of the debris boxes: inside the leg at the ankle, knee and mid-thigh centres; outside
+/// it, a little off the back of the calf and the front of the thigh (their nearest point 5–10 mm
+/// from the skin; [`check_debris_places`] measures it).
+fn debris_centres(skin: &RawMesh, places: &Places) -> Vec<Point3<f64>> {
+    let mut centres = vec![places.ankle, places.knee, places.thigh()];
+    for (at, out) in [
+        (places.calf(), -places.forward),
+        (places.thigh(), places.forward),
+    ] {
+        // The skin vertex furthest out that way within 3 cm of that height and 15 cm of the leg's
+        // centre line: more than the heavy sample's thigh radius (11 cm), less than the distance
+        // to the other thigh's front (27 cm).
+        let furthest = skin
+            .positions
+            .iter()
+            .filter(|p| {
+                let d = *p - at;
+                let across = d - places.up * d.dot(&places.up);
+                d.dot(&places.up).abs() < 0.03 && across.norm() < 0.15
+            })
+            .max_by(|a, b| (*a - at).dot(&out).total_cmp(&(*b - at).dot(&out)))
+            .unwrap();
+        centres.push(furthest + out * (DEBRIS_HALF_SIDE_M + 0.008));
+    }
+    centres
+}
+
+/// The closed axis-aligned box of half side `half` around `centre`, wound outwards.
+fn cube(centre: &Point3<f64>, half: f64) -> (Vec<Point3<f64>>, Vec<[u32; 3]>) {
+    let corner = |k: u32| {
+        let s = |bit: u32| if k & bit == 0 { -half } else { half };
+        centre + Vector3::new(s(1), s(2), s(4))
+    };
+    let quads: [[u32; 4]; 6] = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let triangles = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
+    ((0..8).map(corner).collect(), triangles)
+}
+
+/// Checks the debris boxes around `centres` are where [`debris_centres`] says, against the
+/// clean `leg` (world = file coordinates): the first three wholly inside, the last two wholly
+/// outside with their nearest point within a centimetre of the skin. Returns the outside boxes'
+/// gaps.
+fn check_debris_places(name: &str, leg: &Leg, centres: &[Point3<f64>]) -> Vec<f64> {
+    let collider = Collider::new(leg, ContactMethod::Bvh).unwrap();
+    let mut gaps = Vec::new();
+    for (k, c) in centres.iter().enumerate() {
+        // The box's surface, 6 faces × 5 × 5 points.
+        let mut nearest = f64::INFINITY;
+        let mut furthest = f64::NEG_INFINITY;
+        for axis in 0..3 {
+            for side in [-1.0, 1.0] {
+                for (i, j) in (0..25).map(|n| (n % 5, n / 5)) {
+                    let mut d = Vector3::zeros();
+                    d[axis] = side;
+                    d[(axis + 1) % 3] = i as f64 / 2.0 - 1.0;
+                    d[(axis + 2) % 3] = j as f64 / 2.0 - 1.0;
+                    let s = collider
+                        .closest(&(c + d * DEBRIS_HALF_SIDE_M))
+                        .signed_distance;
+                    nearest = nearest.min(s);
+                    furthest = furthest.max(s);
+                }
+            }
+        }
+        if k < 3 {
+            assert!(
+                furthest < 0.0,
+                "{name}: box {k} reaches {furthest} m outside"
+            );
+        } else {
+            assert!(
+                nearest > 0.0 && nearest <= 0.01,
+                "{name}: box {k} is {nearest} m from the skin"
+            );
+            gaps.push(nearest);
+        }
+    }
+    gaps
+}
+
+/// Splits each face of `m` that the plane through `at` square to `up` crosses, at the midpoint
+/// of its longest edge, where the face across that edge is neither split nor beside a split:
+/// each split leaves a T-junction, all around the section there. Returns the faces split.
+fn split_band(m: &mut RawMesh, at: &Point3<f64>, up: &Vector3<f64>) -> usize {
+    // Edges by position, so a file with unwelded vertices is handled too.
+    let keys: Vec<[u32; 3]> = m
+        .positions
+        .iter()
+        .map(|p| [p.x, p.y, p.z].map(|c| (c as f32).to_bits()))
+        .collect();
+    let key = |i: u32| keys[i as usize];
+    let edge = |a: u32, b: u32| {
+        let (ka, kb) = (key(a), key(b));
+        if ka < kb {
+            (ka, kb)
+        } else {
+            (kb, ka)
+        }
+    };
+    let mut faces_of: BTreeMap<_, Vec<usize>> = BTreeMap::new();
+    for (k, t) in m.triangles.iter().enumerate() {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            faces_of.entry(edge(a, b)).or_default().push(k);
+        }
+    }
+    let mut locked = vec![false; m.triangles.len()];
+    let mut split = 0;
+    for k in 0..m.triangles.len() {
+        let t = m.triangles[k];
+        let heights = t.map(|i| (m.positions[i as usize] - at).dot(up));
+        let crossed = heights.iter().any(|&h| h < 0.0) && heights.iter().any(|&h| h >= 0.0);
+        if !crossed || locked[k] {
+            continue;
+        }
+        let length =
+            |e: usize| (m.positions[t[e] as usize] - m.positions[t[(e + 1) % 3] as usize]).norm();
+        let e = (0..3)
+            .max_by(|&a, &b| length(a).total_cmp(&length(b)))
+            .unwrap();
+        let (a, b, c) = (t[e], t[(e + 1) % 3], t[(e + 2) % 3]);
+        let across = &faces_of[&edge(a, b)];
+        let [other] = across
+            .iter()
+            .filter(|&&f| f != k)
+            .copied()
+            .collect::<Vec<_>>()[..]
+        else {
+            continue;
+        };
+        if locked[other] {
+            continue;
+        }
+        let mid = nalgebra::center(&m.positions[a as usize], &m.positions[b as usize]);
+        m.positions.push(mid);
+        let mid = m.positions.len() as u32 - 1;
+        m.triangles[k] = [a, mid, c];
+        m.triangles.push([mid, b, c]);
+        locked[k] = true;
+        locked[other] = true;
+        split += 1;
+    }
+    split
+}
+
+// ---------------------------------------------------------------------------------------------
+// 1. Damaged files.
+
+#[test]
+fn every_kind_of_export_damage_to_every_sample_fits_like_the_clean_file() {
+    let dir = tempfile::tempdir().unwrap();
+    for path in sample_legs() {
+        let sample = file_name(&path);
+        let clean = fit_checked(&sample, &path, json!({}));
+        // The samples are Y-up files: their file coordinates are world coordinates.
+        assert_eq!(clean.report["details"]["leg"]["up_axis"], "+y", "{sample}");
+        let raw = read_glb_meshes(&path);
+        let places = Places::of(&clean);
+        let gaps = check_debris_places(
+            &sample,
+            &load_sample(&path),
+            &debris_centres(&raw[skin(&raw)], &places),
+        );
+        for damage in Damage::ALL {
+            let name = format!("{sample}, {}", damage.name());
+            let (meshes, done) = damage.apply(&raw, &places);
+            let file = write_raw_meshes(dir.path(), "damaged.glb", &meshes);
+            let got = fit_checked(&name, &file, json!({}));
+            let difference = density_difference(&name, &clean, &got);
+            println!(
+                "{name}: {} faces and {} vertices; density off the clean fit's by {:.3} % (L2){}",
+                done.faces,
+                done.vertices,
+                100.0 * difference,
+                match damage {
+                    Damage::Debris => format!(", outside boxes {gaps:.4?} m off the skin"),
+                    _ => String::new(),
+                }
+            );
+            damage.check_cleaned(&name, &clean, &got, &done, &raw);
+            assert!(difference <= 0.01, "{name}: density off by {difference}");
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 2. Orientation and place.
+
+/// The rigid motions a file may be in, from the sample's own (upright, Y-up) coordinates.
+fn motions() -> [(&'static str, Isometry3<f64>, Option<&'static str>); 3] {
+    // +Y onto +Z exactly: a quarter turn about X, written out.
+    let z_up = Rotation3::from_matrix_unchecked(Matrix3::new(
+        1.0, 0.0, 0.0, //
+        0.0, 0.0, -1.0, //
+        0.0, 1.0, 0.0,
+    ));
+    let turned = Rotation3::from_axis_angle(
+        &Unit::new_normalize(Vector3::new(1.0, 2.0, 3.0)),
+        35f64.to_radians(),
+    );
+    [
+        (
+            "Z up",
+            Isometry3::from_parts(Translation3::identity(), z_up.into()),
+            Some("+z"),
+        ),
+        (
+            "turned 35° about (1, 2, 3)",
+            Isometry3::from_parts(Translation3::identity(), turned.into()),
+            None,
+        ),
+        ("moved 3 m", Isometry3::translation(2.0, 1.0, 2.0), None),
+    ]
+}
+
+#[test]
+fn every_sample_turned_or_moved_fits_as_upright_up_to_the_motion() {
+    let dir = tempfile::tempdir().unwrap();
+    for path in sample_legs() {
+        let sample = file_name(&path);
+        let upright = fit_checked(&sample, &path, json!({}));
+        let raw = read_glb_meshes(&path);
+        for (motion_name, file_from_upright, up_axis) in motions() {
+            let name = format!("{sample}, {motion_name}");
+            let moved: Vec<RawMesh> = raw
+                .iter()
+                .map(|m| RawMesh {
+                    positions: m.positions.iter().map(|p| file_from_upright * p).collect(),
+                    ..m.clone()
+                })
+                .collect();
+            let file = write_raw_meshes(dir.path(), "moved.glb", &moved);
+            let got = fit_checked(&name, &file, json!({}));
+            let leg = &got.report["details"]["leg"];
+            assert_eq!(leg["up_axis_found"], true, "{name}");
+            if let Some(up) = up_axis {
+                assert_eq!(leg["up_axis"], up, "{name}");
+            }
+            // The axis, taken back to the upright file.
+            let axis_off = got
+                .axis_file()
+                .iter()
+                .zip(upright.axis_file())
+                .map(|(g, u)| (file_from_upright.inverse_transform_point(g) - u).norm())
+                .fold(0.0, f64::max);
+            let heights_off = ["ankle", "thigh_top"]
+                .map(|k| (got.height_m(k) - upright.height_m(k)).abs())
+                .into_iter()
+                .fold(0.0, f64::max);
+            let density_off = got.mean_density() / upright.mean_density() - 1.0;
+            println!(
+                "{name}: axis ends {:.4} mm off, ankle and thigh top heights {:.4} mm off, \
+                 mean density {:.3} vs {:.3} per cm² ({:+.2} %)",
+                1e3 * axis_off,
+                1e3 * heights_off,
+                got.mean_density(),
+                upright.mean_density(),
+                100.0 * density_off
+            );
+            assert!(axis_off <= 0.002, "{name}: axis {axis_off} m off");
+            assert!(
+                heights_off <= 0.005,
+                "{name}: landmark heights {heights_off} m off"
+            );
+            assert!(
+                density_off.abs() <= 0.02,
+                "{name}: mean density {density_off:+}"
+            );
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 3. Whole bodies and both legs.
+
+/// The samples holding both legs (the body is symmetric about x = 0, its left at +x).
+const BOTH_LEGS: [&str; 2] = ["makehuman_body.glb", "makehuman_hips_heavy.glb"];
+
+/// Closest a yarn point may come to the leg not dressed, metres.
+const OTHER_LEG_CLEARANCE_M: f64 = 0.02;
+
+#[test]
+fn of_both_legs_the_left_is_dressed_unless_the_scene_says_right_and_the_other_stays_clear() {
+    for path in sample_legs()
+        .into_iter()
+        .filter(|p| BOTH_LEGS.contains(&file_name(p).as_str()))
+    {
+        let sample = file_name(&path);
+        let body = load_sample(&path);
+        for (leg_extra, side, sign) in [
+            (json!({}), "left", 1.0),
+            (json!({ "side": "right" }), "right", -1.0),
+        ] {
+            let name = format!("{sample}, {side}");
+            let got = fit_checked(&name, &path, leg_extra);
+            let l = got.landmarks();
+            assert_eq!(l["side"], side, "{name}");
+            assert_eq!(l["legs_found"], 2, "{name}");
+            assert_eq!(l["thigh_top_kind"], "crotch", "{name}");
+            for end in got.axis_world() {
+                assert!(sign * end.x > 0.0, "{name}: axis end {end}");
+            }
+            // Every landmark is on the leg dressed: the sole and toe on its own foot too.
+            let points = [
+                &l["sole"],
+                &l["toe_tip"],
+                &l["ankle"]["centre"],
+                &l["knee"]["centre"],
+                &l["thigh_top"]["centre"],
+            ];
+            for p in points.iter().filter(|p| !p.is_null()) {
+                let x = p["m"][0].as_f64().unwrap();
+                assert!(sign * x > 0.0, "{name}: landmark at {}", p["m"]);
+            }
+            // The other leg: the skin on the other side of x = 0, below the crotch.
+            let crotch_y = got.ring_y("thigh_top");
+            let other = |i: &u32| {
+                let p = body.positions[*i as usize];
+                sign * p.x < 0.0 && p.y < crotch_y
+            };
+            let triangles: Vec<[u32; 3]> = body
+                .triangles
+                .iter()
+                .filter(|t| t.iter().all(other))
+                .copied()
+                .collect();
+            let other_leg =
+                Leg::from_world(PathBuf::from("other leg"), &body.positions, &triangles);
+            let collider = Collider::new(&other_leg, ContactMethod::Bvh).unwrap();
+            let nearest = got
+                .yarn
+                .iter()
+                .map(|q| collider.distance(q))
+                .fold(f64::INFINITY, f64::min);
+            println!(
+                "{name}: axis x {:.4} to {:.4} m; nearest yarn point {:.1} mm from the other leg",
+                got.axis_world()[0].x,
+                got.axis_world()[1].x,
+                1e3 * nearest
+            );
+            assert!(
+                nearest >= OTHER_LEG_CLEARANCE_M,
+                "{name}: yarn {nearest} m from the other leg"
+            );
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// 4. Landmarks against a person's measurements.
+
+/// Ankle and thigh-top heights (world y, metres) of the left leg of each sample with a foot,
+/// picked without knitfit by `tools/hand_landmarks.py` (numpy, scipy and trimesh; the skin only,
+/// welded): horizontal sections every 0.5 mm, girth = convex-hull perimeter of the left leg's
+/// closed loop (a tape measure). Ankle: the smallest girth from 5 to 25 cm above the sole (the
+/// lowest vertex). Thigh top: where the two legs' sections join (the crotch), or, for a leg cut
+/// at the thigh, the highest section below the cut that is closed all round.
+const HAND_PICKED: [(&str, f64, f64); 4] = [
+    ("lowpoly_leg.glb", -0.6858, -0.2096),
+    ("makehuman_body.glb", -0.7015, -0.0750),
+    ("makehuman_hips_heavy.glb", -0.7040, -0.0750),
+    ("makehuman_leg_foot.glb", -0.6944, -0.2046),
+];
+
+/// How far a landmark may be from the hand-picked one, metres.
+const LANDMARK_TOLERANCE_M: f64 = 0.01;
+
+#[test]
+fn ankle_and_thigh_top_are_within_a_centimetre_of_hand_picked_ones() {
+    let samples = sample_legs();
+    for (sample, ankle_y, thigh_top_y) in HAND_PICKED {
+        let path = samples.iter().find(|p| file_name(p) == sample).unwrap();
+        let got = fit_checked(sample, path, json!({}));
+        let (ankle, thigh_top) = (got.ring_y("ankle"), got.ring_y("thigh_top"));
+        println!(
+            "{sample}: ankle y {ankle:.4} m (hand-picked {ankle_y}), thigh top y {thigh_top:.4} \
+             m (hand-picked {thigh_top_y}, {})",
+            got.landmarks()["thigh_top_kind"]
+        );
+        assert!(
+            (ankle - ankle_y).abs() <= LANDMARK_TOLERANCE_M,
+            "{sample}: ankle at {ankle}"
+        );
+        assert!(
+            (thigh_top - thigh_top_y).abs() <= LANDMARK_TOLERANCE_M,
+            "{sample}: thigh top at {thigh_top}"
+        );
+    }
+}
