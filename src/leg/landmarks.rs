@@ -47,6 +47,9 @@ pub const MAX_STEP_M: f64 = 0.03;
 pub const MIN_LEG_GIRTH_M: f64 = 0.08;
 /// A foot reaches this many ankle radii from the ankle's centre line.
 pub const FOOT_REACH: f64 = 2.0;
+/// How far above a leg's open end its skin is looked for again, metres: skin that goes on
+/// around the same centre within this was a hole, not a cut.
+pub const HOLE_PROBE_M: f64 = 0.15;
 /// Furthest a vertex of the foot may be from the ankle's centre line, metres.
 pub const FOOT_MAX_M: f64 = 0.4;
 
@@ -260,6 +263,13 @@ pub fn find_landmarks(
     } else {
         ThighTopKind::Cut
     };
+    if !upward.joined {
+        hole_above(
+            &slicer,
+            profile.last().copied().unwrap_or(seeds[chosen]),
+            hi,
+        )?;
+    }
     let foot = feet[chosen];
     let sole = sole(positions, &up, &profile, foot.is_some(), &seeds, chosen);
     let sole_s = sole.coords.dot(&up);
@@ -308,6 +318,33 @@ pub fn find_landmarks(
         thigh_top_kind,
         profile,
     })
+}
+
+/// Where a followed leg ends without joining another at `last`: a cut, unless its skin goes on
+/// around the same place within [`HOLE_PROBE_M`] above. Then the end was a hole too big to
+/// count as closed, and no stocking can be fitted over it: the error says where.
+fn hole_above(slicer: &Slicer, last: Ring, hi: f64) -> Result<(), String> {
+    let centre = Point3::from(last.centre);
+    let mut s = last.s + SLICE_STEP_M;
+    while s <= (last.s + HOLE_PROBE_M).min(hi) {
+        let resumes = slicer
+            .loops_at(s)
+            .iter()
+            .any(|l| l.closed && slicer.encloses(l, &centre));
+        if resumes {
+            return Err(format!(
+                "its skin has a hole: the leg's sections are open for {:.0} mm above the point \
+                 ({:.3}, {:.3}, {:.3}) m and whole again above it; fill the hole in a modelling \
+                 tool (or give leg.axis below it)",
+                1000.0 * (s - last.s),
+                last.centre[0],
+                last.centre[1],
+                last.centre[2]
+            ));
+        }
+        s += SLICE_STEP_M;
+    }
+    Ok(())
 }
 
 /// The closed loops at height `s` big enough to be legs, as rings.

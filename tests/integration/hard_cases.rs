@@ -985,3 +985,34 @@ fn an_axis_that_misses_the_leg_is_refused_not_fitted_onto_air() {
         );
     }
 }
+
+#[test]
+fn a_leg_with_a_large_hole_in_its_calf_is_refused_saying_where() {
+    let dir = tempfile::tempdir().unwrap();
+    let leg = procedural();
+    // Half the calf's skin missing over 5 cm: no section there closes, and skin resumes above.
+    let triangles: Vec<[u32; 3]> = leg
+        .triangles
+        .iter()
+        .copied()
+        .filter(|t| {
+            let c = t
+                .iter()
+                .map(|&i| leg.positions[i as usize].coords)
+                .sum::<Vector3<f64>>()
+                / 3.0;
+            !((0.35..0.40).contains(&c.y) && c.x > 0.0)
+        })
+        .collect();
+    assert!(triangles.len() < leg.triangles.len());
+    let path = write_mesh(dir.path(), "holed.glb", &leg.positions, triangles);
+    let scene = scene_for(&path, json!({}), json!({}));
+    let (run, out) = run_scene(&scene, "24x24", &[]);
+    check_refused(
+        "large hole",
+        run.path(),
+        &out,
+        2,
+        &["holed.glb", "has a hole", "fill the hole"],
+    );
+}
