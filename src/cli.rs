@@ -19,7 +19,8 @@ use knitfit::Error;
 #[command(name = "knitfit", version, about, long_about = None)]
 #[command(
     after_help = "Exit codes: 0 done, 1 run failed, 2 bad input, 3 did not converge \
-                        (files written, report.json says \"converged\": false)."
+                        (at the step limit: files written, report.json says \"converged\": \
+                        false; stopped early as going nowhere: nothing written)."
 )]
 pub struct Cli {
     #[command(subcommand)]

@@ -1016,3 +1016,17 @@ fn a_leg_with_a_large_hole_in_its_calf_is_refused_saying_where() {
         &["holed.glb", "has a hole", "fill the hole"],
     );
 }
+
+#[test]
+fn a_body_read_upside_down_is_refused_naming_the_up_axis() {
+    let body = sample("makehuman_body.glb");
+    let scene = scene_for(&body, json!({}), json!({}));
+    let (dir, out) = run_scene(&scene, "24x24", &["--up-axis", "-y"]);
+    check_refused(
+        "upside down",
+        dir.path(),
+        &out,
+        2,
+        &["makehuman_body.glb", "narrows upwards", "--up-axis"],
+    );
+}
