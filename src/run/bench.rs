@@ -124,6 +124,8 @@ pub fn bench_cases(options: &BenchOptions) -> (Vec<BenchCase>, Vec<SkippedCase>)
                 &[(50, 50), (100, 100), (150, 150), (300, 300), (400, 1600)],
             ),
             ("procedural_leg.glb", &[(50, 50), (150, 150)]),
+            // A leg as users export it: with its foot, the stocking placed on its landmarks.
+            ("makehuman_leg_foot.glb", &[(50, 50), (150, 150)]),
         ]
     };
     let mut cases = Vec::new();
