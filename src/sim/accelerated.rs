@@ -39,7 +39,7 @@
 //!
 //! **The futility watch.** Two windows of 100 iterations in a row with restarts on 80 % of them
 //! and no 10 % gain on the best residual (a tube that cannot pass a foot), or ten with a quarter
-//! restarted and no gain, stop the iteration with the courses out of balance ([`Stall`]).
+//! restarted and no gain, stop it with the courses out of balance ([`Stall`]; decisions/0049).
 //!
 //! **Convergence.** The relative residual is the paper solver's (RMS unheld net force over RMS
 //! spring force); with it, the *force step* must be below the tolerance: the largest move the
