@@ -12,15 +12,16 @@
 //! tube is the knit's fabric at any grid size ([`Knit::with_stitch_shape`]).
 //!
 //! Each ring clears the part of the leg that goes around the axis at its height (the loop of the
-//! cross-section around the axis point, [`crate::leg::section`]), not every vertex at that
-//! height: in a file with both legs, the ring around one leg must not take in the other.
+//! cross-section around the axis point, [`crate::leg::slice::enclosing_radii`]), not every
+//! vertex at that height: in a file with both legs, the ring around one leg must not take in the
+//! other.
 
 use nalgebra::{Point3, Vector3};
 
 use super::settings::{TubeBottom, TubeTop};
 use super::{Knit, Pattern, Tile};
 use crate::base::{perpendicular_frame, Vec3};
-use crate::leg::{section, Axis, AxisSource, Landmarks, ThighTopKind};
+use crate::leg::{slice, Axis, AxisSource, Landmarks, ThighTopKind};
 
 /// Fraction of the leg's height kept between the stocking's end and a cut in the mesh, where
 /// inside and outside are not defined.
@@ -169,7 +170,7 @@ fn enclosing_radii(
     let heights: Vec<f64> = (0..bins)
         .map(|c| length * c as f64 / (bins - 1) as f64)
         .collect();
-    let around = section::enclosing_radii(leg_vertices, leg_triangles, bottom, a, &heights);
+    let around = slice::enclosing_radii(leg_vertices, leg_triangles, bottom, a, &heights);
     let mut bin_radius = vec![0.0f64; bins];
     for p in leg_vertices {
         let d = p - bottom;

@@ -9,7 +9,7 @@
 use nalgebra::{Point3, Vector3};
 use serde::Serialize;
 
-use super::{section, Leg};
+use super::{slice, Leg};
 
 /// Where an axis came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
@@ -57,13 +57,12 @@ impl Axis {
 }
 
 /// Where along `axis` (a fraction of its length, of 0.1, 0.5 and 0.9) no loop of the mesh's
-/// cross-section goes around it, if anywhere: a detected axis that leaves the mesh is not a
-/// leg's (it runs between two legs, or across a bent one), and a tube around it would not be a
-/// stocking.
+/// cross-section goes around it, if anywhere: an axis that leaves the mesh is not a leg's (it
+/// misses the leg, or runs between two legs), and a tube around it would not be a stocking.
 pub fn leaves_mesh(leg: &Leg, axis: &Axis) -> Option<f64> {
     let fractions = [0.1, 0.5, 0.9];
     let heights = fractions.map(|f| f * axis.length());
-    let loops = section::enclosing_radii(
+    let loops = slice::enclosing_radii(
         &leg.positions,
         &leg.triangles,
         &axis.bottom(),

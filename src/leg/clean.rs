@@ -30,6 +30,8 @@ use std::collections::{HashMap, HashSet};
 use nalgebra::Point3;
 use serde::Serialize;
 
+use super::weld::welded_ids;
+
 /// Pieces smaller than this fraction of the largest piece's area are dropped as debris.
 pub const DEBRIS_AREA_FRACTION: f64 = 0.02;
 
@@ -70,16 +72,12 @@ pub fn clean_mesh(
 ) -> (Vec<Point3<f64>>, Vec<[u32; 3]>, Cleaned) {
     let mut cleaned = Cleaned::default();
     // 1. One id per position.
-    let mut first: HashMap<[u64; 3], u32> = HashMap::with_capacity(positions.len());
-    let welded: Vec<u32> = positions
+    let welded = welded_ids(positions);
+    cleaned.merged_vertices = welded
         .iter()
         .enumerate()
-        .map(|(i, p)| {
-            let key = [p.x, p.y, p.z].map(|c| (c + 0.0).to_bits());
-            *first.entry(key).or_insert(i as u32)
-        })
-        .collect();
-    cleaned.merged_vertices = positions.len() - first.len();
+        .filter(|&(i, &w)| w as usize != i)
+        .count();
     // 2. and 3. Triangles with area, once each.
     let mut seen: HashMap<[u32; 3], ()> = HashMap::with_capacity(triangles.len());
     let mut kept: Vec<[u32; 3]> = Vec::with_capacity(triangles.len());

@@ -8,7 +8,6 @@ pub mod landmarks;
 pub mod load;
 pub mod orient;
 pub mod ply;
-pub mod section;
 pub mod settings;
 pub mod slice;
 pub mod weld;

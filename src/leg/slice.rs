@@ -11,7 +11,10 @@
 //! chain broken by a small hole in the skin still counts as closed.
 //!
 //! A loop's girth is the perimeter of its convex hull in the plane: what a tape measure reads
-//! around a limb, blind to dents, folds and small self-intersections of the mesh.
+//! around a limb, blind to dents, folds and small self-intersections of the mesh. A loop goes
+//! around a point when a ray from it crosses the loop an odd number of times (the
+//! crossing-number test, half-open): how a tube's ring finds the leg it must clear
+//! ([`enclosing_radii`]) and a followed leg its next section.
 
 use std::collections::HashMap;
 
@@ -30,6 +33,8 @@ pub struct Loop {
     pub points: Vec<Point3<f64>>,
     /// True when the walk came back to its start (the surface is closed around it).
     pub closed: bool,
+    /// The cut triangles it runs through, as indices into the slicer's triangles.
+    pub triangles: Vec<u32>,
 }
 
 /// The sections of a mesh by parallel planes: built once per direction, asked per height.
@@ -102,6 +107,7 @@ impl<'a> Slicer<'a> {
         let mut node: HashMap<(u32, u32), usize> = HashMap::new();
         let mut points: Vec<Point3<f64>> = Vec::new();
         let mut joins: Vec<[usize; 2]> = Vec::new();
+        let mut join_triangle: Vec<u32> = Vec::new();
         for &(_, k) in &self.by_low[first..last] {
             let t = self.triangles[k as usize];
             let mut ends = [0usize; 2];
@@ -122,9 +128,10 @@ impl<'a> Slicer<'a> {
             }
             if found == 2 && ends[0] != ends[1] {
                 joins.push(ends);
+                join_triangle.push(k);
             }
         }
-        walk_loops(&points, &joins)
+        walk_loops(&points, &joins, &join_triangle)
     }
 
     /// `p` in the plane's 2-D frame.
@@ -183,12 +190,46 @@ impl Loop {
     }
 }
 
+/// For each of `heights` (metres along the unit vector `a` from `origin`), the largest distance
+/// from the axis of any vertex of the triangles whose section by that plane makes a closed loop
+/// around the axis point; `None` where no loop goes around it (the axis is outside the mesh
+/// there, or the loop is open). In a file with both legs, only the leg around the axis counts:
+/// a tube's ring must clear that leg, not take in the other.
+pub fn enclosing_radii(
+    positions: &[Point3<f64>],
+    triangles: &[[u32; 3]],
+    origin: &Point3<f64>,
+    a: &Vector3<f64>,
+    heights: &[f64],
+) -> Vec<Option<f64>> {
+    let slicer = Slicer::new(positions, triangles, *a);
+    let base = origin.coords.dot(a);
+    let radial = |p: &Point3<f64>| {
+        let d = p - origin;
+        (d - a * d.dot(a)).norm()
+    };
+    heights
+        .iter()
+        .map(|&h| {
+            let centre = origin + a * h;
+            slicer
+                .loops_at(base + h)
+                .iter()
+                .filter(|l| l.closed && slicer.encloses(l, &centre))
+                .flat_map(|l| &l.triangles)
+                .flat_map(|&k| triangles[k as usize])
+                .map(|i| radial(&positions[i as usize]))
+                .reduce(f64::max)
+        })
+        .collect()
+}
+
 /// Walks the joins into loops (see module docs). A walk that comes back to a point it passed
 /// closes a loop there and goes on from it, so a fin hanging off a loop (a non-manifold edge)
 /// leaves the loop closed and itself an open tail. An open chain whose ends are within
 /// [`SMALL_GAP_M`] and a tenth of its length of each other (a small hole in the skin) counts as
 /// closed.
-fn walk_loops(points: &[Point3<f64>], joins: &[[usize; 2]]) -> Vec<Loop> {
+fn walk_loops(points: &[Point3<f64>], joins: &[[usize; 2]], join_triangle: &[u32]) -> Vec<Loop> {
     let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); points.len()];
     for (k, &[a, b]) in joins.iter().enumerate() {
         neighbours[a].push(k);
@@ -198,7 +239,9 @@ fn walk_loops(points: &[Point3<f64>], joins: &[[usize; 2]]) -> Vec<Loop> {
     let mut place: Vec<Option<usize>> = vec![None; points.len()];
     let mut loops = Vec::new();
     let mut walk = |start: usize, used: &mut Vec<bool>, loops: &mut Vec<Loop>| {
+        // The points walked and, between each two, the join taken.
         let mut chain = vec![start];
+        let mut taken: Vec<usize> = Vec::new();
         place[start] = Some(0);
         let mut at = start;
         while let Some(&k) = neighbours[at].iter().find(|&&k| !used[k]) {
@@ -207,13 +250,17 @@ fn walk_loops(points: &[Point3<f64>], joins: &[[usize; 2]]) -> Vec<Loop> {
             at = if a == at { b } else { a };
             if let Some(i) = place[at] {
                 let cycle: Vec<usize> = chain.drain(i..).collect();
+                let cycle_joins = taken.drain(i..).chain([k]);
                 for &n in &cycle {
                     place[n] = None;
                 }
                 loops.push(Loop {
                     points: cycle.iter().map(|&n| points[n]).collect(),
                     closed: true,
+                    triangles: cycle_joins.map(|j| join_triangle[j]).collect(),
                 });
+            } else {
+                taken.push(k);
             }
             place[at] = Some(chain.len());
             chain.push(at);
@@ -228,6 +275,7 @@ fn walk_loops(points: &[Point3<f64>], joins: &[[usize; 2]]) -> Vec<Loop> {
             loops.push(Loop {
                 points,
                 closed: gap <= SMALL_GAP_M.min(0.1 * length),
+                triangles: taken.iter().map(|&j| join_triangle[j]).collect(),
             });
         }
     };
@@ -321,6 +369,26 @@ mod tests {
         }
         assert_eq!(slicer.range(), (0.0, 1.0));
         assert!(slicer.loops_at(1.5).is_empty());
+    }
+
+    #[test]
+    fn only_the_loop_around_the_axis_counts_for_a_ring() {
+        let (mut positions, mut triangles) = square_tube(0.0, 0.2, 0);
+        let (p, t) = square_tube(0.5, 0.2, 8);
+        positions.extend(p);
+        triangles.extend(t);
+        let up = Vector3::y();
+        let heights = [0.25, 0.5, 0.75];
+        let around_first =
+            enclosing_radii(&positions, &triangles, &Point3::origin(), &up, &heights);
+        let corner = 0.1 * 2f64.sqrt();
+        for r in around_first {
+            assert!((r.unwrap() - corner).abs() < 1e-12, "{r:?}");
+        }
+        // Between the two tubes no loop goes around the axis.
+        let between = Point3::new(0.25, 0.0, 0.0);
+        let none = enclosing_radii(&positions, &triangles, &between, &up, &heights);
+        assert_eq!(none, [None; 3]);
     }
 
     #[test]
