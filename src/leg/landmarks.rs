@@ -7,9 +7,9 @@
 //! mannequins", CAD 37(1)); the anthropometric definitions follow ISO 8559-1 (ankle girth: the
 //! smallest above the malleoli; crotch: where the legs join).
 //!
-//! - **Up** ([`anatomical_up`]): the surface's principal axis, pointed away from the end whose
-//!   cross-sections are smaller (feet, ankles and calves are slimmer than thighs, hips or a
-//!   head and shoulders).
+//! - **Up** ([`anatomical_up`]): of the principal axes nearly as long as the longest (a T-pose's
+//!   span matches its height), the one whose ends differ most in girth, pointed away from the
+//!   slimmer end (feet and calves are slimmer than thighs, hips, or a head and shoulders).
 //! - **The legs**: the closed loops of the section [`SEED_HEIGHT_M`] above the lowest point, each
 //!   followed up and down from slice to slice: the loop that encloses the last centre, or else
 //!   the nearest within [`MAX_STEP_M`]. Following stops where the mesh is cut, or where two legs'
@@ -43,6 +43,8 @@ pub const SEED_HEIGHT_M: f64 = 0.08;
 pub const SLICE_STEP_M: f64 = 0.0025;
 /// Furthest a limb's centre may move between two sections, metres.
 pub const MAX_STEP_M: f64 = 0.03;
+/// A principal axis at least this fraction of the longest one's extent is a candidate for up.
+pub const CANDIDATE_EXTENT: f64 = 0.6;
 /// Smallest girth of a loop that can be a leg, metres.
 pub const MIN_LEG_GIRTH_M: f64 = 0.08;
 /// A foot reaches this many ankle radii from the ankle's centre line.
@@ -162,8 +164,47 @@ pub fn anatomical_up(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Optio
     }
     centroid /= area_sum;
     let eigen = SymmetricEigen::new(second / area_sum - centroid * centroid.transpose());
-    let k = eigen.eigenvalues.imax();
-    let axis: Vector3<f64> = eigen.eigenvectors.column(k).into_owned();
+    // Every principal axis nearly as long as the longest is a candidate: a T-posed character's
+    // arm span can match its height.
+    let axes: Vec<Vector3<f64>> = (0..3)
+        .map(|k| eigen.eigenvectors.column(k).into_owned())
+        .collect();
+    let extent = |axis: &Vector3<f64>| {
+        let (lo, hi) = positions
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+                let s = p.coords.dot(axis);
+                (lo.min(s), hi.max(s))
+            });
+        hi - lo
+    };
+    let extents: Vec<f64> = axes.iter().map(extent).collect();
+    let longest = extents.iter().copied().fold(0.0, f64::max);
+    let mut order: Vec<usize> = (0..3).collect();
+    order.sort_by(|&a, &b| extents[b].total_cmp(&extents[a]));
+    let mut best: Option<(f64, Vector3<f64>)> = None;
+    for k in order {
+        if extents[k] < CANDIDATE_EXTENT * longest {
+            continue;
+        }
+        let Some((score, up)) = signed_by_slimmer_end(positions, triangles, axes[k]) else {
+            continue;
+        };
+        if best.is_none_or(|(b, _)| score > b) {
+            best = Some((score, up));
+        }
+    }
+    best.map(|(_, up)| up)
+}
+
+/// `axis` pointed away from its slimmer end (the mean girth of the closed sections in each end
+/// quarter), with how much slimmer it is (a ratio of at least 1); `None` without any closed
+/// section. An end with none counts as the top (an open cut).
+fn signed_by_slimmer_end(
+    positions: &[Point3<f64>],
+    triangles: &[[u32; 3]],
+    axis: Vector3<f64>,
+) -> Option<(f64, Vector3<f64>)> {
     let slicer = Slicer::new(positions, triangles, axis);
     let (lo, hi) = slicer.range();
     let end_girth = |from: f64, to: f64| {
@@ -179,10 +220,11 @@ pub fn anatomical_up(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Optio
     };
     let quarter = (hi - lo) / 4.0;
     match (end_girth(lo, lo + quarter), end_girth(hi - quarter, hi)) {
-        (Some(bottom), Some(top)) if top < bottom => Some(-axis),
+        (Some(bottom), Some(top)) if top < bottom => Some((bottom / top, -axis)),
+        (Some(bottom), Some(top)) => Some((top / bottom.max(f64::MIN_POSITIVE), axis)),
+        (None, Some(_)) => Some((1.0, -axis)),
+        (Some(_), None) => Some((1.0, axis)),
         (None, None) => None,
-        (None, Some(_)) => Some(-axis),
-        _ => Some(axis),
     }
 }
 

@@ -10,7 +10,7 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use knitfit::leg::{Collider, ContactMethod, Leg, Units, UpAxis};
+use knitfit::leg::{Collider, ContactMethod, Leg, Units, UpAxis, UpChoice};
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, Unit, Vector3};
 use serde_json::{json, Value};
 
@@ -788,4 +788,65 @@ fn ankle_and_thigh_top_are_within_a_centimetre_of_hand_picked_ones() {
             "{sample}: thigh top at {thigh_top}"
         );
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// A T-posed figure: its arm span is longer than its height.
+
+/// A figure of rods in a T-pose, 1.75 m tall with a 2.5 m arm span (as a game character is
+/// exported, and long-armed so that the span is the surface's principal axis): two legs with no
+/// feet, a torso, a head and one rod for both arms.
+fn t_posed_figure(dir: &Path) -> PathBuf {
+    use crate::support::{revolved, write_mesh};
+    let mut positions: Vec<Point3<f64>> = Vec::new();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    let mut add = |piece: Leg, place: &dyn Fn(&Point3<f64>) -> Point3<f64>| {
+        let first = positions.len() as u32;
+        positions.extend(piece.positions.iter().map(place));
+        triangles.extend(piece.triangles.iter().map(|t| t.map(|i| i + first)));
+    };
+    for x in [-0.1, 0.1] {
+        let leg = revolved("leg", 32, 60, (0.0, 0.85), |h| 0.035 + 0.045 * h);
+        add(leg, &|p| Point3::new(p.x + x, p.y, p.z));
+    }
+    add(revolved("torso", 48, 40, (0.8, 1.45), |_| 0.16), &|p| *p);
+    let head = revolved("head", 32, 20, (1.5, 1.75), |h| {
+        0.02 + 0.08 * (std::f64::consts::PI * h).sin()
+    });
+    add(head, &|p| *p);
+    // Along +Y, then turned a quarter about Z onto X at shoulder height.
+    let arms = revolved("arms", 32, 80, (-1.25, 1.25), |_| 0.07);
+    add(arms, &|p| Point3::new(p.y, 1.35 - p.x, p.z));
+    write_mesh(dir, "t_pose.glb", &positions, triangles)
+}
+
+#[test]
+fn a_t_posed_figure_is_stood_up_by_its_legs_not_its_arm_span() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = t_posed_figure(dir.path());
+    // The arm span is the principal axis: up is not simply the longest direction.
+    let leg = knitfit::leg::load_leg(&path, Units::Metres, UpChoice::Axis(UpAxis::PosY)).unwrap();
+    let (lo, hi) = leg.bounds();
+    assert!(
+        hi.x - lo.x > hi.y - lo.y,
+        "span {} vs height {}",
+        hi.x - lo.x,
+        hi.y - lo.y
+    );
+    let scene = scene_for(&path, json!({}), json!({}));
+    let (run, out) = run_scene(&scene, RESOLUTION, &[]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let r = report(&run.path().join("out"));
+    let landmarks = &r["details"]["leg"]["landmarks"];
+    let up: Vec<f64> = (0..3)
+        .map(|k| landmarks["up"][k].as_f64().unwrap())
+        .collect();
+    assert!(up[1] > 0.99, "up {up:?}");
+    assert_eq!(landmarks["legs_found"], 2);
+    assert_eq!(r["metrics"]["converged"], true);
+    assert_eq!(r["metrics"]["max_penetration_m"], 0.0);
+    assert!(
+        r["details"]["axis"]["bottom"][0].as_f64().unwrap() > 0.0,
+        "the left leg"
+    );
 }
