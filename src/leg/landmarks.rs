@@ -39,6 +39,9 @@ use super::Side;
 /// Height above the lowest point where the legs are first looked for, metres (above a foot's
 /// toes, at or below the ankle).
 pub const SEED_HEIGHT_M: f64 = 0.08;
+/// Longest span along up that can be a body, metres (the tallest leg file accepted is 3 m tall
+/// along its file axis; a turned one may span a little more).
+pub const MAX_SPAN_M: f64 = 4.5;
 /// Spacing of the sections, metres.
 pub const SLICE_STEP_M: f64 = 0.0025;
 /// Furthest a limb's centre may move between two sections, metres.
@@ -238,6 +241,14 @@ pub fn find_landmarks(
 ) -> Result<Landmarks, String> {
     let slicer = Slicer::new(positions, triangles, up);
     let (lo, hi) = slicer.range();
+    // Sections every few millimetres over a span no body has would take minutes, for nothing.
+    if hi - lo > MAX_SPAN_M {
+        return Err(format!(
+            "the mesh spans {:.1} m along its up direction, more than a body's {MAX_SPAN_M} m: \
+             check leg.units (--units), or remove the other geometry from the file",
+            hi - lo
+        ));
+    }
     let heights = |from: f64, to: f64, step: f64| {
         let n = ((to - from) / step).floor().max(0.0) as usize;
         (0..=n).map(move |k| from + step * k as f64)
@@ -605,6 +616,17 @@ mod tests {
             triangles.push([q[0], q[1], q[2]].map(|i| first + i));
             triangles.push([q[0], q[2], q[3]].map(|i| first + i));
         }
+    }
+
+    #[test]
+    fn a_mesh_longer_than_any_body_is_refused_before_slicing() {
+        let positions = [
+            Point3::new(0.0, 0.0, 0.0),
+            Point3::new(0.1, 0.0, 0.0),
+            Point3::new(0.0, 50.0, 0.1),
+        ];
+        let err = find_landmarks(&positions, &[[0, 1, 2]], Vector3::y(), Side::Left).unwrap_err();
+        assert!(err.contains("spans 50.0 m"), "{err}");
     }
 
     #[test]
