@@ -68,8 +68,8 @@ pub struct Tube {
 }
 
 /// The stocking's axis on the leg's landmarks: from the centre of the section at `bottom` to
-/// the centre of the section at `top`, kept [`OTHER_LEG_CLEARANCE_M`] below where the thighs
-/// come closer than that. The error says why there is no room for a stocking.
+/// the centre of the section at `top`, kept below where the thighs, from the knee up, come closer
+/// than [`OTHER_LEG_CLEARANCE_M`] to the other leg. The error says why there is no room for a stocking.
 pub fn tube_axis(landmarks: &Landmarks, bottom: TubeBottom, top: TubeTop) -> Result<Axis, String> {
     let sole = landmarks.sole_s();
     let thigh = landmarks.thigh_top.s;
@@ -81,12 +81,23 @@ pub fn tube_axis(landmarks: &Landmarks, bottom: TubeBottom, top: TubeTop) -> Res
     let bottom_s = match bottom {
         TubeBottom::Ankle => landmarks.ankle.s,
     };
-    let top_s = match top {
+    let asked = match top {
         TubeTop::BelowCrotchM(d) => thigh - d,
         TubeTop::Fraction(f) => sole + f * leg_height,
     }
-    .min(highest)
-    .min(landmarks.clear_of_other_leg(OTHER_LEG_CLEARANCE_M));
+    .min(highest);
+    let clear = landmarks.clear_of_other_leg(OTHER_LEG_CLEARANCE_M);
+    let top_s = asked.min(clear);
+    if top_s - bottom_s < MIN_TUBE_LENGTH_M && clear < asked {
+        return Err(format!(
+            "the legs come within {:.1} cm of each other {:.3} m above the sole, so the \
+             stocking would end there, only {:.3} m above the ankle; give the stocking's ends \
+             as leg.axis (--axis)",
+            100.0 * OTHER_LEG_CLEARANCE_M,
+            clear - sole,
+            (top_s - bottom_s).max(0.0)
+        ));
+    }
     if top_s - bottom_s < MIN_TUBE_LENGTH_M {
         return Err(format!(
             "the stocking would run only {:.3} m, from the ankle ({:.3} m above the sole) to \

@@ -35,8 +35,8 @@ use super::weld::welded_ids;
 /// Pieces smaller than this fraction of the largest piece's area are dropped as debris.
 pub const DEBRIS_AREA_FRACTION: f64 = 0.02;
 
-/// A triangle whose area is at most this times its longest edge squared has no area worth the
-/// name: its third corner lies within a millionth of an edge from the line of the other two.
+/// A triangle whose doubled area (the cross product of two edges) is at most this times its
+/// longest edge squared has no area worth the name: its third corner lies within a millionth of an edge from the line of the other two.
 pub const SLIVER: f64 = 1e-6;
 
 /// A triangle whose third corner lies within this times its largest coordinate (in absolute

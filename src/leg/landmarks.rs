@@ -48,6 +48,11 @@ pub const SLICE_STEP_M: f64 = 0.0025;
 pub const MAX_STEP_M: f64 = 0.03;
 /// A principal axis at least this fraction of the longest one's extent is a candidate for up.
 pub const CANDIDATE_EXTENT: f64 = 0.6;
+/// A followed leg whose girth grows by this factor within [`JUMP_SPAN_M`] has reached the
+/// crotch (a thigh grows far slower).
+pub const GIRTH_JUMP: f64 = 1.5;
+/// See [`GIRTH_JUMP`], metres.
+pub const JUMP_SPAN_M: f64 = 0.02;
 /// Smallest girth of a loop that can be a leg, metres.
 pub const MIN_LEG_GIRTH_M: f64 = 0.08;
 /// A foot reaches this many ankle radii from the ankle's centre line.
@@ -132,14 +137,16 @@ impl Landmarks {
         }
     }
 
-    /// The highest height up to which the leg's sections keep `clearance` from the other
-    /// leg's (the thigh top where the file holds one leg).
+    /// The highest height up to which the thigh's sections, from the knee up, keep `clearance`
+    /// from the other leg's (the thigh top where the file holds one leg). Knees or ankles that
+    /// touch do not end a stocking: only the thighs near the crotch do.
     pub fn clear_of_other_leg(&self, clearance: f64) -> f64 {
         self.profile
             .iter()
+            .filter(|r| r.s >= self.knee.s)
             .take_while(|r| r.gap_m >= clearance)
             .last()
-            .map_or(self.ankle.s, |r| r.s)
+            .map_or(self.knee.s, |r| r.s)
     }
 
     /// Height of the sole along up.
@@ -254,18 +261,27 @@ pub fn find_landmarks(
         (0..=n).map(move |k| from + step * k as f64)
     };
     // The legs: closed loops just above the lowest point.
+    // The height in the band with the most legs, the lowest of those: a foot lifted off the
+    // ground (a walking pose) is found a little higher.
     let seeds: Vec<Ring> = heights(lo + SEED_HEIGHT_M, (lo + 3.0 * SEED_HEIGHT_M).min(hi), 0.01)
         .map(|s| legs_at(&slicer, s))
-        .find(|rings| !rings.is_empty())
-        .ok_or(
-            "no closed cross-section near its lowest point looks like a leg (the mesh is open \
+        .fold(Vec::new(), |best, rings| {
+            if rings.len() > best.len() {
+                rings
+            } else {
+                best
+            }
+        });
+    let seeds = Some(seeds).filter(|rings| !rings.is_empty()).ok_or(
+        "no closed cross-section near its lowest point looks like a leg (the mesh is open \
                 all around there, or has holes)",
-        )?;
+    )?;
     let seed_s = seeds[0].s;
     let mut down = follow(
         &slicer,
         &seeds,
         heights(lo, seed_s, SLICE_STEP_M).rev().skip(1),
+        false,
     );
     let feet: Vec<Option<Foot>> = (0..seeds.len())
         .map(|i| {
@@ -275,18 +291,21 @@ pub fn find_landmarks(
             foot(positions, &up, &low, &seeds, i)
         })
         .collect();
-    // Forward: where the feet point; otherwise +Z, glTF's facing.
+    // Forward: where the foot standing lowest points (a lifted foot may point anywhere);
+    // otherwise +Z, glTF's facing.
     let forward = feet
         .iter()
-        .flatten()
-        .map(|f| Vector3::from(f.direction))
-        .sum::<Vector3<f64>>();
+        .zip(&down.rings)
+        .filter_map(|(f, rings)| Some((f.as_ref()?, rings.last()?.s)))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map_or(Vector3::zeros(), |(f, _)| Vector3::from(f.direction));
     let forward = if forward.norm() > 1e-9 {
         forward
     } else {
         Vector3::z() - up * up.z
     };
     let left = up.cross(&forward);
+
     let leftness = |r: &Ring| Vector3::from(r.centre).dot(&left);
     let chosen =
         match side {
@@ -306,7 +325,12 @@ pub fn find_landmarks(
     let pair: Vec<Ring> = std::iter::once(seeds[chosen])
         .chain(other.map(|o| seeds[o]))
         .collect();
-    let upward = follow(&slicer, &pair, heights(seed_s, hi, SLICE_STEP_M).skip(1));
+    let upward = follow(
+        &slicer,
+        &pair,
+        heights(seed_s, hi, SLICE_STEP_M).skip(1),
+        true,
+    );
     let mut profile = std::mem::take(&mut down.rings[chosen]);
     profile.reverse();
     profile.push(seeds[chosen]);
@@ -333,7 +357,8 @@ pub fn find_landmarks(
     if leg_height < 0.15 {
         return Err(format!(
             "the leg found is only {leg_height:.3} m from its lowest point to the top of its \
-             thigh"
+             thigh: up may be the wrong way; leave leg.up_axis (--up-axis) at \"auto\" or give \
+             the file's real up axis"
         ));
     }
     let narrowest = |from: f64, to: f64| {
@@ -437,8 +462,16 @@ struct Followed {
 }
 
 /// Follows each of `start` through the sections at `heights` (see module docs) until it ends;
-/// stops all at once when the first two join.
-fn follow(slicer: &Slicer, start: &[Ring], heights: impl Iterator<Item = f64>) -> Followed {
+/// stops all at once when the first two join. Going `upward`, the first limb's girth growing by
+/// half within [`JUMP_SPAN_M`], once it is half again as wide as where it started, counts as
+/// joining too: its loop took in the other leg at the crotch, where the other leg was not
+/// followed (its foot lifted out of the seeds' band, or cut off).
+fn follow(
+    slicer: &Slicer,
+    start: &[Ring],
+    heights: impl Iterator<Item = f64>,
+    upward: bool,
+) -> Followed {
     let mut rings: Vec<Vec<Ring>> = vec![Vec::new(); start.len()];
     let mut last: Vec<Option<Ring>> = start.iter().copied().map(Some).collect();
     for s in heights {
@@ -467,7 +500,17 @@ fn follow(slicer: &Slicer, start: &[Ring], heights: impl Iterator<Item = f64>) -
                         .map(|(k, _)| k)
                 });
         }
-        if start.len() > 1 && taken[0].is_some() && taken[0] == taken[1] {
+        // Only once the limb has grown well past where it started: a seed in a lifted foot
+        // grows as fast into its heel.
+        let jumped = upward
+            && taken[0].is_some_and(|k| {
+                let below = rings[0].iter().rev().find(|r| r.s <= s - JUMP_SPAN_M);
+                below.is_some_and(|r| {
+                    r.girth_m >= GIRTH_JUMP * start[0].girth_m
+                        && slicer.girth(&loops[k]) > GIRTH_JUMP * r.girth_m
+                })
+            });
+        if jumped || (start.len() > 1 && taken[0].is_some() && taken[0] == taken[1]) {
             return Followed {
                 rings,
                 joined: true,
@@ -497,8 +540,8 @@ fn follow(slicer: &Slicer, start: &[Ring], heights: impl Iterator<Item = f64>) -
     }
 }
 
-/// The foot of limb `i`, from its rings ascending from the bottom (`low`): the vertices below
-/// its narrowest low ring, nearer its centre line than any other limb's.
+/// The foot of limb `i`, from its rings ascending from the bottom to its seed (`low`): the
+/// vertices below the seed's section, nearer its centre line than any other limb's.
 fn foot(
     positions: &[Point3<f64>],
     up: &Vector3<f64>,
@@ -506,7 +549,9 @@ fn foot(
     seeds: &[Ring],
     i: usize,
 ) -> Option<Foot> {
-    let ankle = low.iter().min_by(|a, b| a.girth_m.total_cmp(&b.girth_m))?;
+    // The seed's section, at the ankle or above it: a narrower one lower down can be a patch of
+    // sole, off to one side of the foot.
+    let ankle = low.last()?;
     let centre = Vector3::from(ankle.centre);
     let across = |p: &Vector3<f64>, c: &Vector3<f64>| {
         let d = p - c;

@@ -652,6 +652,7 @@ fn stalled(
         }
     };
     let worst = Point3::from(stall.worst_point);
+    let mut at_foot = landmarks.is_none();
     let mut place = format!(
         "courses {}–{} of {} ({:.0}–{:.0} cm up the stocking from its bottom end) are out of \
          balance",
@@ -678,6 +679,7 @@ fn stalled(
             })
             .expect("four landmarks");
         place += &format!(", worst {:.0} cm above the sole, at {name}", 100.0 * height);
+        at_foot = *name == "the foot";
     }
     let circumference = scene.tube.relaxed_circumference_m;
     let advice = match (landmarks, axis.source) {
@@ -686,7 +688,7 @@ fn stalled(
              against an ankle of {:.3} m; raise tube.relaxed_circumference_m.",
             l.ankle.girth_m
         ),
-        (_, AxisSource::CommandLine | AxisSource::Scene) => {
+        (_, AxisSource::CommandLine | AxisSource::Scene) if at_foot => {
             let flag = if axis.source == AxisSource::CommandLine {
                 "--axis"
             } else {
@@ -705,6 +707,15 @@ fn stalled(
                  the leg's landmarks."
             )
         }
+        (_, AxisSource::CommandLine | AxisSource::Scene) => format!(
+            "Check {}: the stocking cannot settle around it here; leave it out and knitfit \
+             places the stocking on the leg's landmarks.",
+            if axis.source == AxisSource::CommandLine {
+                "--axis"
+            } else {
+                "leg.axis"
+            }
+        ),
         _ if scene.yarns.support.stiffness >= 100.0 * scene.yarns.nylon.stiffness => format!(
             "The support yarn ({}× nylon's) barely stretches: lower yarns.support.stiffness, or \
              raise tube.relaxed_circumference_m (now {circumference} m).",

@@ -291,7 +291,8 @@ pub fn relax_accelerated(
                 force_step,
                 max_move,
                 converged,
-                stall,
+                // A level that converged on the iteration after the watch fired is no stall.
+                stall: stall.filter(|_| !converged),
                 seconds: started.elapsed().as_secs_f64(),
             });
         }
@@ -357,7 +358,9 @@ fn where_stalled(
         }
     }
     if courses[0] == usize::MAX {
-        courses = [0, knit.courses.saturating_sub(1)];
+        // No point is above the tolerance (only the residual is): the worst one says where.
+        let c = worst.0 / knit.wales;
+        courses = [c, c];
     }
     Stall {
         courses,

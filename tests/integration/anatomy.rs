@@ -850,3 +850,64 @@ fn a_t_posed_figure_is_stood_up_by_its_legs_not_its_arm_span() {
         "the left leg"
     );
 }
+
+// ---------------------------------------------------------------------------------------------
+// A body standing on one foot.
+
+/// The sample body with its right leg bent up from the knee: the right foot `lift` metres off the
+/// ground, the skin closed (the lift grows smoothly over the 10 cm below the knee).
+fn body_with_right_foot_lifted(dir: &Path, lift: f64) -> PathBuf {
+    use crate::support::write_mesh;
+    let body_path = sample_legs()
+        .into_iter()
+        .find(|p| file_name(p) == "makehuman_body.glb")
+        .unwrap();
+    let body = load_sample(&body_path);
+    let knee_y = -0.45;
+    let positions: Vec<Point3<f64>> = body
+        .positions
+        .iter()
+        .map(|p| {
+            let below = ((knee_y - p.y) / 0.1).clamp(0.0, 1.0);
+            let dy = if p.x < 0.0 { lift * below } else { 0.0 };
+            Point3::new(p.x, p.y + dy, p.z)
+        })
+        .collect();
+    write_mesh(
+        dir,
+        &format!("lifted_{lift}.glb"),
+        &positions,
+        body.triangles.clone(),
+    )
+}
+
+#[test]
+fn a_body_on_one_foot_is_dressed_up_to_its_crotch_not_its_head() {
+    let dir = tempfile::tempdir().unwrap();
+    let body = sample_legs()
+        .into_iter()
+        .find(|p| file_name(p) == "makehuman_body.glb")
+        .unwrap();
+    let crotch = fit_checked("upright body", &body, json!({})).ring_y("thigh_top");
+    // Lifted a little, both legs are still found; lifted far, only the standing one is, and its
+    // girth doubling at the crotch ends it there.
+    for (lift, legs) in [(0.12, 2), (0.35, 1)] {
+        let path = body_with_right_foot_lifted(dir.path(), lift);
+        let scene = scene_for(&path, json!({}), json!({}));
+        let (run, out) = run_scene(&scene, RESOLUTION, &[]);
+        assert!(out.status.success(), "lift {lift}: {}", stderr(&out));
+        let r = report(&run.path().join("out"));
+        let landmarks = &r["details"]["leg"]["landmarks"];
+        assert_eq!(landmarks["legs_found"], legs, "lift {lift}");
+        assert_eq!(landmarks["thigh_top_kind"], "crotch", "lift {lift}");
+        let top = landmarks["thigh_top"]["centre"]["m"][1].as_f64().unwrap();
+        assert!(
+            (top - crotch).abs() < 0.03,
+            "lift {lift}: thigh top {top} vs {crotch}"
+        );
+        assert!(
+            r["details"]["axis"]["bottom"][0].as_f64().unwrap() > 0.0,
+            "the left leg"
+        );
+    }
+}
