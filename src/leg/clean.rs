@@ -19,8 +19,9 @@
 //!    no vertices along the seam, so each section loop crossing it would break into open chains
 //!    there, and the seam's edges would be open to the pseudo-normals;
 //! 5. connected pieces (sharing vertices) with less than [`DEBRIS_AREA_FRACTION`] of the largest
-//!    piece's area are dropped: eyes, teeth, nails, debris. The legs of a body exported in
-//!    pieces that do not share vertices stay, each being a large share of the whole.
+//!    body-like piece's area are dropped (eyes, teeth, nails, debris), and so are sheets (a
+//!    floor, a backdrop: open at [`SHEET_OPEN_FRACTION`] of their edges) beside a body. The legs
+//!    of a body exported in pieces that do not share vertices stay, each a large share of it.
 //!
 //! The result is what every later stage sees: orientation, landmarks, tube, contact, and the
 //! leg written with the fit's attributes. The counts go to the report.
@@ -32,8 +33,12 @@ use serde::Serialize;
 
 use super::weld::welded_ids;
 
-/// Pieces smaller than this fraction of the largest piece's area are dropped as debris.
+/// Pieces smaller than this fraction of the largest body-like piece's area are dropped as
+/// debris.
 pub const DEBRIS_AREA_FRACTION: f64 = 0.02;
+/// A piece with at least this fraction of its triangles' edges open (used by one triangle) is a
+/// sheet, not a body: a floor, a backdrop, a card for hair or lashes.
+pub const SHEET_OPEN_FRACTION: f64 = 0.2;
 
 /// A triangle whose doubled area (the cross product of two edges) is at most this times its
 /// longest edge squared has no area worth the name: its third corner lies within a millionth of an edge from the line of the other two.
@@ -104,8 +109,37 @@ pub fn clean_mesh(
     for (t, p) in kept.iter().zip(&piece) {
         *piece_area.entry(*p).or_default() += area(positions, t);
     }
-    let largest = piece_area.values().copied().fold(0.0, f64::max);
-    let debris = |p: &u32| piece_area[p] < DEBRIS_AREA_FRACTION * largest;
+    // Sheets (a floor, a backdrop, a card) are open nearly everywhere; a body, even cut, is
+    // closed nearly everywhere. The largest body-like piece is what debris is measured against,
+    // and sheets go with the debris wherever there is one.
+    let mut edge_uses: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in &kept {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            *edge_uses.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    let mut piece_edges: HashMap<u32, (usize, usize)> = HashMap::new();
+    for (t, p) in kept.iter().zip(&piece) {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            let entry = piece_edges.entry(*p).or_default();
+            entry.0 += 1;
+            entry.1 += usize::from(edge_uses[&(a.min(b), a.max(b))] == 1);
+        }
+    }
+    let sheet = |p: &u32| {
+        let (edges, open) = piece_edges[p];
+        open as f64 >= SHEET_OPEN_FRACTION * edges as f64
+    };
+    let bodies = piece_area.iter().filter(|(p, _)| !sheet(p));
+    let largest_body = bodies.map(|(_, &a)| a).fold(0.0, f64::max);
+    let largest = if largest_body > 0.0 {
+        largest_body
+    } else {
+        piece_area.values().copied().fold(0.0, f64::max)
+    };
+    let debris = |p: &u32| {
+        piece_area[p] < DEBRIS_AREA_FRACTION * largest || (largest_body > 0.0 && sheet(p))
+    };
     cleaned.debris_pieces = piece_area.keys().filter(|p| debris(p)).count();
     let before = kept.len();
     let mut keep_piece = piece.iter().map(|p| !debris(p));

@@ -1030,3 +1030,41 @@ fn a_body_read_upside_down_is_refused_naming_the_up_axis() {
         &["makehuman_body.glb", "up may be the wrong way", "--up-axis"],
     );
 }
+
+#[test]
+fn a_floor_and_a_backdrop_in_the_file_change_nothing() {
+    // A 10 × 10 m floor under the leg and a 6 × 3 m backdrop behind it, each two triangles:
+    // by area the leg is under 2 % of either, but they are sheets, not bodies.
+    let reference = reference_fit();
+    let dir = tempfile::tempdir().unwrap();
+    let leg = procedural();
+    let mut positions = leg.positions.clone();
+    let mut triangles = leg.triangles.clone();
+    let quads = [
+        [
+            [-5.0, 0.0, -5.0],
+            [5.0, 0.0, -5.0],
+            [5.0, 0.0, 5.0],
+            [-5.0, 0.0, 5.0],
+        ],
+        [
+            [-3.0, 0.0, -1.0],
+            [3.0, 0.0, -1.0],
+            [3.0, 3.0, -1.0],
+            [-3.0, 3.0, -1.0],
+        ],
+    ];
+    for quad in quads {
+        let first = positions.len() as u32;
+        positions.extend(quad.map(Point3::from));
+        triangles.push([first, first + 1, first + 2]);
+        triangles.push([first, first + 2, first + 3]);
+    }
+    let path = write_mesh(dir.path(), "staged.glb", &positions, triangles);
+    let scene = scene_for(&path, json!({}), json!({}));
+    let (run, out) = run_scene(&scene, "32x32", &[]);
+    let got = check_leg_fit("floor and backdrop", run.path(), &out, &leg);
+    assert_same_density("floor and backdrop", &got, reference, 0.01);
+    let cleaned = &report(&run.path().join("out"))["details"]["leg"]["cleaned"];
+    assert_eq!(cleaned["debris_pieces"], 2, "{cleaned}");
+}
