@@ -155,8 +155,9 @@ impl Landmarks {
     }
 }
 
-/// The principal axis of the surface, pointed up (see module docs); `None` for a mesh with no
-/// area or no closed section.
+/// Up the body (see module docs): of the principal axes nearly as long as the longest, the one
+/// whose ends differ most in girth, pointed away from the slimmer end; `None` for a mesh with
+/// no area or no closed section.
 pub fn anatomical_up(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Option<Vector3<f64>> {
     let mut area_sum = 0.0;
     let mut centroid = Vector3::zeros();

@@ -37,7 +37,7 @@ pub struct Leg {
     /// The up axis the file was read with (given, or the nearest to the body's up).
     pub up_axis: UpAxis,
     /// True when `up_axis` was found from the anatomy (`leg.up_axis: auto`).
-    pub up_detected: bool,
+    pub up_axis_found: bool,
     /// Unit vector up the body, world space: +Y where the up axis was given; found from the
     /// anatomy with `auto` (then it turns with the body, so a turned copy of a leg gets the
     /// same landmarks, turned).
@@ -70,7 +70,7 @@ impl Leg {
             reoriented_triangles,
             units: Units::Metres,
             up_axis: UpAxis::PosY,
-            up_detected: false,
+            up_axis_found: false,
             up: Vector3::y(),
             cleaned,
         }
@@ -355,7 +355,7 @@ pub fn decode_leg(file: LegFile, units: Units, choice: UpChoice) -> Result<Leg> 
         reoriented_triangles,
         units,
         up_axis,
-        up_detected: choice == UpChoice::Auto,
+        up_axis_found: choice == UpChoice::Auto,
         up,
         cleaned,
     };

@@ -1,7 +1,7 @@
 //! Vertex welding by exact position: exporters often write a vertex once per triangle (flat
 //! shading, hard edges, UV seams), so vertex indices alone do not say which triangles touch.
-//! Every topological question about the leg (open edges, winding, cross-sections) is asked of
-//! the welded ids instead.
+//! Cleaning ([`super::clean`]) merges them with these ids, so every later question about the
+//! leg (open edges, winding, cross-sections) sees triangles that share what they touch.
 
 use std::collections::HashMap;
 

@@ -165,7 +165,7 @@ fn fit_details(
             file: leg.path.display().to_string(),
             units: leg.units,
             up_axis: leg.up_axis,
-            up_axis_found: leg.up_detected,
+            up_axis_found: leg.up_axis_found,
             reoriented_triangles: leg.reoriented_triangles,
             cleaned: leg.cleaned,
             bounds_m: Bounds {

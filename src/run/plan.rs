@@ -102,7 +102,7 @@ impl Placed {
         Placed {
             up: leg.up.into(),
             up_axis: leg.up_axis,
-            up_axis_found: leg.up_detected,
+            up_axis_found: leg.up_axis_found,
             units: leg.units,
             landmarks: landmarks.map(|l| LandmarkDetails::of(l, leg)),
             axis_file: [file(axis.bottom()), file(axis.top())],
