@@ -509,7 +509,7 @@ impl Plan {
     /// the preview as `picture` with its report `report` beside it. No solver, no forces.
     pub fn render(scene: &Scene, input: &str, picture: &str, report: &str) -> Plan {
         let no_forces = ForceTerms {
-            stiffness: [0.0; 2],
+            stiffness: [0.0; 3],
             connection_factor: None,
         };
         let mut plan = Plan::new("render", no_forces, Vec::new());
@@ -551,7 +551,7 @@ fn force_terms(scene: &Scene, effects: &[Effect]) -> ForceTerms {
     let stiffness = if effects.contains(&Effect::AlternatingYarns) {
         YarnKind::ALL.map(|k| scene.yarns.get(k).stiffness)
     } else {
-        [nylon, nylon]
+        [nylon; 3]
     };
     ForceTerms {
         stiffness,
@@ -592,7 +592,7 @@ mod tests {
     fn without_alternating_yarns_every_spring_is_nylon_stiff() {
         let mut scene = Scene::load(None).unwrap();
         scene.effects = vec![];
-        assert_eq!(Plan::patch(&scene).forces.stiffness, [1.0, 1.0]);
+        assert_eq!(Plan::patch(&scene).forces.stiffness, [1.0; 3]);
     }
 
     #[test]

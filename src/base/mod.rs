@@ -9,4 +9,4 @@ pub mod yarn;
 
 pub use frame::{perpendicular_frame, Vec3};
 pub use mesh::{vertex_normals, SurfaceMesh};
-pub use yarn::{Direction, Segment, YarnGeometry, YarnKind};
+pub use yarn::{Direction, PerYarn, Segment, YarnGeometry, YarnKind};

@@ -1,4 +1,4 @@
-//! The yarn vocabulary every stage shares: the two yarn kinds, the two directions a yarn runs in
+//! The yarn vocabulary every stage shares: the yarn kinds (two knitted, and the toe seam), the two directions a yarn runs in
 //! the knit, and [`YarnGeometry`], the one list of yarn points and segments that the
 //! penetration fix, the writers and the renderers take.
 
@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-/// A yarn material. Indexes per-yarn arrays: nylon first, support second.
+/// A yarn of the stocking. Indexes per-yarn arrays: nylon, support, then the toe seam.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum YarnKind {
@@ -14,28 +14,48 @@ pub enum YarnKind {
     Nylon,
     /// Support yarn: polyurethane core wrapped in nylon, stiffer and more elastic (paper: c1 = 10).
     Support,
+    /// The toe seam: the thread that links the last course's loops across the toe. It is sewn
+    /// with the stocking's nylon, so it has nylon's material; it is a kind of its own so that
+    /// exports and pictures can show where the seam runs.
+    Seam,
 }
 
 impl YarnKind {
-    /// Both kinds, in index order.
-    pub const ALL: [YarnKind; 2] = [YarnKind::Nylon, YarnKind::Support];
+    /// Every kind, in index order.
+    pub const ALL: [YarnKind; 3] = [YarnKind::Nylon, YarnKind::Support, YarnKind::Seam];
+    /// The kinds a pattern knits with (each has its own material in the scene's `yarns`).
+    pub const KNITTED: [YarnKind; 2] = [YarnKind::Nylon, YarnKind::Support];
 
-    /// 0 for nylon, 1 for support: the value written to `yarn_kind` / `_YARN_KIND` attributes.
+    /// 0 for nylon, 1 for support, 2 for the toe seam: the value written to `yarn_kind` /
+    /// `_YARN_KIND` attributes.
     pub fn index(self) -> u8 {
         match self {
             YarnKind::Nylon => 0,
             YarnKind::Support => 1,
+            YarnKind::Seam => 2,
         }
     }
 
-    /// Lower-case name, as in scene files.
+    /// Lower-case name, as in scene files and glTF material names.
     pub fn name(self) -> &'static str {
         match self {
             YarnKind::Nylon => "nylon",
             YarnKind::Support => "support",
+            YarnKind::Seam => "seam",
+        }
+    }
+
+    /// The knitted kind whose material this yarn has: itself, or nylon for the seam.
+    pub fn material(self) -> YarnKind {
+        match self {
+            YarnKind::Seam => YarnKind::Nylon,
+            kind => kind,
         }
     }
 }
+
+/// One value per yarn kind, indexed by [`YarnKind::index`].
+pub type PerYarn<T> = [T; 3];
 
 /// Direction of a spring in the knit grid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -13,7 +13,7 @@
 use image::RgbImage;
 
 use super::canvas::{Canvas, Capsule, LinearImage, Rect};
-use crate::base::{Direction, YarnGeometry};
+use crate::base::{Direction, PerYarn, YarnGeometry};
 
 /// One patch to draw.
 #[derive(Clone, Copy, Debug)]
@@ -35,18 +35,18 @@ pub struct PictureStyle {
     /// Yarn radius per yarn kind ([`crate::base::YarnKind::index`]), metres (default: 0.03 mm
     /// nylon, 0.04 mm support, as the scene defaults). Drawn at least 1.2 px, and at most 30 % of
     /// the panel's median segment length so stitches stay open.
-    pub yarn_radius_m: [f64; 2],
+    pub yarn_radius_m: PerYarn<f64>,
     /// Linear-RGB yarn colour per yarn kind, each channel 0–1 (default: the scene defaults, a
     /// dark brown nylon and a dark blue-black support yarn).
-    pub yarn_colour: [[f64; 3]; 2],
+    pub yarn_colour: PerYarn<[f64; 3]>,
 }
 
 impl Default for PictureStyle {
     fn default() -> Self {
         PictureStyle {
             panel_px: 480,
-            yarn_radius_m: [0.000_03, 0.000_04],
-            yarn_colour: [[0.16, 0.11, 0.09], [0.08, 0.07, 0.10]],
+            yarn_radius_m: [0.000_03, 0.000_04, 0.000_03],
+            yarn_colour: [[0.16, 0.11, 0.09], [0.08, 0.07, 0.10], [0.16, 0.11, 0.09]],
         }
     }
 }
@@ -276,8 +276,8 @@ mod tests {
     fn style(panel_px: u32) -> PictureStyle {
         PictureStyle {
             panel_px,
-            yarn_radius_m: [0.000_1, 0.000_1],
-            yarn_colour: [[0.9, 0.05, 0.05], [0.05, 0.05, 0.9]],
+            yarn_radius_m: [0.000_1; 3],
+            yarn_colour: [[0.9, 0.05, 0.05], [0.05, 0.05, 0.9], [0.9, 0.05, 0.05]],
         }
     }
 
@@ -416,7 +416,7 @@ mod tests {
         ];
         let bad_style = PictureStyle {
             panel_px: 0,
-            yarn_radius_m: [nan, f64::INFINITY],
+            yarn_radius_m: [nan, f64::INFINITY, nan],
             ..PictureStyle::default()
         };
         for g in &cases {

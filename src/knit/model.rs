@@ -1,10 +1,20 @@
 //! The knit as a mass-spring system (Sakaguchi & Miyata §4, Fig. 5): a grid of mass points at the
-//! yarn crossings, joined to their four neighbours by springs that stand for yarn.
+//! yarn crossings, joined to their four neighbours by springs that stand for yarn, and the
+//! shaping hosiery adds to the grid: a toe seam and the short rows of a heel pocket.
 //!
-//! Particle state is kept as parallel arrays ([`Particles`]); springs and the per-point lists of
-//! what acts on each point are built once, here. The force pass (`sim::evaluation`) finds the
-//! same neighbours from the grid layout instead of reading the lists; a property test holds the
-//! two together, and the lists serve the fields computed after the fit.
+//! This is the one model of the knit's topology. Grid points come first (`course * wales +
+//! wale`), then the points of short rows; grid springs first (course by course, then wale
+//! springs), then the shaping's springs. Short rows replace a grid wale spring by a chain of
+//! extra points; the replaced slot stays in place (so the grid keeps its layout) marked
+//! [`Spring::cut`], and carries no force. Everything after the fit reads the same model: the
+//! per-point lists ([`Knit::incident`], [`Knit::connections`]), the wales as chains of points
+//! ([`Knit::wale_chain`]), the fabric's faces ([`Knit::faces`]) and each point's place in the
+//! fabric ([`Knit::fabric_coords`]).
+//!
+//! Particle state is kept as parallel arrays ([`Particles`]); springs and the per-point lists
+//! are built here. The force pass (`sim::evaluation`) finds the grid's neighbours from its layout
+//! instead of reading the lists, and the shaping's springs from the lists; a property test holds
+//! the two together.
 
 use std::collections::BTreeMap;
 
@@ -35,6 +45,9 @@ pub struct Spring {
     pub yarn: YarnKind,
     /// Along the course or along the wale.
     pub direction: Direction,
+    /// A grid slot that short rows replaced: no yarn runs here and it carries no force. Kept so
+    /// the grid's springs stay where the force pass finds them.
+    pub cut: bool,
 }
 
 /// Particle state as parallel arrays, one entry per point.
@@ -100,10 +113,74 @@ pub struct Knit {
     /// [`Direction::index`]): 1 when a grid cell is one stitch, as in the paper; see
     /// [`Knit::with_stitch_shape`] for a grid coarser than the stitches.
     pub stiffness_scale: [f64; 2],
+    /// Springs of the grid (the first ones); those after are the shaping's.
+    grid_springs: usize,
+    /// True when the last course is closed by a toe seam.
+    toe_seam: bool,
+    /// The heel pocket's short rows, if knitted.
+    short_rows: Option<ShortRows>,
+    /// Grid points that shaping springs reach, ascending.
+    shaped_grid_points: Vec<u32>,
+    /// Springs that carry yarn (not cut).
+    yarn_spring_count: usize,
     incident_start: Vec<u32>,
     incident: Vec<Incident>,
     connection_start: Vec<u32>,
     connections: Vec<Connection>,
+}
+
+/// Short rows knitted between grid courses `course` and `course + 1` (a heel pocket): `rows`
+/// partial rows that first shorten, then lengthen again. Row `r` of the shortening half
+/// (1 ≤ r ≤ rows/2) runs over the wales of depth ≥ r; its mirror, row `rows + 1 − r`, over the
+/// same wales. So wale `w` of depth `d` gains `2 d` points between the two courses: those of rows
+/// `1..=d`, then those of rows `rows + 1 − d..=rows`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ShortRows {
+    /// The grid course the short rows start above.
+    pub course: usize,
+    /// Rows in all (even).
+    pub rows: usize,
+    /// Per wale, how many rows of each half run over it.
+    pub depth: Vec<usize>,
+    /// Per wale, its first extra point (its extra points are consecutive, in chain order).
+    first_point: Vec<u32>,
+}
+
+impl ShortRows {
+    /// The short row of wale `w`'s `k`-th extra point (0-based, in chain order): 1..=rows.
+    fn row_of(&self, w: usize, k: usize) -> usize {
+        let d = self.depth[w];
+        if k < d {
+            k + 1
+        } else {
+            self.rows + 1 - d + (k - d)
+        }
+    }
+
+    /// Wale `w`'s extra point in short row `row`, if that row runs over it.
+    fn point_in_row(&self, w: usize, row: usize) -> Option<PointId> {
+        let d = self.depth[w];
+        let k = if row <= d {
+            row - 1
+        } else if row + d > self.rows {
+            d + row - (self.rows + 1 - d)
+        } else {
+            return None;
+        };
+        Some(PointId(self.first_point[w] + k as u32))
+    }
+}
+
+/// A face of the fabric: a grid cell, a cell of the heel pocket (more than four corners where
+/// one side has short rows the other lacks), or a piece of the toe seam. Corners run
+/// counter-clockwise seen from outside a tube: around, then up the wales.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Face {
+    /// The corners.
+    pub corners: Vec<PointId>,
+    /// Knitted stitches the face stands for: the mean of its two sides' wale intervals (1 for a
+    /// grid cell), 0 for the toe seam, which is sewn, not knitted.
+    pub stitches: f64,
 }
 
 impl Knit {
@@ -152,6 +229,7 @@ impl Knit {
                     rest: rest_course,
                     yarn: tile.spring_kind(w as isize, c as isize, Direction::Course),
                     direction: Direction::Course,
+                    cut: false,
                 });
             }
         }
@@ -163,10 +241,174 @@ impl Knit {
                     rest: rest_wale,
                     yarn: tile.spring_kind(w as isize, c as isize, Direction::Wale),
                     direction: Direction::Wale,
+                    cut: false,
                 });
             }
         }
 
+        let grid_springs = springs.len();
+        let mut knit = Knit {
+            wales,
+            courses,
+            closed_courses: wraps,
+            particles: Particles {
+                v: vec![Vec3::zeros(); n],
+                inv_mass: vec![1.0; n],
+                x,
+            },
+            springs,
+            class,
+            course_yarn,
+            stiffness_scale: [1.0, 1.0],
+            grid_springs,
+            toe_seam: false,
+            short_rows: None,
+            shaped_grid_points: Vec::new(),
+            yarn_spring_count: 0,
+            incident_start: Vec::new(),
+            incident: Vec::new(),
+            connection_start: Vec::new(),
+            connections: Vec::new(),
+        };
+        knit.build_lists();
+        knit
+    }
+
+    /// Closes the last course with a toe seam, as hosiery is closed: the course laid flat with
+    /// wale 0 and wale `wales / 2` at its folds, each wale `w` linked to the wale `wales − w`
+    /// facing it, by a seam spring of rest length `rest` (metres). The seam continues the wales
+    /// across the toe, so its springs run along the wale.
+    pub fn with_toe_seam(mut self, rest: f64) -> Knit {
+        let (wales, last) = (self.wales, self.courses - 1);
+        for w in 1..wales.div_ceil(2) {
+            let facing = wales - w;
+            // An odd course's middle pair are course neighbours already.
+            if facing == w + 1 {
+                continue;
+            }
+            self.springs.push(Spring {
+                a: self.point(w, last),
+                b: self.point(facing, last),
+                rest,
+                yarn: YarnKind::Seam,
+                direction: Direction::Wale,
+                cut: false,
+            });
+        }
+        self.toe_seam = true;
+        self.build_lists();
+        self
+    }
+
+    /// Knits short rows between grid courses `course` and `course + 1` (see [`ShortRows`]):
+    /// `depth[w]` rows of each half over wale `w`. `tile` gives their yarns (row `r` knits as
+    /// course `course + r` would), `rest_course` and `rest_wale` their rest lengths, and
+    /// `position(wale, fraction)` each new point's start, `fraction` (0–1) its place between the
+    /// two courses along its wale's chain.
+    pub fn with_short_rows(
+        mut self,
+        course: usize,
+        depth: Vec<usize>,
+        tile: &Tile,
+        rest_course: f64,
+        rest_wale: f64,
+        position: impl Fn(usize, f64) -> Vec3,
+    ) -> Knit {
+        let wales = self.wales;
+        assert_eq!(depth.len(), wales, "a depth per wale");
+        assert!(
+            course + 1 < self.courses,
+            "short rows lie between two courses"
+        );
+        let half = depth.iter().copied().max().unwrap_or(0);
+        let mut first_point = Vec::with_capacity(wales);
+        for (w, &d) in depth.iter().enumerate() {
+            first_point.push(self.particles.x.len() as u32);
+            for k in 0..2 * d {
+                let row = if k < d {
+                    k + 1
+                } else {
+                    2 * half + 1 - d + (k - d)
+                };
+                let c = (course + row) as isize;
+                self.particles
+                    .x
+                    .push(position(w, (k + 1) as f64 / (2 * d + 1) as f64));
+                self.particles.v.push(Vec3::zeros());
+                self.particles.inv_mass.push(1.0);
+                self.class.push(tile.point_class(w as isize, c));
+                self.course_yarn.push(tile.course_yarn(w as isize, c));
+            }
+        }
+        let rows = ShortRows {
+            course,
+            rows: 2 * half,
+            depth,
+            first_point,
+        };
+        // Each wale with short rows: its grid spring across them is cut, and a chain of wale
+        // springs runs through its points instead.
+        let wale_start = self.courses * self.course_springs_per_row();
+        for w in 0..wales {
+            let d = rows.depth[w];
+            if d == 0 {
+                continue;
+            }
+            let slot = wale_start + course * wales + w;
+            self.springs[slot].cut = true;
+            let chain: Vec<PointId> = std::iter::once(self.point(w, course))
+                .chain((0..2 * d).map(|k| PointId(rows.first_point[w] + k as u32)))
+                .chain(std::iter::once(self.point(w, course + 1)))
+                .collect();
+            for (k, pair) in chain.windows(2).enumerate() {
+                let row = if k == 0 { 0 } else { rows.row_of(w, k - 1) };
+                self.springs.push(Spring {
+                    a: pair[0],
+                    b: pair[1],
+                    rest: rest_wale,
+                    yarn: tile.spring_kind(w as isize, (course + row) as isize, Direction::Wale),
+                    direction: Direction::Wale,
+                    cut: false,
+                });
+            }
+        }
+        // Each row's course springs, between neighbouring wales it runs over.
+        let across = self.course_springs_per_row();
+        for row in 1..=rows.rows {
+            for w in 0..across {
+                let next = (w + 1) % wales;
+                if let (Some(a), Some(b)) =
+                    (rows.point_in_row(w, row), rows.point_in_row(next, row))
+                {
+                    self.springs.push(Spring {
+                        a,
+                        b,
+                        rest: rest_course,
+                        yarn: tile.course_yarn(w as isize, (course + row) as isize),
+                        direction: Direction::Course,
+                        cut: false,
+                    });
+                }
+            }
+        }
+        self.short_rows = Some(rows);
+        self.build_lists();
+        self
+    }
+
+    /// Course springs per grid row: around a closed course, one more than across an open one.
+    fn course_springs_per_row(&self) -> usize {
+        if self.closed_courses {
+            self.wales
+        } else {
+            self.wales.saturating_sub(1)
+        }
+    }
+
+    /// Builds the per-point lists from the springs (cut slots left out).
+    fn build_lists(&mut self) {
+        let n = self.len();
+        let springs = &self.springs;
         let nowhere = PointId(0);
         let (incident_start, incident) = lists(
             n,
@@ -175,7 +417,7 @@ impl Knit {
                 other: nowhere,
             },
             |push| {
-                for (s, spring) in springs.iter().enumerate() {
+                for (s, spring) in springs.iter().enumerate().filter(|(_, s)| !s.cut) {
                     let s = s as u32;
                     push(
                         spring.a.index(),
@@ -221,25 +463,19 @@ impl Knit {
                 }
             }
         });
-
-        Knit {
-            wales,
-            courses,
-            closed_courses: wraps,
-            particles: Particles {
-                v: vec![Vec3::zeros(); n],
-                inv_mass: vec![1.0; n],
-                x,
-            },
-            springs,
-            class,
-            course_yarn,
-            stiffness_scale: [1.0, 1.0],
-            incident_start,
-            incident,
-            connection_start,
-            connections,
-        }
+        let mut shaped: Vec<u32> = springs[self.grid_springs..]
+            .iter()
+            .flat_map(|s| [s.a.0, s.b.0])
+            .filter(|&p| (p as usize) < self.wales * self.courses)
+            .collect();
+        shaped.sort_unstable();
+        shaped.dedup();
+        self.shaped_grid_points = shaped;
+        self.yarn_spring_count = springs.iter().filter(|s| !s.cut).count();
+        self.incident_start = incident_start;
+        self.incident = incident;
+        self.connection_start = connection_start;
+        self.connections = connections;
     }
 
     /// The same grid standing for a knit whose stitch is `course_spacing × wale_spacing`
@@ -284,9 +520,164 @@ impl Knit {
         PointId((course * self.wales + wale) as u32)
     }
 
-    /// `(wale, course)` of a point.
+    /// `(wale, course)` of a grid point.
     pub fn grid_coords(&self, p: PointId) -> (usize, usize) {
+        debug_assert!(p.index() < self.grid_len(), "a grid point");
         (p.index() % self.wales, p.index() / self.wales)
+    }
+
+    /// Points of the grid; the points after them are short rows'.
+    pub fn grid_len(&self) -> usize {
+        self.wales * self.courses
+    }
+
+    /// The springs the grid does not have: the toe seam's and the short rows'.
+    pub fn shaping_springs(&self) -> std::ops::Range<usize> {
+        self.grid_springs..self.springs.len()
+    }
+
+    /// Grid points that shaping springs reach, ascending: the force pass adds those springs to
+    /// what the grid gives them.
+    pub fn shaped_grid_points(&self) -> &[u32] {
+        &self.shaped_grid_points
+    }
+
+    /// True when the last course is closed by a toe seam.
+    pub fn has_toe_seam(&self) -> bool {
+        self.toe_seam
+    }
+
+    /// The heel pocket's short rows, if knitted.
+    pub fn short_rows(&self) -> Option<&ShortRows> {
+        self.short_rows.as_ref()
+    }
+
+    /// How many springs carry yarn.
+    pub fn yarn_spring_count(&self) -> usize {
+        self.yarn_spring_count
+    }
+
+    /// The springs that carry yarn (cut grid slots left out), with their indices.
+    pub fn yarn_springs(&self) -> impl Iterator<Item = (usize, &Spring)> {
+        self.springs.iter().enumerate().filter(|(_, s)| !s.cut)
+    }
+
+    /// A point's place in the fabric as `[wale, course]`: whole numbers on the grid; a short
+    /// row's point lies between the two grid courses it was knitted between, spread evenly
+    /// along its wale. Continuous across the fabric (texture coordinates, interpolation
+    /// between grids).
+    pub fn fabric_coords(&self, p: PointId) -> [f64; 2] {
+        let i = p.index();
+        if i < self.grid_len() {
+            let (w, c) = self.grid_coords(p);
+            return [w as f64, c as f64];
+        }
+        let rows = self
+            .short_rows
+            .as_ref()
+            .expect("extra points are short rows'");
+        let w = rows.first_point.partition_point(|&f| f as usize <= i) - 1;
+        let k = i - rows.first_point[w] as usize;
+        let d = rows.depth[w];
+        [
+            w as f64,
+            rows.course as f64 + (k + 1) as f64 / (2 * d + 1) as f64,
+        ]
+    }
+
+    /// The points of wale `w` from the first course to the last, short rows' included.
+    pub fn wale_chain(&self, w: usize) -> Vec<PointId> {
+        let grid = |c: usize| self.point(w, c);
+        match &self.short_rows {
+            Some(rows) if rows.depth[w] > 0 => (0..=rows.course)
+                .map(grid)
+                .chain((0..2 * rows.depth[w]).map(|k| PointId(rows.first_point[w] + k as u32)))
+                .chain((rows.course + 1..self.courses).map(grid))
+                .collect(),
+            _ => (0..self.courses).map(grid).collect(),
+        }
+    }
+
+    /// The fabric's faces (see [`Face`]): the grid's cells, the heel pocket's in place of the
+    /// cells its short rows divide, and the toe seam's, which close the last course.
+    pub fn faces(&self) -> Vec<Face> {
+        let wales = self.wales;
+        let across = self.course_springs_per_row();
+        let mut faces = Vec::with_capacity(across * self.courses);
+        for c in 0..self.courses.saturating_sub(1) {
+            for w in 0..across {
+                let next = (w + 1) % wales;
+                match &self.short_rows {
+                    Some(rows)
+                        if rows.course == c && (rows.depth[w] > 0 || rows.depth[next] > 0) =>
+                    {
+                        self.pocket_faces(rows, w, next, &mut faces)
+                    }
+                    _ => faces.push(Face {
+                        corners: vec![
+                            self.point(w, c),
+                            self.point(next, c),
+                            self.point(next, c + 1),
+                            self.point(w, c + 1),
+                        ],
+                        stitches: 1.0,
+                    }),
+                }
+            }
+        }
+        if self.toe_seam {
+            // The last course folded flat: each face spans two neighbouring wales and the two
+            // facing them.
+            let last = self.courses - 1;
+            let facing = |w: usize| (wales - w) % wales;
+            for w in 0..wales / 2 {
+                let mut corners = vec![self.point(w, last), self.point(w + 1, last)];
+                for f in [facing(w + 1), facing(w)] {
+                    if !corners.contains(&self.point(f, last)) {
+                        corners.push(self.point(f, last));
+                    }
+                }
+                if corners.len() >= 3 {
+                    faces.push(Face {
+                        corners,
+                        stitches: 0.0,
+                    });
+                }
+            }
+        }
+        faces
+    }
+
+    /// The faces between wales `w` and `next` across the short rows: one between each two rows
+    /// both wales have (the grid courses included), with the rows only one side has between.
+    fn pocket_faces(&self, rows: &ShortRows, w: usize, next: usize, faces: &mut Vec<Face>) {
+        let c = rows.course;
+        // Rows 0 and rows + 1 are the grid courses below and above.
+        let at = |wale: usize, row: usize| -> Option<PointId> {
+            if row == 0 {
+                Some(self.point(wale, c))
+            } else if row == rows.rows + 1 {
+                Some(self.point(wale, c + 1))
+            } else {
+                rows.point_in_row(wale, row)
+            }
+        };
+        let mut lower = 0;
+        for row in 1..=rows.rows + 1 {
+            let (Some(_), Some(_)) = (at(w, row), at(next, row)) else {
+                continue;
+            };
+            let right: Vec<PointId> = (lower..=row).filter_map(|r| at(next, r)).collect();
+            let left: Vec<PointId> = (lower..=row).rev().filter_map(|r| at(w, r)).collect();
+            faces.push(Face {
+                stitches: (right.len() - 1 + left.len() - 1) as f64 / 2.0,
+                corners: std::iter::once(left[left.len() - 1])
+                    .chain(right)
+                    .chain(left[..left.len() - 1].iter().copied())
+                    .collect(),
+            });
+            lower = row;
+        }
     }
 
     /// Springs incident to point `p`, in a fixed order.
@@ -319,7 +710,7 @@ impl Knit {
         let mut course = Vec::with_capacity(n);
         let mut wale = Vec::with_capacity(n);
         for i in 0..n {
-            let (w, c) = self.grid_coords(PointId(i as u32));
+            let [w, c] = self.fabric_coords(PointId(i as u32));
             course.push(c as f32);
             wale.push(w as f32);
         }
@@ -340,9 +731,8 @@ impl Knit {
             positions: self.particles.x.iter().map(|p| [p.x, p.y, p.z]).collect(),
             point_attributes,
             segments: self
-                .springs
-                .iter()
-                .map(|s| Segment {
+                .yarn_springs()
+                .map(|(_, s)| Segment {
                     a: s.a.0,
                     b: s.b.0,
                     yarn: s.yarn,

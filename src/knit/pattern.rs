@@ -52,7 +52,7 @@ impl Tile {
                 wale: vec![YarnKind::Nylon],
             },
             Pattern::Alternating => {
-                let kind = |i: usize| YarnKind::ALL[i % 2];
+                let kind = |i: usize| YarnKind::KNITTED[i % 2];
                 let (width, height) = (2, 2);
                 let mut course = Vec::new();
                 let mut wale = Vec::new();

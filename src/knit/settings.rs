@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use super::Pattern;
 use crate::base::settings::{self, Invalid};
-use crate::base::YarnKind;
+use crate::base::{PerYarn, YarnKind};
 
 /// Knit structure.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -67,11 +67,16 @@ impl Default for Yarns {
 }
 
 impl Yarns {
+    /// A value of each yarn kind's material, in [`YarnKind::index`] order.
+    pub fn each<T>(&self, value: impl Fn(&Yarn) -> T) -> PerYarn<T> {
+        YarnKind::ALL.map(|kind| value(self.get(kind)))
+    }
+
     /// The material of a yarn kind.
     pub fn get(&self, kind: YarnKind) -> &Yarn {
-        match kind {
-            YarnKind::Nylon => &self.nylon,
+        match kind.material() {
             YarnKind::Support => &self.support,
+            _ => &self.nylon,
         }
     }
 }
@@ -253,7 +258,7 @@ impl KnitSettings {
 impl Yarns {
     /// Checks every value; the error names the field under `yarns`.
     pub fn validate(&self) -> Result<(), Invalid> {
-        for kind in YarnKind::ALL {
+        for kind in YarnKind::KNITTED {
             let yarn = self.get(kind);
             let check = || -> Result<(), Invalid> {
                 settings::positive("stiffness", yarn.stiffness)?;

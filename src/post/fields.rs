@@ -24,7 +24,7 @@ use std::collections::HashMap;
 
 use nalgebra::Point3;
 
-use crate::base::{Direction, Vec3};
+use crate::base::{Direction, PerYarn, Vec3};
 use crate::knit::{Knit, PointId};
 use crate::leg::Leg;
 use crate::sim::ForceTerms;
@@ -112,7 +112,7 @@ pub fn stretch(knit: &Knit) -> (Vec<f64>, Vec<f64>) {
 
 /// Coverage at every point (see module docs); `radius_m` is the yarn radius per
 /// [`YarnKind::index`](crate::base::YarnKind::index), metres.
-pub fn coverage(knit: &Knit, radius_m: [f64; 2]) -> Vec<f64> {
+pub fn coverage(knit: &Knit, radius_m: PerYarn<f64>) -> Vec<f64> {
     (0..knit.len())
         .map(|i| {
             let spacing = local_spacing(knit, PointId(i as u32));
@@ -183,7 +183,7 @@ pub struct KnitFields {
 
 impl KnitFields {
     /// Every field at every point of `knit`; `radius_m` per yarn kind, metres.
-    pub fn measure(knit: &Knit, radius_m: [f64; 2]) -> KnitFields {
+    pub fn measure(knit: &Knit, radius_m: PerYarn<f64>) -> KnitFields {
         let (stretch_course, stretch_wale) = stretch(knit);
         KnitFields {
             stitch_density: stitch_density(knit),
@@ -302,7 +302,7 @@ impl PointGrid {
 }
 
 /// Per-point stitch fields of `knit` and their transfer to the leg's vertices.
-pub fn measure_fields(knit: &Knit, leg: &Leg, radius_m: [f64; 2]) -> (KnitFields, KnitFields) {
+pub fn measure_fields(knit: &Knit, leg: &Leg, radius_m: PerYarn<f64>) -> (KnitFields, KnitFields) {
     let per_point = KnitFields::measure(knit, radius_m);
     // Wide enough to span a nylon and a support course whichever way the knit runs, so the
     // alternation of the yarns does not print through as speckle.
@@ -368,23 +368,23 @@ mod tests {
         // every 0.5 mm, so 12% of each direction is hidden and the holes are 0.88 × 0.88.
         let knit = flat(Pattern::Plain, 0.0005, 1.0, 1.0);
         let expected = 1.0 - 0.88 * 0.88;
-        for c in coverage(&knit, [0.00003, 0.00004]) {
+        for c in coverage(&knit, [0.00003, 0.00004, 0.00003]) {
             assert!((c - expected).abs() < 1e-12, "{c} vs {expected}");
         }
         // Stretched ×2 along the course: wale strips twice as far apart.
         let knit = flat(Pattern::Plain, 0.0005, 2.0, 1.0);
         let expected = 1.0 - 0.88 * 0.94;
-        for c in coverage(&knit, [0.00003, 0.00004]) {
+        for c in coverage(&knit, [0.00003, 0.00004, 0.00003]) {
             assert!((c - expected).abs() < 1e-12, "{c} vs {expected}");
         }
         // Yarn wider than the gap hides everything.
-        assert!(coverage(&knit, [0.001, 0.001]).iter().all(|&c| c == 1.0));
+        assert!(coverage(&knit, [0.001; 3]).iter().all(|&c| c == 1.0));
     }
 
     #[test]
     fn coverage_uses_each_courses_own_yarn() {
         let knit = flat(Pattern::Alternating, 0.0005, 1.0, 1.0);
-        let cov = coverage(&knit, [0.00003, 0.00004]);
+        let cov = coverage(&knit, [0.00003, 0.00004, 0.00003]);
         let values: std::collections::BTreeSet<u64> =
             cov.iter().map(|c| (c * 1e9).round() as u64).collect();
         assert!(

@@ -22,7 +22,7 @@ use super::sampling::{strata, PixelSamples};
 use super::shading::{self, Lights};
 use super::yarn_lookup::YarnIndex;
 use crate::base::colour::{heat, linear_to_srgb8};
-use crate::base::{SurfaceMesh, YarnGeometry, YarnKind};
+use crate::base::{PerYarn, SurfaceMesh, YarnGeometry, YarnKind};
 use crate::error::{Error, Result};
 use crate::knit::Yarns;
 use crate::preview::{PreviewSettings, RenderMode};
@@ -39,9 +39,9 @@ pub struct PreviewInput<'a> {
     /// The yarn polylines (after the penetration fix), world space plus their `offset_m`.
     pub yarns: &'a YarnGeometry,
     /// Yarn radius per kind (`YarnKind::index`), metres.
-    pub radius_m: [f64; 2],
+    pub radius_m: PerYarn<f64>,
     /// Linear-RGB yarn colour per kind.
-    pub yarn_colour: [[f64; 3]; 2],
+    pub yarn_colour: PerYarn<[f64; 3]>,
 }
 
 impl<'a> PreviewInput<'a> {

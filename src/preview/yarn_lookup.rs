@@ -24,7 +24,7 @@ use std::hash::{BuildHasherDefault, Hasher};
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 
-use crate::base::{YarnGeometry, YarnKind};
+use crate::base::{PerYarn, YarnGeometry, YarnKind};
 
 /// One yarn segment as the renderer sees it: a capsule.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,7 +70,7 @@ impl YarnIndex {
     /// Indexes the segments of `yarns` (offset by its `offset_m`), each of the radius of its
     /// yarn kind (`radius_m[kind.index()]`, metres). Segments with a non-finite end are left
     /// out.
-    pub fn new(yarns: &YarnGeometry, radius_m: [f64; 2]) -> YarnIndex {
+    pub fn new(yarns: &YarnGeometry, radius_m: PerYarn<f64>) -> YarnIndex {
         let offset = Vector3::from(yarns.offset_m);
         let at = |i: u32| {
             yarns

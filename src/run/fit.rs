@@ -815,7 +815,7 @@ impl FitProducts<'_> {
                         GlbNode::Yarns(self.yarns),
                         GlbNode::Surface(&stocking),
                     ],
-                    [yarns.nylon.colour, yarns.support.colour],
+                    yarns.each(|y| y.colour),
                 )
             }
             FitFile::StockingPly => {

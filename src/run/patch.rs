@@ -92,9 +92,7 @@ fn encode(
     let yarns = &scene.yarns;
     match file {
         PatchFile::Ply => export::ply::write_ply(geometries, &ply_comments(scene)),
-        PatchFile::Glb => {
-            export::gltf::write_glb(geometries, [yarns.nylon.colour, yarns.support.colour])
-        }
+        PatchFile::Glb => export::gltf::write_glb(geometries, yarns.each(|y| y.colour)),
         PatchFile::Picture => {
             let held: Vec<Vec<bool>> = runs
                 .iter()
@@ -113,8 +111,8 @@ fn encode(
                 .map(|(geometry, held)| Panel { geometry, held })
                 .collect();
             let style = PictureStyle {
-                yarn_radius_m: [yarns.nylon.radius_m, yarns.support.radius_m],
-                yarn_colour: [yarns.nylon.colour, yarns.support.colour],
+                yarn_radius_m: yarns.each(|y| y.radius_m),
+                yarn_colour: yarns.each(|y| y.colour),
                 ..PictureStyle::default()
             };
             crate::draw::encode_png(&patch_picture::draw_patches(&panels, &style), file.name())

@@ -193,7 +193,7 @@ impl PlanOutcome {
                 effects.join(", ")
             }
         );
-        let [nylon, support] = p.forces.stiffness;
+        let [nylon, support, _] = p.forces.stiffness;
         out += &format!("forces: springs (eq. 1, c1 = {nylon} nylon, {support} support)");
         if let Some(c2) = p.forces.connection_factor {
             out += &format!(" + yarn connection (eq. 2, c2 = {c2})");

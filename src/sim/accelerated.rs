@@ -350,7 +350,7 @@ fn where_stalled(
     for i in 0..knit.len() {
         let s = step(i);
         if s > tolerance {
-            let c = i / knit.wales;
+            let c = course_of(knit, i);
             courses = [courses[0].min(c), courses[1].max(c)];
         }
         if s > worst.1 {
@@ -359,7 +359,7 @@ fn where_stalled(
     }
     if courses[0] == usize::MAX {
         // No point is above the tolerance (only the residual is): the worst one says where.
-        let c = worst.0 / knit.wales;
+        let c = course_of(knit, worst.0);
         courses = [c, c];
     }
     Stall {
@@ -367,6 +367,11 @@ fn where_stalled(
         worst_point: knit.particles.x[worst.0].into(),
         worst_force_step: worst.1,
     }
+}
+
+/// The grid course at or below point `i` (a short row's point: the course it was knitted above).
+fn course_of(knit: &Knit, i: usize) -> usize {
+    knit.fabric_coords(crate::knit::PointId(i as u32))[1] as usize
 }
 
 #[cfg(test)]

@@ -254,7 +254,18 @@ fn force_pass<T: Send, S: Default + Send>(
         .map(|d| YarnKind::ALL.map(|yarn| terms.c1_of(knit, yarn, d)));
     let rows = rows_per_chunk(knit);
     let chunk_points = (rows * wales).max(1);
-    let partial: Vec<(Evaluation, S)> = out
+    // The shaping's springs (toe seam, short rows), computed once before the grid reads them.
+    let shaping: Vec<SpringState> = knit.springs[knit.shaping_springs()]
+        .iter()
+        .map(|s| {
+            let c1 = c1[s.direction.index()][s.yarn.index() as usize];
+            SpringState::between(&x[s.a.index()], &x[s.b.index()], s.rest, c1)
+        })
+        .collect();
+    let grid_len = knit.grid_len();
+    let (out, out_extra) = out.split_at_mut(grid_len);
+    let (bounds, bounds_extra) = bounds.split_at_mut(grid_len);
+    let mut partial: Vec<(Evaluation, S)> = out
         .par_chunks_mut(chunk_points)
         .zip(bounds.par_chunks_mut(chunk_points))
         .enumerate()
@@ -272,12 +283,13 @@ fn force_pass<T: Send, S: Default + Send>(
                         (s.a.index(), s.b.index()),
                         (c * wales + w, (c + 1) * wales + w)
                     );
-                    SpringState::between(
-                        &below[w],
-                        &above[w],
-                        s.rest,
-                        c1[1][s.yarn.index() as usize],
-                    )
+                    // A slot the short rows replaced carries nothing.
+                    let c1 = if s.cut {
+                        0.0
+                    } else {
+                        c1[1][s.yarn.index() as usize]
+                    };
+                    SpringState::between(&below[w], &above[w], s.rest, c1)
                 }));
                 if let Some(eval) = eval {
                     for (state, s) in row.iter().zip(springs) {
@@ -329,12 +341,29 @@ fn force_pass<T: Send, S: Default + Send>(
                 for (w, (force, bound)) in forces.iter_mut().zip(bounds.iter_mut()).enumerate() {
                     (*force, *bound) = row.net_force(w, terms.connection_factor);
                 }
+                add_shaping_to_row(knit, &shaping, c, &mut forces, bounds);
                 visit(c * wales, &mut forces, bounds, out, &mut sums);
                 std::mem::swap(&mut below, &mut above);
             }
             (eval, sums)
         })
         .collect();
+    // The short rows' points, after the grid's: every force on them from the lists.
+    let mut eval = Evaluation::default();
+    for (state, s) in shaping.iter().zip(&knit.springs[knit.shaping_springs()]) {
+        eval.add(state, s.rest);
+    }
+    let mut sums = S::default();
+    if !out_extra.is_empty() {
+        let mut forces: Vec<Vec3> = Vec::with_capacity(out_extra.len());
+        for (k, bound) in bounds_extra.iter_mut().enumerate() {
+            let (f, b) = list_force(knit, &shaping, grid_len + k, terms.connection_factor);
+            forces.push(f);
+            *bound = b;
+        }
+        visit(grid_len, &mut forces, bounds_extra, out_extra, &mut sums);
+    }
+    partial.push((eval, sums));
     let eval = partial
         .iter()
         .fold(Evaluation::default(), |a, (b, _)| Evaluation {
@@ -342,6 +371,82 @@ fn force_pass<T: Send, S: Default + Send>(
             potential_energy: a.potential_energy + b.potential_energy,
         });
     (eval, partial.into_iter().map(|(_, s)| s).collect())
+}
+
+/// Adds to row `c`'s grid points the shaping springs that reach them (`shaping`: their states,
+/// in the order of [`Knit::shaping_springs`]).
+fn add_shaping_to_row(
+    knit: &Knit,
+    shaping: &[SpringState],
+    c: usize,
+    forces: &mut [Vec3],
+    bounds: &mut [f64],
+) {
+    let shaped = knit.shaped_grid_points();
+    if shaped.is_empty() {
+        return;
+    }
+    let wales = knit.wales;
+    let (first, end) = ((c * wales) as u32, ((c + 1) * wales) as u32);
+    let from = shaped.partition_point(|&p| p < first);
+    let first_shaping = knit.shaping_springs().start;
+    for &p in shaped[from..].iter().take_while(|&&p| p < end) {
+        let w = (p - first) as usize;
+        for inc in knit.incident(crate::knit::PointId(p)) {
+            let s = inc.spring as usize;
+            if s >= first_shaping {
+                let state = &shaping[s - first_shaping];
+                let at_a = knit.springs[s].a.0 == p;
+                forces[w] += state.away(at_a) * state.tension;
+                bounds[w] += state.stiffness_bound;
+            }
+        }
+    }
+}
+
+/// Net force and stiffness bound of a short row's point, from its lists: its springs (all of
+/// them the shaping's, with states in `shaping`), then its connection terms.
+fn list_force(
+    knit: &Knit,
+    shaping: &[SpringState],
+    i: usize,
+    connection_factor: Option<f64>,
+) -> (Vec3, f64) {
+    let first_shaping = knit.shaping_springs().start;
+    let p = crate::knit::PointId(i as u32);
+    let state_of = |s: u32| &shaping[s as usize - first_shaping];
+    let mut f = Vec3::zeros();
+    let mut bound = 0.0;
+    for inc in knit.incident(p) {
+        let state = state_of(inc.spring);
+        let at_a = knit.springs[inc.spring as usize].a == p;
+        f += state.away(at_a) * state.tension;
+        bound += state.stiffness_bound;
+    }
+    if let Some(c2) = connection_factor {
+        for conn in knit.connections(p) {
+            // The spring i–j this term acts along: i's course spring to `via`.
+            let from = knit
+                .incident(p)
+                .iter()
+                .find(|inc| {
+                    inc.other == conn.via
+                        && knit.springs[inc.spring as usize].direction
+                            == crate::base::Direction::Course
+                })
+                .expect("a connection runs through a course neighbour");
+            let at_a = knit.springs[from.spring as usize].a == p;
+            add_connection(
+                c2,
+                state_of(from.spring),
+                at_a,
+                state_of(conn.spring),
+                &mut f,
+                &mut bound,
+            );
+        }
+    }
+    (f, bound)
 }
 
 /// Eq. (2) on point `i`: the tension of `onward` (spring j–k) draws it towards the middle point j
@@ -462,9 +567,8 @@ pub(crate) fn rest_force_floor(knit: &Knit, terms: &ForceTerms) -> f64 {
 
 /// The shortest rest length of the knit's springs, metres.
 pub(crate) fn shortest_rest(knit: &Knit) -> f64 {
-    knit.springs
-        .iter()
-        .map(|s| s.rest)
+    knit.yarn_springs()
+        .map(|(_, s)| s.rest)
         .fold(f64::INFINITY, f64::min)
 }
 
@@ -578,7 +682,7 @@ pub(crate) fn residual_of(
         return 0.0;
     }
     let rms_net = (sums.sum_sq / sums.free as f64).sqrt();
-    let rms_spring = (spring_force_sq / knit.springs.len().max(1) as f64).sqrt();
+    let rms_spring = (spring_force_sq / knit.yarn_spring_count().max(1) as f64).sqrt();
     rms_net / rms_spring.max(force_floor)
 }
 
@@ -636,7 +740,7 @@ mod tests {
     fn the_fused_step_is_the_evaluation_followed_by_a_momentum_step() {
         let knit = tube();
         let terms = ForceTerms {
-            stiffness: [1.0, 10.0],
+            stiffness: [1.0, 10.0, 1.0],
             connection_factor: Some(0.3),
         };
         let (beta, step) = (0.7, 1.5);
@@ -696,7 +800,7 @@ mod tests {
     fn a_point_with_no_stiffness_does_not_coast_on_its_velocity() {
         let knit = tube();
         let terms = ForceTerms {
-            stiffness: [0.0, 0.0],
+            stiffness: [0.0; 3],
             connection_factor: None,
         };
         let mut next = moved_from(&knit);

@@ -19,7 +19,7 @@ pub use multilevel::{relax_multilevel, Levels, MultilevelStats};
 pub use relax::{relax, relax_constrained, stability_limit, RelaxStats};
 pub use settings::{ContactSettings, OnUnstable, SolverMethod, SolverSettings};
 
-use crate::base::{Direction, Vec3, YarnKind};
+use crate::base::{Direction, PerYarn, Vec3, YarnKind};
 use crate::knit::Knit;
 
 /// Which force terms run, with their coefficients. Built by the plan from the scene's effects.
@@ -27,7 +27,7 @@ use crate::knit::Knit;
 pub struct ForceTerms {
     /// Spring stiffness c1 per yarn kind (indexed by `YarnKind::index()`). Equal entries when the
     /// scene does not ask for `alternating_yarns`.
-    pub stiffness: [f64; 2],
+    pub stiffness: PerYarn<f64>,
     /// Connection factor c2 of eq. (2), or `None` when `yarn_connection` is off.
     pub connection_factor: Option<f64>,
 }

@@ -166,6 +166,9 @@ pub fn relax_multilevel(
 /// in the fabric: the same fraction of the way around (or across) the courses and along the
 /// wales. Closed courses interpolate across the seam.
 pub fn prolong(coarse: &Knit, fine: &mut Knit) {
+    if coarse.short_rows().is_some() || fine.short_rows().is_some() {
+        return prolong_along_wales(coarse, fine);
+    }
     let (cw, cc) = (coarse.wales, coarse.courses);
     let (fw, fc) = (fine.wales, fine.courses);
     let closed = coarse.closed_courses && fine.closed_courses;
@@ -195,6 +198,58 @@ pub fn prolong(coarse: &Knit, fine: &mut Knit) {
             fine.particles.v[i] = Vec3::zeros();
         }
     }
+}
+
+/// [`prolong`] for knits with short rows, whose wales are chains of different lengths: each fine
+/// point takes the place the same fraction of the way along its wale has on the coarse knit's
+/// wales either side of it (interpolated around the course as [`prolong`] does).
+fn prolong_along_wales(coarse: &Knit, fine: &mut Knit) {
+    let (cw, fw) = (coarse.wales, fine.wales);
+    let chains: Vec<Vec<Vec3>> = (0..cw)
+        .map(|w| {
+            let chain = coarse.wale_chain(w);
+            chain
+                .iter()
+                .map(|p| coarse.particles.x[p.index()])
+                .collect()
+        })
+        .collect();
+    let on_chain = |w: usize, fraction: f64| -> Vec3 {
+        let chain = &chains[w];
+        let (i0, i1, t) = along_fraction(fraction, chain.len());
+        chain[i0] * (1.0 - t) + chain[i1] * t
+    };
+    for w in 0..fw {
+        let chain = fine.wale_chain(w);
+        let (w0, w1, tw) = if coarse.closed_courses {
+            let u = w as f64 * cw as f64 / fw as f64;
+            let w0 = (u.floor() as usize).min(cw - 1);
+            (w0, (w0 + 1) % cw, u - w0 as f64)
+        } else {
+            along(w, fw, cw)
+        };
+        let last = (chain.len() - 1).max(1) as f64;
+        for (k, p) in chain.iter().enumerate() {
+            let i = p.index();
+            if fine.particles.inv_mass[i] == 0.0 {
+                continue;
+            }
+            let fraction = k as f64 / last;
+            fine.particles.x[i] = on_chain(w0, fraction) * (1.0 - tw) + on_chain(w1, fraction) * tw;
+            fine.particles.v[i] = Vec3::zeros();
+        }
+    }
+}
+
+/// A fraction 0–1 of the way along `n` points as the two neighbouring points and the fraction
+/// between them.
+fn along_fraction(fraction: f64, n: usize) -> (usize, usize, f64) {
+    if n < 2 {
+        return (0, 0, 0.0);
+    }
+    let t = fraction * (n - 1) as f64;
+    let i0 = (t.floor() as usize).min(n - 2);
+    (i0, i0 + 1, t - i0 as f64)
 }
 
 /// Index `i` of `n_fine` points spread end to end, as the two neighbouring points of `n_coarse`

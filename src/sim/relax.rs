@@ -100,9 +100,7 @@ pub fn relax_constrained(
     let force_floor = rest_force_floor(knit, terms);
     // Energy of a strain of 1e-6 on every spring: below this, growth is rounding, not divergence.
     let energy_floor: f64 = knit
-        .springs
-        .iter()
-        .enumerate()
+        .yarn_springs()
         .map(|(i, s)| 0.5 * terms.c1(knit, i as u32) * (1e-6 * s.rest).powi(2))
         .sum();
 

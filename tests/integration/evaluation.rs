@@ -32,6 +32,9 @@ struct Case {
     moves: Vec<[f64; 3]>,
     /// (to, from): point `to` put exactly where point `from` is.
     same: Vec<(usize, usize)>,
+    /// On a closed knit, per wale the depth of short rows above the first course, and a toe
+    /// seam across the last (the hosiery shaping); empty for a plain grid.
+    short_rows: Vec<usize>,
     terms: ForceTerms,
 }
 
@@ -54,6 +57,22 @@ impl Case {
         for &(to, from) in &self.same {
             knit.particles.x[to] = knit.particles.x[from];
         }
+        if !self.short_rows.is_empty() {
+            let x = knit.particles.x.clone();
+            let wales = self.wales;
+            knit = knit.with_toe_seam(rest_wale).with_short_rows(
+                0,
+                self.short_rows.clone(),
+                &tile,
+                rest_course,
+                rest_wale,
+                |w, t| {
+                    // Between the wale's two grid points, bowed out so no two coincide.
+                    let (a, b) = (x[w], x[wales + w]);
+                    a * (1.0 - t) + b * t + Vec3::new(0.0, 0.0, t * (1.0 - t) * rest_course)
+                },
+            );
+        }
         knit
     }
 }
@@ -74,11 +93,14 @@ fn sized_cases(
     coincide: bool,
     connection: bool,
 ) -> impl Strategy<Value = Case> {
-    (wales, courses, any::<bool>(), any::<bool>())
-        .prop_flat_map(move |(wales, courses, closed, plain)| {
+    (wales, courses, any::<bool>(), any::<bool>(), any::<bool>())
+        .prop_flat_map(move |(wales, courses, closed, plain, shaped)| {
             let n = wales * courses;
+            let closed = closed && wales >= 3;
+            let depths = if closed && shaped { wales } else { 0 };
             (
-                Just((wales, courses, closed && wales >= 3, plain)),
+                Just((wales, courses, closed, plain)),
+                proptest::collection::vec(0usize..=2, depths),
                 1e-4f64..1.0,
                 0.3f64..3.0,
                 proptest::collection::vec(prop::array::uniform3(-jitter..=jitter), n),
@@ -87,7 +109,15 @@ fn sized_cases(
             )
         })
         .prop_map(
-            move |((wales, courses, closed, plain), rest, aspect, moves, same, (c_a, c_b, c2))| {
+            move |(
+                (wales, courses, closed, plain),
+                short_rows,
+                rest,
+                aspect,
+                moves,
+                same,
+                (c_a, c_b, c2),
+            )| {
                 Case {
                     wales,
                     courses,
@@ -101,8 +131,9 @@ fn sized_cases(
                     aspect,
                     moves,
                     same,
+                    short_rows,
                     terms: ForceTerms {
-                        stiffness: [c_a, c_b],
+                        stiffness: [c_a, c_b, c_a],
                         connection_factor: connection.then_some(c2),
                     },
                 }
@@ -185,9 +216,8 @@ fn preconditioned_spectral_radius(case: &Case) -> f64 {
 /// The shortest spring over its rest length.
 fn shortest_strain(knit: &Knit) -> f64 {
     let x = &knit.particles.x;
-    knit.springs
-        .iter()
-        .map(|s| (x[s.b.index()] - x[s.a.index()]).norm() / s.rest)
+    knit.yarn_springs()
+        .map(|(_, s)| (x[s.b.index()] - x[s.a.index()]).norm() / s.rest)
         .fold(f64::INFINITY, f64::min)
 }
 
@@ -327,8 +357,9 @@ fn regression_connection_turning_is_in_the_stiffness_bound() {
             [-0.8022855633160448, -1.242953958657946, -0.9337057828847074],
         ],
         same: vec![],
+        short_rows: vec![],
         terms: ForceTerms {
-            stiffness: [0.1, 0.1],
+            stiffness: [0.1; 3],
             connection_factor: Some(0.9653009032664419),
         },
     };

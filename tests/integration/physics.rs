@@ -7,7 +7,7 @@ use knitfit::sim::{relax, stability_limit, ForceTerms, OnUnstable, RelaxStats, S
 use knitfit::Error;
 
 const PAPER_TERMS: ForceTerms = ForceTerms {
-    stiffness: [1.0, 10.0],
+    stiffness: [1.0, 10.0, 1.0],
     connection_factor: Some(0.2),
 };
 
@@ -91,11 +91,11 @@ fn course_and_wale_stretch_differ_only_with_yarn_connection() {
         anisotropy(&c, &w)
     };
     let with = plain(&ForceTerms {
-        stiffness: [1.0, 1.0],
+        stiffness: [1.0; 3],
         connection_factor: Some(0.2),
     });
     let without = plain(&ForceTerms {
-        stiffness: [1.0, 1.0],
+        stiffness: [1.0; 3],
         connection_factor: None,
     });
     assert!(
@@ -112,7 +112,7 @@ fn yarn_connection_draws_stitches_wider_at_the_held_edges() {
     // pulled inwards, so the stitches next to the held wales are wider than those in the middle.
     let settings = SolverSettings::default();
     let terms = ForceTerms {
-        stiffness: [1.0, 1.0],
+        stiffness: [1.0; 3],
         connection_factor: Some(0.2),
     };
     let (knit, _, _) = relaxed(
@@ -139,7 +139,7 @@ fn alternating_yarns_differ_measurably_from_plain() {
     let (_, _, plain) = relaxed(
         Pattern::Plain,
         &ForceTerms {
-            stiffness: [1.0, 1.0],
+            stiffness: [1.0; 3],
             ..PAPER_TERMS
         },
         s,
@@ -159,7 +159,7 @@ fn stability_run(
     policy: OnUnstable,
 ) -> Result<(Knit, RelaxStats), Error> {
     let terms = ForceTerms {
-        stiffness: [1.0, ratio],
+        stiffness: [1.0, ratio, 1.0],
         connection_factor: Some(0.2),
     };
     let mut knit = build_patch(

@@ -428,8 +428,8 @@ fn yarn_finer_than_a_pixel_averages_to_the_true_coverage_without_moire() {
     let input = PreviewInput {
         leg: &leg,
         yarns: &yarns,
-        radius_m: [radius; 2],
-        yarn_colour: [[0.1; 3]; 2],
+        radius_m: [radius; 3],
+        yarn_colour: [[0.1; 3]; 3],
     };
     let distance = 0.5;
     let fov = 2.0 * (0.048f64 / distance).atan().to_degrees();

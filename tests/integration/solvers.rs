@@ -50,7 +50,7 @@ fn solve_scene(leg: &std::path::Path, scene: Scene) -> (SolvedFit, Scene) {
 }
 
 fn leg_density(fit: &SolvedFit, scene: &Scene) -> Vec<f64> {
-    let radius = [scene.yarns.nylon.radius_m, scene.yarns.support.radius_m];
+    let radius = scene.yarns.each(|y| y.radius_m);
     measure_fields(&fit.knit, &fit.leg, radius).1.stitch_density
 }
 

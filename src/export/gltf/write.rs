@@ -13,7 +13,7 @@ use gltf_json as json;
 use json::validation::{Checked::Valid, USize64};
 use json::Index;
 
-use crate::base::{SurfaceMesh, YarnGeometry, YarnKind};
+use crate::base::{PerYarn, SurfaceMesh, YarnGeometry, YarnKind};
 use crate::error::{Error, Result};
 use crate::export::ply::{check_surface_mesh, check_yarn_geometry};
 
@@ -37,7 +37,7 @@ pub enum GlbNode<'a> {
 ///
 /// Fails with [`Error::Encode`] if a part is inconsistent (indices past the points, attributes
 /// of the wrong length, non-finite positions).
-pub fn write_glb(parts: &[YarnGeometry], yarn_colours: [[f64; 3]; 2]) -> Result<Vec<u8>> {
+pub fn write_glb(parts: &[YarnGeometry], yarn_colours: PerYarn<[f64; 3]>) -> Result<Vec<u8>> {
     let nodes: Vec<GlbNode> = parts.iter().map(GlbNode::Yarns).collect();
     write_nodes_glb(&nodes, yarn_colours)
 }
@@ -48,7 +48,7 @@ pub fn write_glb(parts: &[YarnGeometry], yarn_colours: [[f64; 3]; 2]) -> Result<
 /// and no translation (a surface without triangles is a node without a mesh).
 ///
 /// Fails with [`Error::Encode`] if a node's geometry is inconsistent.
-pub fn write_nodes_glb(nodes: &[GlbNode], yarn_colours: [[f64; 3]; 2]) -> Result<Vec<u8>> {
+pub fn write_nodes_glb(nodes: &[GlbNode], yarn_colours: PerYarn<[f64; 3]>) -> Result<Vec<u8>> {
     for node in nodes {
         match node {
             GlbNode::Yarns(part) => check_yarn_geometry(part),
@@ -175,7 +175,7 @@ impl GlbBuilder {
     fn yarn_node(
         &mut self,
         part: &YarnGeometry,
-        materials: &[Option<Index<json::Material>>; 2],
+        materials: &PerYarn<Option<Index<json::Material>>>,
     ) -> Index<json::Node> {
         let by_kind: Vec<(YarnKind, Vec<u32>)> = YarnKind::ALL
             .into_iter()
@@ -384,7 +384,7 @@ mod tests {
 
     use crate::base::yarn::sample_geometry as part;
 
-    const COLOURS: [[f64; 3]; 2] = [[0.5, 0.25, 0.125], [0.2, 0.4, 0.6]];
+    const COLOURS: PerYarn<[f64; 3]> = [[0.5, 0.25, 0.125], [0.2, 0.4, 0.6], [0.1, 0.1, 0.1]];
 
     /// The values of a float accessor (custom attributes, which the reader has no method for).
     fn floats<T: gltf::accessor::Item>(

@@ -154,7 +154,7 @@ pub fn write_tube_leg(
 pub fn write_meshes(dir: &Path, name: &str, meshes: &[SurfaceMesh]) -> PathBuf {
     let nodes: Vec<GlbNode> = meshes.iter().map(GlbNode::Surface).collect();
     let path = dir.join(name);
-    std::fs::write(&path, write_nodes_glb(&nodes, [[0.5; 3]; 2]).unwrap()).unwrap();
+    std::fs::write(&path, write_nodes_glb(&nodes, [[0.5; 3]; 3]).unwrap()).unwrap();
     path
 }
 
