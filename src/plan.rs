@@ -16,9 +16,10 @@ use crate::sim::multilevel::grid_sizes;
 use crate::sim::{ForceTerms, SolverMethod};
 
 /// Where `tube.bottom` puts the stocking's start, in words.
-pub fn tube_bottom_words(bottom: TubeBottom) -> String {
+pub fn tube_bottom_words(bottom: Option<TubeBottom>) -> String {
     match bottom {
-        TubeBottom::Ankle => "the ankle (tube.bottom)".into(),
+        None | Some(TubeBottom::Ankle) => "the ankle (tube.bottom)".into(),
+        Some(TubeBottom::Toe) => "the toe (tube.bottom)".into(),
     }
 }
 

@@ -8,7 +8,7 @@ use std::time::Instant;
 use nalgebra::{Point3, Vector3};
 use serde::Serialize;
 
-use crate::knit::{Pattern, Stretch};
+use crate::knit::{Pattern, Stretch, TubeBottom, TubeHeel};
 use crate::leg::landmarks::Ring;
 use crate::leg::{
     Axis, AxisSource, Cleaned, ContactMethod, Landmarks, Leg, Side, ThighTopKind, Units, UpAxis,
@@ -16,6 +16,7 @@ use crate::leg::{
 use crate::limits::MemoryCheck;
 use crate::plan::{Plan, PlannedStage, Stage};
 use crate::post::penetration::PenetrationStats;
+use crate::post::stitches::SlackDetails;
 use crate::post::StitchStats;
 use crate::preview::PreviewStats;
 use crate::scene::Effect;
@@ -279,10 +280,18 @@ pub struct TubeDetails {
     pub relaxed_circumference_m: f64,
     /// The springs' stiffness factors for the stitch's shape.
     pub stiffness_scale: PerDirection,
-    /// Lowest and highest yarn point along the axis, metres from the bottom point.
+    /// Where the stocking ends at the bottom: `toe` (closed by a toe seam) or `ankle` (open).
+    pub bottom: TubeBottom,
+    /// The heel: `none` or `pocket` (short rows).
+    pub heel: TubeHeel,
+    /// Nearest and furthest yarn along the stocking's centreline, metres from its start (the
+    /// bottom of an open tube, the welt of a stocking to the toe).
     pub axial_range_m: [f64; 2],
-    /// Courses that came to rest below a course before them.
+    /// Courses out of order along the centreline (the fit sliding; refused beyond 10%).
     pub bunched_courses: usize,
+    /// Where the courses lie closer than knitted (surplus fabric that would wrinkle): never
+    /// refused; per point, the `slack` attribute.
+    pub slack: SlackDetails,
 }
 
 /// A value per knit direction.

@@ -14,9 +14,10 @@ pub enum YarnKind {
     Nylon,
     /// Support yarn: polyurethane core wrapped in nylon, stiffer and more elastic (paper: c1 = 10).
     Support,
-    /// The toe seam: the thread that links the last course's loops across the toe. It is sewn
-    /// with the stocking's nylon, so it has nylon's material; it is a kind of its own so that
-    /// exports and pictures can show where the seam runs.
+    /// The toe seam: the thread that links the last course's loops across the toe. It has the
+    /// support yarn's material (a seam is sewn to be the strongest line of the stocking; a
+    /// weaker one would let the wales pull the toe back between the toes); it is a kind of its
+    /// own so that exports and pictures can show where the seam runs.
     Seam,
 }
 
@@ -45,10 +46,10 @@ impl YarnKind {
         }
     }
 
-    /// The knitted kind whose material this yarn has: itself, or nylon for the seam.
+    /// The knitted kind whose material this yarn has: itself, or support for the seam.
     pub fn material(self) -> YarnKind {
         match self {
-            YarnKind::Seam => YarnKind::Nylon,
+            YarnKind::Seam => YarnKind::Support,
             kind => kind,
         }
     }

@@ -3,13 +3,14 @@
 
 pub mod model;
 pub mod patch;
+pub mod path;
 pub mod pattern;
 pub mod settings;
 pub mod tube;
 
-pub use model::{Connection, Incident, Knit, Particles, PointId, Spring};
+pub use model::{Connection, Face, Incident, Knit, Particles, PointId, ShortRows, Spring};
 pub use pattern::{Pattern, Tile};
 pub use settings::{
-    KnitSettings, PatchSettings, Stretch, StretchAxis, TubeBottom, TubeSettings, TubeTop, Yarn,
-    Yarns, RELAXED_LENGTH_FRACTION,
+    KnitSettings, PatchSettings, Stretch, StretchAxis, TubeBottom, TubeHeel, TubeSettings, TubeTop,
+    Yarn, Yarns, RELAXED_LENGTH_FRACTION,
 };

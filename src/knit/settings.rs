@@ -114,8 +114,13 @@ pub struct TubeSettings {
     /// the axis, since a stocking is worn stretched along the leg. Absent means
     /// [`RELAXED_LENGTH_FRACTION`] of the axis length (default: absent).
     pub relaxed_length_m: Option<f64>,
-    /// Where the stocking starts on the leg (default: `"ankle"`).
-    pub bottom: TubeBottom,
+    /// Where the stocking ends at the bottom: `"toe"` (over the foot, closed by a toe seam) or
+    /// `"ankle"` (an open end at the ankle). Absent means the ankle for now (default: absent).
+    pub bottom: Option<TubeBottom>,
+    /// The heel: `"none"` (a heel-less tube, as most sheer hosiery is knitted) or `"pocket"`
+    /// (short rows over the back of the heel). Only a stocking that reaches the toe has one
+    /// (default: `"none"`).
+    pub heel: TubeHeel,
     /// Where the stocking ends on the thigh (default: `{"below_crotch_m": 0.05}`, a
     /// thigh-high's welt).
     pub top: TubeTop,
@@ -125,10 +130,23 @@ pub struct TubeSettings {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum TubeBottom {
-    /// At the ankle: the narrowest girth above the foot (or just inside the cut of a leg that
-    /// has no foot).
+    /// Over the heel and down the foot, closed across the toes by a toe seam.
     #[default]
+    Toe,
+    /// At the ankle: the narrowest girth above the foot (or just inside the cut of a leg that
+    /// has no foot). The stocking's end is open and held there.
     Ankle,
+}
+
+/// The heel of a stocking that reaches the toe.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum TubeHeel {
+    /// No heel: the tube goes straight over the heel ("sandal foot").
+    #[default]
+    None,
+    /// A heel pocket of short rows over the back half of the tube (see `knit::tube`).
+    Pocket,
 }
 
 /// Where the stocking ends.
@@ -159,7 +177,8 @@ impl Default for TubeSettings {
             courses: 150,
             relaxed_circumference_m: 0.20,
             relaxed_length_m: None,
-            bottom: TubeBottom::Ankle,
+            bottom: None,
+            heel: TubeHeel::None,
             top: TubeTop::default(),
         }
     }
@@ -293,6 +312,18 @@ impl TubeSettings {
         settings::positive("relaxed_circumference_m", self.relaxed_circumference_m)?;
         if let Some(length) = self.relaxed_length_m {
             settings::positive("relaxed_length_m", length)?;
+        }
+        if self.heel == TubeHeel::Pocket && self.bottom == Some(TubeBottom::Ankle) {
+            return Err(Invalid::new(
+                "heel",
+                "a heel pocket needs a stocking that reaches the toe; tube.bottom is \"ankle\"",
+            ));
+        }
+        if self.bottom != Some(TubeBottom::Ankle) && w < 4 {
+            return Err(Invalid::new(
+                "wales",
+                format!("a stocking closed at the toe needs at least 4 wales, got {w}"),
+            ));
         }
         match self.top {
             TubeTop::BelowCrotchM(d) => {

@@ -18,7 +18,8 @@
 
 use nalgebra::{Point3, Vector3};
 
-use super::settings::{TubeBottom, TubeTop};
+use super::path::{PathPart, TubePath};
+use super::settings::{TubeBottom, TubeHeel, TubeTop};
 use super::{Knit, Pattern, Tile};
 use crate::base::{perpendicular_frame, Vec3};
 use crate::leg::{slice, Axis, AxisSource, Landmarks, ThighTopKind};
@@ -78,8 +79,10 @@ pub fn tube_axis(landmarks: &Landmarks, bottom: TubeBottom, top: TubeTop) -> Res
         ThighTopKind::Crotch => thigh,
         ThighTopKind::Cut => thigh - CUT_CLEARANCE * leg_height,
     };
+    // A stocking to the toe has this axis too: its leg part, what the report and the checks
+    // of the axis read.
     let bottom_s = match bottom {
-        TubeBottom::Ankle => landmarks.ankle.s,
+        TubeBottom::Ankle | TubeBottom::Toe => landmarks.ankle.s,
     };
     let asked = match top {
         TubeTop::BelowCrotchM(d) => thigh - d,
@@ -153,15 +156,169 @@ pub fn build_tube(
     }
 }
 
-/// Per point of a tube's knit, true on the first and last ring (held at their heights along the
-/// axis during the fit).
+/// Per point of a tube's knit, true on a held end ring (held at its height along the axis during
+/// the fit): the first and last ring of an open tube; only the first (the welt) of a stocking
+/// closed at the toe, whose toe rests on the foot.
 pub fn end_rings(knit: &Knit) -> Vec<bool> {
+    let grid = knit.grid_len();
     (0..knit.len())
         .map(|i| {
             let c = i / knit.wales;
-            c == 0 || c + 1 == knit.courses
+            i < grid && (c == 0 || (c + 1 == knit.courses && !knit.has_toe_seam()))
         })
         .collect()
+}
+
+/// Builds a whole stocking along `path` (top to toe): course 0 is the welt, held; the last
+/// course is closed by a toe seam; with [`TubeHeel::Pocket`], short rows over the back half at
+/// the middle of the heel (see [`heel_pocket_depths`]).
+pub fn build_stocking(spec: &TubeSpec, path: &TubePath, heel: TubeHeel) -> Tube {
+    let (w_count, c_count) = (spec.wales, spec.courses);
+    let tile = Tile::of(spec.pattern);
+    let rest_course = spec.relaxed_circumference_m / w_count as f64;
+    let rest_wale = spec.relaxed_length_m / (c_count - 1).max(1) as f64;
+    let length = path.length();
+    let along = |c: usize| length * c as f64 / (c_count - 1).max(1) as f64;
+    let rings: Vec<Vec<Point3<f64>>> = (0..c_count).map(|c| path.ring(along(c), w_count)).collect();
+    let mut knit = Knit::grid(
+        w_count,
+        c_count,
+        true,
+        &tile,
+        rest_course,
+        rest_wale,
+        |w, c| rings[c][w].coords,
+    )
+    .with_stitch_shape(spec.stitch_m[0], spec.stitch_m[1])
+    .with_toe_seam(rest_wale);
+    if heel == TubeHeel::Pocket {
+        let [lo, hi] = path.heel_range();
+        let course = ((0.5 * (lo + hi) / length) * (c_count - 1) as f64).round() as usize;
+        let course = course.min(c_count - 2);
+        let depth = heel_pocket_depths(spec, w_count, rest_wale);
+        let (centre, ..) = path.frame_at(along(course));
+        // Each new point starts on the straight line between its wale's two rings, bowed out
+        // from the path by up to a quarter of its chain's length, so the folded-up pocket starts
+        // clear of the heel.
+        let place = |w: usize, f: f64| {
+            let (a, b) = (rings[course][w], rings[course + 1][w]);
+            let on_line = a + (b - a) * f;
+            let out = (on_line - centre).normalize();
+            let bow =
+                0.25 * (2 * depth[w] + 1) as f64 * rest_wale * (std::f64::consts::PI * f).sin();
+            (on_line + out * bow).coords
+        };
+        knit = knit.with_short_rows(course, depth.clone(), &tile, rest_course, rest_wale, place);
+    }
+    let (_, t, u, _) = path.frame_at(0.0);
+    Tube {
+        end_ring: end_rings(&knit),
+        knit,
+        frame: (u, t.cross(&u)),
+    }
+}
+
+/// Short rows per half of a heel pocket over each of `wales` wales, on a grid whose wale springs
+/// are `rest_wale` long. A real short-row heel is knitted on the back half of the stitches,
+/// each row one stitch shorter at both ends until a third of them remain, then one longer again:
+/// so `n / 6` rows each way for a tube of `n` stitches around (`n` from the relaxed
+/// circumference and the stitch), over the middle third of the heel, fewer towards its sides.
+/// The same length of fabric at any grid size: rows on the grid are that length over
+/// `rest_wale`. The back half is `v < 0`: wales `wales / 2..wales`, centred on `3 wales / 4`.
+pub fn heel_pocket_depths(spec: &TubeSpec, wales: usize, rest_wale: f64) -> Vec<usize> {
+    let stitches_around = spec.relaxed_circumference_m / spec.stitch_m[0];
+    let half_length = stitches_around / 6.0 * spec.stitch_m[1];
+    let rows = (half_length / rest_wale).round().max(1.0);
+    let n = wales as f64;
+    let centre = 0.75 * n;
+    (0..wales)
+        .map(|w| {
+            let off = (w as f64 - centre).abs();
+            // Full depth over the middle third of the back half, none at its sides.
+            let f = ((n / 4.0 - off) / (n / 4.0 - n / 12.0)).clamp(0.0, 1.0);
+            (rows * f).round() as usize
+        })
+        .collect()
+}
+
+/// The stocking's centreline, from course 0's end to the last course's: the path's centres for
+/// a stocking to the toe, the axis (bottom to top) for an open tube. It tells slack from
+/// sliding: where each course came to rest along it.
+#[derive(Clone, Debug)]
+pub struct Centreline {
+    points: Vec<Point3<f64>>,
+    /// Distance along the line at each point, metres.
+    distance: Vec<f64>,
+}
+
+impl Centreline {
+    /// The open tube's: its axis from bottom to top.
+    pub fn straight(axis: &Axis) -> Centreline {
+        Centreline::through(vec![axis.bottom(), axis.top()])
+    }
+
+    /// A stocking's to the toe: the path's centres.
+    pub fn of_path(path: &TubePath) -> Centreline {
+        Centreline::through(path.centreline())
+    }
+
+    fn through(points: Vec<Point3<f64>>) -> Centreline {
+        let mut distance = Vec::with_capacity(points.len());
+        let mut total = 0.0;
+        for (k, p) in points.iter().enumerate() {
+            if k > 0 {
+                total += (p - points[k - 1]).norm();
+            }
+            distance.push(total);
+        }
+        Centreline { points, distance }
+    }
+
+    /// Length, metres.
+    pub fn length(&self) -> f64 {
+        self.distance.last().copied().unwrap_or(0.0)
+    }
+
+    /// How far along the line `p` lies: the distance to its closest point on the line, the first
+    /// and last pieces extended beyond the ends (so a point past an end is below 0 or beyond the
+    /// length).
+    pub fn along(&self, p: &Vec3) -> f64 {
+        let n = self.points.len();
+        let mut best = (f64::INFINITY, 0.0);
+        for k in 0..n.saturating_sub(1) {
+            let (a, b) = (self.points[k].coords, self.points[k + 1].coords);
+            let ab = b - a;
+            let len = ab.norm();
+            if len <= 0.0 {
+                continue;
+            }
+            let mut s = (p - a).dot(&ab) / len;
+            if k > 0 {
+                s = s.max(0.0);
+            }
+            if k + 2 < n {
+                s = s.min(len);
+            }
+            let d = (a + ab * (s / len) - p).norm_squared();
+            if d < best.0 {
+                best = (d, self.distance[k] + s);
+            }
+        }
+        best.1
+    }
+
+    /// Where course `c` of `knit` came to rest: how far along the line its points' mean lies.
+    pub fn course_along(&self, knit: &Knit, c: usize) -> f64 {
+        let ring = &knit.particles.x[c * knit.wales..(c + 1) * knit.wales];
+        let mean = ring.iter().sum::<Vec3>() / knit.wales as f64;
+        self.along(&mean)
+    }
+}
+
+/// The path's part at distance `s` along it.
+pub fn part_at(path: &TubePath, s: f64) -> PathPart {
+    let k = path.stations.partition_point(|st| st.s < s);
+    path.stations[k.min(path.stations.len() - 1)].part
 }
 
 /// Per ring, a radius that clears the leg near that ring's height, with margin. Each ring's

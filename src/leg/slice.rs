@@ -103,35 +103,8 @@ impl<'a> Slicer<'a> {
             .by_low
             .partition_point(|&(lo, _)| lo < s - self.tallest);
         let last = self.by_low.partition_point(|&(lo, _)| lo < s);
-        // Each crossed edge is a node; each cut triangle joins two nodes.
-        let mut node: HashMap<(u32, u32), usize> = HashMap::new();
-        let mut points: Vec<Point3<f64>> = Vec::new();
-        let mut joins: Vec<[usize; 2]> = Vec::new();
-        let mut join_triangle: Vec<u32> = Vec::new();
-        for &(_, k) in &self.by_low[first..last] {
-            let t = self.triangles[k as usize];
-            let mut ends = [0usize; 2];
-            let mut found = 0;
-            for (i, j) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
-                let (i, j) = (i.min(j), i.max(j));
-                let (hi, hj) = (self.height[i as usize], self.height[j as usize]);
-                if (hi >= s) == (hj >= s) || found == 2 {
-                    continue;
-                }
-                let id = *node.entry((i, j)).or_insert_with(|| {
-                    let (pi, pj) = (self.positions[i as usize], self.positions[j as usize]);
-                    points.push(pi + (pj - pi) * ((s - hi) / (hj - hi)));
-                    points.len() - 1
-                });
-                ends[found] = id;
-                found += 1;
-            }
-            if found == 2 && ends[0] != ends[1] {
-                joins.push(ends);
-                join_triangle.push(k);
-            }
-        }
-        walk_loops(&points, &joins, &join_triangle)
+        let cut = self.by_low[first..last].iter().map(|&(_, k)| k);
+        loops_of_cut(self.positions, self.triangles, &self.height, s, cut)
     }
 
     /// `p` in the plane's 2-D frame.
@@ -188,6 +161,81 @@ impl Loop {
             self.points.first().copied().unwrap_or_else(Point3::origin)
         }
     }
+}
+
+/// The loops of one plane's section: the plane through `origin` square to the unit vector
+/// `normal`. For a few planes of different directions; [`Slicer`] is faster for many parallel
+/// ones.
+pub fn section(
+    positions: &[Point3<f64>],
+    triangles: &[[u32; 3]],
+    origin: &Point3<f64>,
+    normal: &Vector3<f64>,
+) -> Vec<Loop> {
+    let height: Vec<f64> = positions.iter().map(|p| p.coords.dot(normal)).collect();
+    let s = origin.coords.dot(normal);
+    let cut = (0..triangles.len() as u32).filter(|&k| {
+        let h = triangles[k as usize].map(|i| height[i as usize] >= s);
+        h[0] != h[1] || h[1] != h[2]
+    });
+    loops_of_cut(positions, triangles, &height, s, cut)
+}
+
+/// The convex hull of `points` in the plane through `centre` spanned by the unit vectors `u`
+/// and `v`, as 2-D coordinates from `centre`, counter-clockwise.
+pub fn hull_in_plane(
+    points: impl Iterator<Item = Point3<f64>>,
+    centre: &Point3<f64>,
+    u: &Vector3<f64>,
+    v: &Vector3<f64>,
+) -> Vec<[f64; 2]> {
+    convex_hull(
+        points
+            .map(|p| {
+                let d = p - centre;
+                [d.dot(u), d.dot(v)]
+            })
+            .collect(),
+    )
+}
+
+/// Loops of the section at height `s` (per-vertex `height`) through the triangles `cut` (those
+/// that may cross it): each crossed edge is a node, each cut triangle joins two.
+fn loops_of_cut(
+    positions: &[Point3<f64>],
+    triangles: &[[u32; 3]],
+    height: &[f64],
+    s: f64,
+    cut: impl Iterator<Item = u32>,
+) -> Vec<Loop> {
+    let mut node: HashMap<(u32, u32), usize> = HashMap::new();
+    let mut points: Vec<Point3<f64>> = Vec::new();
+    let mut joins: Vec<[usize; 2]> = Vec::new();
+    let mut join_triangle: Vec<u32> = Vec::new();
+    for k in cut {
+        let t = triangles[k as usize];
+        let mut ends = [0usize; 2];
+        let mut found = 0;
+        for (i, j) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            let (i, j) = (i.min(j), i.max(j));
+            let (hi, hj) = (height[i as usize], height[j as usize]);
+            if (hi >= s) == (hj >= s) || found == 2 {
+                continue;
+            }
+            let id = *node.entry((i, j)).or_insert_with(|| {
+                let (pi, pj) = (positions[i as usize], positions[j as usize]);
+                points.push(pi + (pj - pi) * ((s - hi) / (hj - hi)));
+                points.len() - 1
+            });
+            ends[found] = id;
+            found += 1;
+        }
+        if found == 2 && ends[0] != ends[1] {
+            joins.push(ends);
+            join_triangle.push(k);
+        }
+    }
+    walk_loops(&points, &joins, &join_triangle)
 }
 
 /// For each of `heights` (metres along the unit vector `a` from `origin`), the largest distance
@@ -297,7 +345,8 @@ fn walk_loops(points: &[Point3<f64>], joins: &[[usize; 2]], join_triangle: &[u32
 }
 
 /// The convex hull of `points` (Andrew's monotone chain), counter-clockwise, no repeats.
-fn convex_hull(mut points: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
+/// The convex hull of 2-D `points`, counter-clockwise.
+pub fn convex_hull(mut points: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
     points.sort_unstable_by(|a, b| a[0].total_cmp(&b[0]).then(a[1].total_cmp(&b[1])));
     points.dedup();
     if points.len() < 3 {

@@ -1,13 +1,21 @@
-//! Stitch shape measurements on a relaxed grid knit.
+//! Stitch shape measurements on a relaxed grid knit, and the two ways a fitted stocking's courses
+//! can fail to lie as knitted: slack and sliding.
 //!
 //! A stitch is a grid cell: points `(w, c)`, `(w+1, c)`, `(w, c+1)`, `(w+1, c+1)`. Its width is the
 //! mean length of its two course edges, its height the mean length of its two wale edges, and its
 //! aspect ratio width / height (1 for a square stitch at equal rest spacing).
+//!
+//! *Slack* is local surplus fabric: courses closer together than their rest spacing, where a
+//! real stocking wrinkles (over the front of the ankle, where a tube has more fabric than the
+//! skin). It is reported, per point and as a region, and never refused. *Sliding* is the fit
+//! leaving its place: courses out of order along the stocking's centreline
+//! ([`bunched_courses`]), refused beyond [`MAX_BUNCHED_FRACTION`].
 
-use nalgebra::Vector3;
 use serde::Serialize;
 
-use crate::knit::Knit;
+use crate::base::Direction;
+use crate::knit::tube::Centreline;
+use crate::knit::{Knit, PointId};
 
 /// Summary of the stitch shapes of a knit. Lengths in metres.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -91,8 +99,8 @@ pub fn anisotropy(course_stretched: &StitchStats, wale_stretched: &StitchStats) 
     (sum_sq / n).sqrt()
 }
 
-/// Courses of a fitted tube that bunched: those whose mean position along the unit vector
-/// `axis` is not above every course before them (the courses slid along the leg past each
+/// Courses of a fitted tube that bunched: those whose mean position along `centreline` is not
+/// beyond every course before them (the courses slid along the leg past each
 /// other). Returns how many, and the first.
 ///
 /// A yarn too tight for the leg slides down it towards the ankle, where it is thinnest, and
@@ -100,21 +108,16 @@ pub fn anisotropy(course_stretched: &StitchStats, wale_stretched: &StitchStats) 
 /// at most a small fold just above a slack ankle: on a frictionless leg, the rings' own tension
 /// pushes the lower courses down onto the held bottom ring, and where the wales are slack they
 /// fold (at 400×1600 on the MakeHuman leg, 3% of the courses; see [`MAX_BUNCHED_FRACTION`]).
-pub fn bunched_courses(knit: &Knit, axis: &Vector3<f64>) -> (usize, Option<usize>) {
-    let wales = knit.wales;
-    let mean_height = |c: usize| {
-        let ring = &knit.particles.x[c * wales..(c + 1) * wales];
-        ring.iter().map(|p| p.dot(axis)).sum::<f64>() / wales as f64
-    };
-    let mut highest = f64::NEG_INFINITY;
+pub fn bunched_courses(knit: &Knit, centreline: &Centreline) -> (usize, Option<usize>) {
+    let mut furthest = f64::NEG_INFINITY;
     let (mut count, mut first) = (0, None);
     for c in 0..knit.courses {
-        let h = mean_height(c);
-        if h <= highest {
+        let h = centreline.course_along(knit, c);
+        if h <= furthest {
             count += 1;
             first.get_or_insert(c);
         }
-        highest = highest.max(h);
+        furthest = furthest.max(h);
     }
     (count, first)
 }
@@ -122,3 +125,75 @@ pub fn bunched_courses(knit: &Knit, axis: &Vector3<f64>) -> (usize, Option<usize
 /// The largest fraction of a fit's courses that may be out of order ([`bunched_courses`])
 /// before the fit is refused as bunched.
 pub const MAX_BUNCHED_FRACTION: f64 = 0.1;
+
+/// A point whose wales are shorter than their rest length by more than this fraction is slack.
+pub const SLACK_THRESHOLD: f64 = 0.1;
+
+/// Per point, its slack: how much shorter than their rest length its wale springs are, as a
+/// fraction (0 where they are at rest or stretched, 0.3 where the courses are 30% closer than
+/// knitted). The `slack` attribute: where the stocking would wrinkle.
+pub fn slack(knit: &Knit) -> Vec<f64> {
+    let x = &knit.particles.x;
+    (0..knit.len())
+        .map(|i| {
+            let (mut length, mut rest) = (0.0, 0.0);
+            for inc in knit.incident(PointId(i as u32)) {
+                let s = &knit.springs[inc.spring as usize];
+                if s.direction == Direction::Wale {
+                    length += (x[s.b.index()] - x[s.a.index()]).norm();
+                    rest += s.rest;
+                }
+            }
+            if rest > 0.0 {
+                (1.0 - length / rest).max(0.0)
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// Where a fitted stocking is slack (see [`slack`]), for the report.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct SlackDetails {
+    /// Points slacker than [`SLACK_THRESHOLD`], as a fraction of all points.
+    pub fraction_of_points: f64,
+    /// The largest slack.
+    pub max: f64,
+    /// Where the slack points lie along the stocking's centreline, metres from its start
+    /// (`None` where no point is slack).
+    pub along_m: Option<[f64; 2]>,
+    /// The parts of the leg they lie on (`leg`, `heel`, `foot`), where the stocking follows a
+    /// path over the foot.
+    pub parts: Vec<String>,
+}
+
+/// [`SlackDetails`] of `knit` from its per-point `slack`, placed along `centreline`; `part`
+/// names the part of the leg at a distance along it, where known.
+pub fn slack_details(
+    knit: &Knit,
+    slack: &[f64],
+    centreline: &Centreline,
+    part: impl Fn(f64) -> Option<String>,
+) -> SlackDetails {
+    let slack_points: Vec<usize> = (0..knit.len())
+        .filter(|&i| slack[i] > SLACK_THRESHOLD)
+        .collect();
+    let mut parts: Vec<String> = Vec::new();
+    let mut range = [f64::INFINITY, f64::NEG_INFINITY];
+    for &i in &slack_points {
+        let s = centreline.along(&knit.particles.x[i]);
+        range = [range[0].min(s), range[1].max(s)];
+        if let Some(name) = part(s) {
+            if !parts.contains(&name) {
+                parts.push(name);
+            }
+        }
+    }
+    SlackDetails {
+        fraction_of_points: slack_points.len() as f64 / knit.len().max(1) as f64,
+        max: slack.iter().copied().fold(0.0, f64::max),
+        along_m: (!slack_points.is_empty()).then_some(range),
+        parts,
+    }
+}

@@ -8,14 +8,17 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Point3, Vector3};
 
 use super::{Outcome, Progress, Run, StepProgress};
-use crate::base::{SurfaceMesh, Vec3, YarnGeometry, YarnKind};
+use crate::base::{SurfaceMesh, YarnGeometry, YarnKind};
 use crate::draw;
 use crate::draw::density_map::{self, DensityPictureStyle};
 use crate::error::{Error, Result};
 use crate::export;
 use crate::export::gltf::GlbNode;
-use crate::knit::tube::{build_tube, end_rings, tube_axis, TubeSpec};
-use crate::knit::{Knit, RELAXED_LENGTH_FRACTION};
+use crate::knit::path::{path_to_toe, TubePath};
+use crate::knit::tube::{
+    build_stocking, build_tube, end_rings, part_at, tube_axis, Centreline, TubeSpec,
+};
+use crate::knit::{Knit, TubeBottom, TubeHeel, RELAXED_LENGTH_FRACTION};
 use crate::leg::{
     decode_leg, find_landmarks, leaves_mesh, read_leg_file, Axis, AxisSource, Collider, Landmarks,
     Leg,
@@ -24,7 +27,9 @@ use crate::limits::{peak_memory, FitSize, MemoryCheck};
 use crate::plan::{fit_files, File, FitFile, Plan, Stage, PREVIEW_FILE};
 use crate::post::fields::{self, measure_fields, KnitFields};
 use crate::post::penetration::{fix_penetrations, PenetrationStats};
-use crate::post::stitches::{bunched_courses, MAX_BUNCHED_FRACTION};
+use crate::post::stitches::{
+    bunched_courses, slack, slack_details, SlackDetails, MAX_BUNCHED_FRACTION,
+};
 use crate::post::surfaces::{leg_surface, stocking_surface};
 use crate::preview::{PreviewInput, PreviewStats};
 use crate::report::{
@@ -100,6 +105,15 @@ pub fn run_fit(
         "tension".into(),
         tension.iter().map(|&t| t as f32).collect(),
     );
+    let slack = slack(&fit.knit);
+    yarns
+        .point_attributes
+        .insert("slack".into(), slack.iter().map(|&v| v as f32).collect());
+    let slack = slack_details(&fit.knit, &slack, &fit.centreline, |s| {
+        fit.path
+            .as_ref()
+            .map(|path| format!("{:?}", part_at(path, s)).to_lowercase())
+    });
     let mut penetration_fix = None;
     if plan.has(Stage::PenetrationFix) {
         let (fixed, stats) = run.stage(Stage::PenetrationFix, || {
@@ -140,7 +154,7 @@ pub fn run_fit(
         max_penetration_m: Some(fit.max_penetration_m),
         leg_triangles: Some(fit.leg.triangles.len()),
     };
-    let details = fit_details(scene, &fit, &leg_fields, penetration_fix, preview);
+    let details = fit_details(scene, &fit, &leg_fields, slack, penetration_fix, preview);
     run.finish(&loaded.name, metrics, details)
 }
 
@@ -149,6 +163,7 @@ fn fit_details(
     scene: &Scene,
     fit: &SolvedFit,
     leg_fields: &KnitFields,
+    slack: SlackDetails,
     penetration_fix: Option<PenetrationStats>,
     preview: Option<PreviewStats>,
 ) -> FitDetails {
@@ -186,8 +201,19 @@ fn fit_details(
                 course: knit.stiffness_scale[0],
                 wale: knit.stiffness_scale[1],
             },
+            bottom: if fit.knit.has_toe_seam() {
+                TubeBottom::Toe
+            } else {
+                TubeBottom::Ankle
+            },
+            heel: if fit.knit.short_rows().is_some() {
+                TubeHeel::Pocket
+            } else {
+                TubeHeel::None
+            },
             axial_range_m: fit.axial_range_m,
             bunched_courses: fit.bunched_courses,
+            slack,
         },
         solver: fit.solver.details(scene),
         contact: ContactDetails {
@@ -217,8 +243,12 @@ pub struct SolvedFit {
     pub leg: Leg,
     /// The leg's landmarks, where the axis was placed on them.
     pub landmarks: Option<Landmarks>,
-    /// The axis the tube was stretched along.
+    /// The axis the tube was stretched along (a stocking to the toe: its leg part).
     pub axis: Axis,
+    /// The path of a stocking to the toe, down the leg, around the heel and along the foot.
+    pub path: Option<TubePath>,
+    /// The stocking's centreline, from course 0 to the last course.
+    pub centreline: Centreline,
     /// The leg's collider.
     pub collider: Collider,
     /// The tube asked for.
@@ -233,7 +263,7 @@ pub struct SolvedFit {
     pub counters: ContactCounters,
     /// Deepest yarn point inside the leg against the exact triangles, metres (0 when none is).
     pub max_penetration_m: f64,
-    /// Lowest and highest yarn point along the axis, metres from the bottom point.
+    /// Nearest and furthest yarn along the centreline, metres from its start.
     pub axial_range_m: [f64; 2],
     /// Courses that came to rest below a course before them (a small fold above a slack ankle;
     /// more than [`MAX_BUNCHED_FRACTION`] of them is refused as bunched).
@@ -263,11 +293,19 @@ pub fn solve_fit(
             memory,
         ))
     })?;
-    let (landmarks, axis) = place_axis(scene, inputs, &leg, clock)?;
+    let Placement {
+        landmarks,
+        axis,
+        path,
+    } = place_axis(scene, inputs, &leg, clock)?;
+    let centreline = match &path {
+        Some(path) => Centreline::of_path(path),
+        None => Centreline::straight(&axis),
+    };
     let collider = clock.time(Stage::BuildCollider, || {
         Collider::new(&leg, scene.contact.method)
     })?;
-    let relaxed_length = relaxed_length(scene, &axis, scene_name)?;
+    let relaxed_length = relaxed_length(scene, centreline.length(), scene_name)?;
     let spec = TubeSpec {
         wales: scene.tube.wales,
         courses: scene.tube.courses,
@@ -279,6 +317,13 @@ pub fn solve_fit(
     let offset = scene.contact.offset(&scene.yarns);
     let mut levels = TubeLevels {
         spec,
+        path: path.as_ref(),
+        heel: scene.tube.heel,
+        centreline: &centreline,
+        lock_axis: match &path {
+            Some(path) => path.stations[0].t,
+            None => axis.direction(),
+        },
         axis: &axis,
         leg: &leg,
         collider: &collider,
@@ -325,7 +370,7 @@ pub fn solve_fit(
     if let Some(level) = solver.stalled() {
         // A stocking stopped while bunched is refused as that: it says more.
         let ratio = levels.support_ratio;
-        refuse_bunched(&knit, &axis, spec.relaxed_circumference_m, ratio)?;
+        refuse_bunched(&knit, &centreline, spec.relaxed_circumference_m, ratio)?;
         return Err(stalled(scene, &leg, &axis, landmarks.as_ref(), level));
     }
     let mut contact = levels
@@ -342,7 +387,7 @@ pub fn solve_fit(
         clock.time(Stage::CheckPenetration, || {
             (
                 skin_contact(&knit, &collider),
-                axial_range(&knit.particles.x, &axis),
+                axial_range(&knit, &centreline),
             )
         });
     if touching < MIN_TOUCHING_FRACTION {
@@ -363,7 +408,7 @@ pub fn solve_fit(
     }
     let bunched = refuse_bunched(
         &knit,
-        &axis,
+        &centreline,
         spec.relaxed_circumference_m,
         levels.support_ratio,
     )?;
@@ -371,6 +416,8 @@ pub fn solve_fit(
         leg,
         landmarks,
         axis,
+        path,
+        centreline,
         collider,
         spec,
         offset,
@@ -388,11 +435,11 @@ pub fn solve_fit(
 /// [`Error::Bunched`] above [`MAX_BUNCHED_FRACTION`] of them.
 fn refuse_bunched(
     knit: &Knit,
-    axis: &Axis,
+    centreline: &Centreline,
     circumference_m: f64,
     support_ratio: f64,
 ) -> Result<usize> {
-    let (bunched, first) = bunched_courses(knit, &axis.direction());
+    let (bunched, first) = bunched_courses(knit, centreline);
     match first.filter(|_| bunched as f64 > MAX_BUNCHED_FRACTION * knit.courses as f64) {
         Some(course) => Err(Error::Bunched {
             course,
@@ -400,11 +447,16 @@ fn refuse_bunched(
             courses: knit.courses,
             place: {
                 // Where the courses from the first out of order on came to rest.
-                let [lo, hi] = axial_range(&knit.particles.x[course * knit.wales..], axis);
+                let along: Vec<f64> = (course..knit.courses)
+                    .map(|c| centreline.course_along(knit, c))
+                    .collect();
+                let lo = along.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = along.iter().copied().fold(f64::NEG_INFINITY, f64::max);
                 format!(
-                    "gathered {:.0}–{:.0} cm above the stocking's bottom end",
+                    "gathered {:.0}–{:.0} cm along the stocking from its {} end",
                     100.0 * lo.max(0.0),
-                    100.0 * hi.max(0.0)
+                    100.0 * hi.max(0.0),
+                    if knit.has_toe_seam() { "top" } else { "bottom" }
                 )
             },
             ratio: support_ratio,
@@ -425,7 +477,7 @@ pub fn place_axis(
     inputs: &FitInputs,
     leg: &Leg,
     clock: &mut StageClock,
-) -> Result<(Option<Landmarks>, Axis)> {
+) -> Result<Placement> {
     let landmarks = match scene.leg.axis {
         Some(_) => None,
         None => Some(clock.time(Stage::FindLandmarks, || {
@@ -437,10 +489,55 @@ pub fn place_axis(
             )
         })?),
     };
-    let axis = clock.time(Stage::FindAxis, || {
-        choose_axis(scene, inputs, leg, &landmarks)
+    let (axis, path) = clock.time(Stage::FindAxis, || -> Result<_> {
+        let axis = choose_axis(scene, inputs, leg, &landmarks)?;
+        let path = match (scene.tube.bottom, &landmarks) {
+            (Some(TubeBottom::Ankle), _) => None,
+            (Some(TubeBottom::Toe), None) => {
+                return Err(Error::Leg {
+                    path: leg.path.clone(),
+                    message: "tube.bottom is \"toe\", but leg.axis gives a straight tube; set \
+                              tube.bottom to \"ankle\", or leave leg.axis out so the stocking \
+                              follows the leg's landmarks"
+                        .into(),
+                })
+            }
+            // Until every sample with a foot passes the invariants to the toe, a scene asks
+            // for the toe by name (CHANGELOG, issue 20).
+            (None, _) => None,
+            (Some(TubeBottom::Toe), Some(l)) => Some(stocking_path(scene, leg, l)?),
+        };
+        Ok((axis, path))
     })?;
-    Ok((landmarks, axis))
+    Ok(Placement {
+        landmarks,
+        axis,
+        path,
+    })
+}
+
+/// Where a fit's stocking goes: the landmarks it was placed on, its axis, and, for a stocking
+/// to the toe, its path over the foot.
+pub struct Placement {
+    /// The leg's landmarks (none where the scene gives the axis).
+    pub landmarks: Option<Landmarks>,
+    /// The stocking's axis (to the toe: its leg part, from the ankle up).
+    pub axis: Axis,
+    /// The path of a stocking to the toe.
+    pub path: Option<TubePath>,
+}
+
+/// The path of a stocking to the toe on `landmarks`, its top where `tube.top` puts it.
+fn stocking_path(scene: &Scene, leg: &Leg, landmarks: &Landmarks) -> Result<TubePath> {
+    let fail = |message: String| {
+        Error::Leg {
+        path: leg.path.clone(),
+        message: format!("cannot take the stocking to the toe: {message}; set tube.bottom to \"ankle\" for a stocking that ends there"),
+    }
+    };
+    let axis = tube_axis(landmarks, TubeBottom::Toe, scene.tube.top).map_err(fail)?;
+    let top_s = axis.top().coords.dot(&Vector3::from(landmarks.up));
+    path_to_toe(landmarks, top_s, &leg.positions, &leg.triangles).map_err(fail)
 }
 
 /// The fit's memory check: its tube, leg and files against the scene's limits.
@@ -455,10 +552,20 @@ pub fn memory_check(scene: &Scene, plan: &Plan, leg_triangles: usize) -> MemoryC
     MemoryCheck::fit(&size, &scene.limits)
 }
 
+/// Fewest wales or courses on the coarsest grid of a stocking to the toe: 24 courses over a
+/// leg and foot of 70 cm put rings 3 cm apart, coarser than the heel, and that level chattered.
+const STOCKING_COARSEST: usize = 60;
+
 /// The tube at any grid size, and its contact with the leg: what the solvers knit and constrain.
 struct TubeLevels<'a> {
     /// The tube asked for; other levels change only its wales and courses.
     spec: TubeSpec,
+    /// A stocking to the toe's path (else an open tube along `axis`).
+    path: Option<&'a TubePath>,
+    heel: TubeHeel,
+    centreline: &'a Centreline,
+    /// The direction the held ring(s) may not move along.
+    lock_axis: Vector3<f64>,
     axis: &'a Axis,
     leg: &'a Leg,
     collider: &'a Collider,
@@ -479,7 +586,10 @@ impl<'a> Levels for TubeLevels<'a> {
             courses,
             ..self.spec
         };
-        build_tube(&spec, self.axis, &self.leg.positions, &self.leg.triangles).knit
+        match self.path {
+            Some(path) => build_stocking(&spec, path, self.heel).knit,
+            None => build_tube(&spec, self.axis, &self.leg.positions, &self.leg.triangles).knit,
+        }
     }
 
     fn constraints(&mut self, knit: &Knit) -> &mut dyn Constraints {
@@ -492,15 +602,24 @@ impl<'a> Levels for TubeLevels<'a> {
             self.collider,
             self.offset,
             query_radius,
-            self.axis.direction(),
+            self.lock_axis,
             end_rings(knit),
         ))
+    }
+
+    fn coarsest(&self) -> usize {
+        // A heel and a toe need rings a few centimetres apart at most.
+        if self.path.is_some() {
+            STOCKING_COARSEST
+        } else {
+            crate::sim::multilevel::COARSEST
+        }
     }
 
     fn accept(&mut self, knit: &Knit) -> Result<()> {
         refuse_bunched(
             knit,
-            self.axis,
+            self.centreline,
             self.spec.relaxed_circumference_m,
             self.support_ratio,
         )
@@ -606,7 +725,8 @@ fn choose_axis(
             }
         }
         (None, Some(landmarks)) => {
-            tube_axis(landmarks, scene.tube.bottom, scene.tube.top).map_err(fail)?
+            let bottom = scene.tube.bottom.unwrap_or(TubeBottom::Ankle);
+            tube_axis(landmarks, bottom, scene.tube.top).map_err(fail)?
         }
         (None, None) => unreachable!("landmarks are found whenever no axis is given"),
     };
@@ -741,8 +861,7 @@ fn stalled(
 }
 
 /// The stocking's relaxed length: given (and shorter than the axis), or a fraction of the axis.
-fn relaxed_length(scene: &Scene, axis: &Axis, scene_name: &str) -> Result<f64> {
-    let length = axis.length();
+fn relaxed_length(scene: &Scene, length: f64, scene_name: &str) -> Result<f64> {
     match scene.tube.relaxed_length_m {
         None => Ok(RELAXED_LENGTH_FRACTION * length),
         Some(l) if l < length => Ok(l),
@@ -782,14 +901,21 @@ fn skin_contact(knit: &Knit, collider: &Collider) -> (f64, f64) {
 }
 
 /// Lowest and highest of `points` along the axis, metres from the bottom point.
-fn axial_range(points: &[Vec3], axis: &Axis) -> [f64; 2] {
-    let a = axis.direction();
-    points
-        .iter()
-        .fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], p| {
-            let s = (p - axis.bottom().coords).dot(&a);
+/// Nearest and furthest yarn along `centreline`, metres from its start: every grid point's
+/// place along an open tube's straight axis; along a stocking to the toe's bent line, its
+/// courses' (the mean of each).
+fn axial_range(knit: &Knit, centreline: &Centreline) -> [f64; 2] {
+    let range = |values: &mut dyn Iterator<Item = f64>| {
+        values.fold([f64::INFINITY, f64::NEG_INFINITY], |[lo, hi], s| {
             [lo.min(s), hi.max(s)]
         })
+    };
+    if knit.has_toe_seam() {
+        range(&mut (0..knit.courses).map(|c| centreline.course_along(knit, c)))
+    } else {
+        let grid = &knit.particles.x[..knit.grid_len()];
+        range(&mut grid.iter().map(|p| centreline.along(p)))
+    }
 }
 
 /// What a fit's files are encoded from.

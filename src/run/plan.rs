@@ -83,8 +83,12 @@ pub fn plan_fit(loaded: &LoadedScene, out_dir: &Path) -> Result<PlanOutcome> {
     } else {
         let leg = decode_leg(file, scene.leg.units, scene.leg.up_axis)?;
         // The fit's own stages, on a clock nobody reads.
-        let (landmarks, axis) = place_axis(scene, &inputs, &leg, &mut StageClock::new(&plan))?;
-        Placement::Placed(Box::new(Placed::new(&leg, landmarks.as_ref(), axis)))
+        let placed = place_axis(scene, &inputs, &leg, &mut StageClock::new(&plan))?;
+        Placement::Placed(Box::new(Placed::new(
+            &leg,
+            placed.landmarks.as_ref(),
+            placed.axis,
+        )))
     };
     Ok(PlanOutcome {
         memory: Some(memory),

@@ -52,6 +52,11 @@ pub trait Levels {
     fn accept(&mut self, _knit: &Knit) -> Result<()> {
         Ok(())
     }
+    /// Fewest wales or courses a level may have (default [`COARSEST`]): a knit whose shape has
+    /// small features (a heel, a toe) needs a finer coarsest grid to resolve them.
+    fn coarsest(&self) -> usize {
+        COARSEST
+    }
 }
 
 /// What a multilevel relaxation did, level by level.
@@ -87,11 +92,16 @@ impl MultilevelStats {
 /// directions. A closed course of `w` points coarsens to `⌈w/2⌉`; a wale of `c` points (`c − 1`
 /// intervals between the held end rings) to `⌈(c − 1)/2⌉ + 1`.
 pub fn grid_sizes(wales: usize, courses: usize) -> Vec<(usize, usize)> {
+    grid_sizes_down_to(wales, courses, COARSEST)
+}
+
+/// [`grid_sizes`] with at least `coarsest` wales and courses on every level.
+pub fn grid_sizes_down_to(wales: usize, courses: usize, coarsest: usize) -> Vec<(usize, usize)> {
     let mut sizes = vec![(wales, courses)];
     loop {
         let (w, c) = *sizes.last().expect("starts non-empty");
         let coarser = (w.div_ceil(2), (c - 1).div_ceil(2) + 1);
-        if coarser.0 < COARSEST || coarser.1 < COARSEST {
+        if coarser.0 < coarsest || coarser.1 < coarsest {
             break;
         }
         sizes.push(coarser);
@@ -119,7 +129,7 @@ pub fn relax_multilevel(
 ) -> Result<(Knit, MultilevelStats)> {
     let mut stats = MultilevelStats::default();
     let mut coarser: Option<Knit> = None;
-    let sizes = grid_sizes(wales, courses);
+    let sizes = grid_sizes_down_to(wales, courses, levels.coarsest());
     for (n, &(w, c)) in sizes.iter().enumerate() {
         let finest = n + 1 == sizes.len();
         let mut knit = levels.knit(w, c);

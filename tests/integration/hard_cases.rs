@@ -964,7 +964,7 @@ fn a_stocking_far_smaller_than_the_ankle_is_refused_on_the_coarse_grid() {
         &[
             "not a stocking",
             "of its 31 courses",
-            "cm above the stocking's bottom end",
+            "cm along the stocking from its bottom end",
             "raise tube.relaxed_circumference_m",
         ],
     );

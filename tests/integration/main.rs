@@ -7,6 +7,7 @@ mod contact;
 mod docs;
 mod evaluation;
 mod fit;
+mod foot;
 mod fuzz;
 mod golden;
 mod hard_cases;
