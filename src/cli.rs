@@ -34,7 +34,7 @@ pub struct Cli {
 pub enum Command {
     /// Fit the stocking onto a leg from a glTF or PLY file; write stocking.glb, stocking.ply,
     /// leg.ply.
-    Fit(FitArgs),
+    Fit(Box<FitArgs>),
     /// The paper's flat-patch experiment: hold two edges of a knit patch, pull them apart, relax.
     Patch(PatchArgs),
     /// What accuracy costs in time: sweep resolution × solver × tolerance on the bundled legs;
@@ -63,7 +63,7 @@ pub struct PlanArgs {
 #[derive(Subcommand, Debug)]
 pub enum PlanOf {
     /// The plan of `knitfit fit` (what `knitfit plan` shows without a subcommand).
-    Fit(FitArgs),
+    Fit(Box<FitArgs>),
     /// The plan of `knitfit patch`.
     Patch(PatchArgs),
 }
@@ -137,6 +137,14 @@ pub struct FitArgs {
     /// Overrides leg.side.
     #[arg(long, value_name = "left|right")]
     pub side: Option<String>,
+    /// Where the stocking ends at the bottom: toe (over the foot, closed by a toe seam) or
+    /// ankle (open). Overrides tube.bottom.
+    #[arg(long, value_name = "toe|ankle")]
+    pub bottom: Option<String>,
+    /// The heel of a stocking to the toe: none (heel-less) or pocket (short rows). Overrides
+    /// tube.heel.
+    #[arg(long, value_name = "none|pocket")]
+    pub heel: Option<String>,
     /// Contact queries: bvh (fast) or brute (the paper's all-triangles test). Overrides
     /// contact.method.
     #[arg(long, value_name = "bvh|brute")]
@@ -183,6 +191,8 @@ impl FitArgs {
             units,
             up_axis,
             side,
+            bottom,
+            heel,
             contact,
             solver,
             tolerance,
@@ -197,6 +207,8 @@ impl FitArgs {
             || units.is_some()
             || up_axis.is_some()
             || side.is_some()
+            || bottom.is_some()
+            || heel.is_some()
             || contact.is_some()
             || solver.is_some()
             || tolerance.is_some()
@@ -231,6 +243,8 @@ impl FitArgs {
             ("--units", "leg.units", &self.units),
             ("--up-axis", "leg.up_axis", &self.up_axis),
             ("--side", "leg.side", &self.side),
+            ("--bottom", "tube.bottom", &self.bottom),
+            ("--heel", "tube.heel", &self.heel),
         ] {
             if let Some(value) = value {
                 set.push(Override::new(flag, field, value.as_str()));

@@ -43,7 +43,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let quiet = cli.quiet;
     let result = match cli.command {
-        Some(Command::Fit(args)) => fit(args, quiet),
+        Some(Command::Fit(args)) => fit(*args, quiet),
         Some(Command::Patch(args)) => patch(args, quiet),
         Some(Command::Bench(args)) => bench(args, quiet),
         Some(Command::Render(args)) => render(args, quiet),

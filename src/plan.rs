@@ -18,7 +18,8 @@ use crate::sim::{ForceTerms, SolverMethod};
 /// Where `tube.bottom` puts the stocking's start, in words.
 pub fn tube_bottom_words(bottom: Option<TubeBottom>) -> String {
     match bottom {
-        None | Some(TubeBottom::Ankle) => "the ankle (tube.bottom)".into(),
+        None => "the toe where the leg has a foot, else the ankle (tube.bottom)".into(),
+        Some(TubeBottom::Ankle) => "the ankle (tube.bottom)".into(),
         Some(TubeBottom::Toe) => "the toe (tube.bottom)".into(),
     }
 }

@@ -78,6 +78,9 @@ pub struct TubePath {
     pub stations: Vec<Station>,
     /// The heel fan's pivot line passes through here (along the stations' `u`).
     pub pivot: Point3<f64>,
+    /// The toes as the stocking meets them: the sections' convex hulls from the ball of the foot
+    /// to the last section (see [`TubePath::box_the_toes`]).
+    pub toes: Vec<Station>,
 }
 
 impl TubePath {
@@ -280,8 +283,12 @@ pub fn path_to_toe(
             return Err(message);
         }
     }
-    add_toe_cap(&mut stations, foot.toe_tip.into());
-    Ok(TubePath { stations, pivot })
+    let toes = add_toe_cap(&mut stations, foot.toe_tip.into());
+    Ok(TubePath {
+        stations,
+        pivot,
+        toes,
+    })
 }
 
 /// How far the toe cap reaches beyond the toe tip, metres.
@@ -294,7 +301,8 @@ const TOE_CAP_END: f64 = 0.05;
 /// [`TOE_CAP_M`] in front of the toe tip (while still clearing the toes' own sections), where
 /// the toe seam joins its two sides. Without this the rings would follow the toes down to the
 /// big toe alone, and the toe's courses would start bunched many times over.
-fn add_toe_cap(stations: &mut Vec<Station>, toe_tip: Point3<f64>) {
+/// Returns the foot's stations from the ball on as they were (the toes' own hulls).
+fn add_toe_cap(stations: &mut Vec<Station>, toe_tip: Point3<f64>) -> Vec<Station> {
     let foot: Vec<usize> = (0..stations.len())
         .filter(|&k| stations[k].part == PathPart::Foot)
         .collect();
@@ -303,8 +311,9 @@ fn add_toe_cap(stations: &mut Vec<Station>, toe_tip: Point3<f64>) {
             |k: usize| stations[k].extent_at(0.0) + stations[k].extent_at(std::f64::consts::PI);
         width(a).total_cmp(&width(b))
     }) else {
-        return;
+        return Vec::new();
     };
+    let toes = stations[widest..].to_vec();
     let ball = stations[widest].clone();
     let last = stations.last().cloned().expect("the foot has stations");
     let end = (toe_tip - ball.centre).dot(&ball.t) + TOE_CAP_M;
@@ -346,6 +355,81 @@ fn add_toe_cap(stations: &mut Vec<Station>, toe_tip: Point3<f64>) {
         };
         stations.push(station.clone());
         previous = station;
+    }
+    toes
+}
+
+impl TubePath {
+    /// The leg `positions`/`triangles` with its toes boxed: the toes' own triangles, from the
+    /// ball of the foot on, replaced by the surface through their sections' convex hulls, closed
+    /// at the tip. This is the leg the stocking's contact sees: fabric bridges the gaps between
+    /// toes, and a point let into one chatters between its two sides (the futility watch
+    /// stopped the whole body's fit there). The box holds the toes, so a point outside it is
+    /// outside them. Unchanged where the path has no toes.
+    pub fn box_the_toes(
+        &self,
+        positions: &[Point3<f64>],
+        triangles: &[[u32; 3]],
+    ) -> (Vec<Point3<f64>>, Vec<[u32; 3]>) {
+        let toes = &self.toes;
+        if toes.len() < 2 {
+            return (positions.to_vec(), triangles.to_vec());
+        }
+        let (first, last) = (&toes[0], &toes[toes.len() - 1]);
+        let t = first.t;
+        let along = |p: &Point3<f64>| (p - first.centre).dot(&t);
+        let length = along(&last.centre);
+        // Inside the box, with a millimetre to spare; never the ball's own section.
+        let inside = |p: &Point3<f64>| {
+            let x = along(p);
+            if x <= 0.001 || x > length + TOE_END_M {
+                return false;
+            }
+            let k = toes
+                .partition_point(|st| along(&st.centre) < x)
+                .clamp(1, toes.len() - 1);
+            let (a, b) = (&toes[k - 1], &toes[k]);
+            let span = along(&b.centre) - along(&a.centre);
+            let f = if span > 0.0 {
+                ((x - along(&a.centre)) / span).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let centre = a.centre + (b.centre - a.centre) * f;
+            let d = p - centre;
+            let (du, dv) = (d.dot(&a.u), d.dot(&a.v));
+            let theta = dv.atan2(du);
+            let reach = a.extent_at(theta) * (1.0 - f) + b.extent_at(theta) * f;
+            (du * du + dv * dv).sqrt() <= reach + 0.001
+        };
+        let mut out_positions = positions.to_vec();
+        let mut out_triangles: Vec<[u32; 3]> = triangles
+            .iter()
+            .filter(|tri| !tri.iter().all(|&i| inside(&positions[i as usize])))
+            .copied()
+            .collect();
+        let n = RADIUS_SAMPLES;
+        let base = out_positions.len() as u32;
+        for st in toes {
+            for p in st.outline() {
+                out_positions.push(st.centre + st.u * p[0] + st.v * p[1]);
+            }
+        }
+        let tip = last.centre + t * TOE_END_M;
+        out_positions.push(tip);
+        let apex = out_positions.len() as u32 - 1;
+        let at = |i: usize, k: usize| base + (i * n + k % n) as u32;
+        for i in 0..toes.len() - 1 {
+            for k in 0..n {
+                out_triangles.push([at(i, k), at(i, k + 1), at(i + 1, k + 1)]);
+                out_triangles.push([at(i, k), at(i + 1, k + 1), at(i + 1, k)]);
+            }
+        }
+        let end = toes.len() - 1;
+        for k in 0..n {
+            out_triangles.push([at(end, k), at(end, k + 1), apex]);
+        }
+        (out_positions, out_triangles)
     }
 }
 

@@ -115,7 +115,8 @@ pub struct TubeSettings {
     /// [`RELAXED_LENGTH_FRACTION`] of the axis length (default: absent).
     pub relaxed_length_m: Option<f64>,
     /// Where the stocking ends at the bottom: `"toe"` (over the foot, closed by a toe seam) or
-    /// `"ankle"` (an open end at the ankle). Absent means the ankle for now (default: absent).
+    /// `"ankle"` (an open end at the ankle). Absent means the toe on a leg with a foot and the
+    /// ankle on one without, or where `leg.axis` is given (default: absent).
     pub bottom: Option<TubeBottom>,
     /// The heel: `"none"` (a heel-less tube, as most sheer hosiery is knitted) or `"pocket"`
     /// (short rows over the back of the heel). Only a stocking that reaches the toe has one

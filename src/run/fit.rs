@@ -302,8 +302,14 @@ pub fn solve_fit(
         Some(path) => Centreline::of_path(path),
         None => Centreline::straight(&axis),
     };
-    let collider = clock.time(Stage::BuildCollider, || {
-        Collider::new(&leg, scene.contact.method)
+    let collider = clock.time(Stage::BuildCollider, || match &path {
+        // The stocking's contact sees the toes boxed (TubePath::box_the_toes).
+        Some(path) => {
+            let mut boxed = leg.clone();
+            (boxed.positions, boxed.triangles) = path.box_the_toes(&leg.positions, &leg.triangles);
+            Collider::new(&boxed, scene.contact.method)
+        }
+        None => Collider::new(&leg, scene.contact.method),
     })?;
     let relaxed_length = relaxed_length(scene, centreline.length(), scene_name)?;
     let spec = TubeSpec {
@@ -502,10 +508,10 @@ pub fn place_axis(
                         .into(),
                 })
             }
-            // Until every sample with a foot passes the invariants to the toe, a scene asks
-            // for the toe by name (CHANGELOG, issue 20).
-            (None, _) => None,
-            (Some(TubeBottom::Toe), Some(l)) => Some(stocking_path(scene, leg, l)?),
+            // Absent: to the toe where the leg has a foot.
+            (None, None) => None,
+            (None, Some(l)) if l.foot.is_none() => None,
+            (_, Some(l)) => Some(stocking_path(scene, leg, l)?),
         };
         Ok((axis, path))
     })?;

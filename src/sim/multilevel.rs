@@ -38,6 +38,11 @@ pub const COARSE_LEVEL_ITERATIONS: usize = 2000;
 /// still leaves smooth error for a very fine grid (docs/decisions/0032).
 pub const COARSE_TOLERANCE_FACTOR: f64 = 2.0;
 
+/// A coarser level stopped as futile hands its state on all the same when its residual is
+/// below this many times its tolerance: close enough to be a start. Further off (a fit that
+/// cannot hold on the leg, residuals of 1e-2 and more) it stops the fit there.
+pub const HAND_ON_RESIDUAL_FACTOR: f64 = 5.0;
+
 /// How the caller makes the knit and constraints of each level: the solver knows grids, the
 /// caller knows what is knitted and what it touches.
 pub trait Levels {
@@ -158,7 +163,15 @@ pub fn relax_multilevel(
             observer,
             stats.total_iterations(),
         )?;
-        let stalled = level.stall.is_some();
+        // A coarser level that stalled close to its tolerance still hands on a useful start
+        // (a stocking's heel and toe keep a coarse grid's contact chattering there).
+        let level_tolerance = if finest {
+            tolerance
+        } else {
+            tolerance * COARSE_TOLERANCE_FACTOR
+        };
+        let stalled = level.stall.is_some()
+            && (finest || level.residual >= HAND_ON_RESIDUAL_FACTOR * level_tolerance);
         stats.levels.push(level);
         if !finest && !stalled {
             levels.accept(&knit)?;

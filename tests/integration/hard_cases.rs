@@ -254,10 +254,12 @@ fn reference_fit() -> &'static Figures {
 
 /// The scene's `yarns` and `tube` for support yarn `ratio` times as stiff as nylon, with a
 /// stocking relaxed at `circumference_m`.
+/// The open tube held at the ankle (these cases are about its courses along its axis, at grids
+/// too coarse for a foot; the stocking to the toe: `foot.rs`).
 fn stiffness(ratio: f64, circumference_m: f64) -> Value {
     json!({
         "yarns": { "support": { "stiffness": ratio, "radius_m": 0.00004 } },
-        "tube": { "relaxed_circumference_m": circumference_m },
+        "tube": { "relaxed_circumference_m": circumference_m, "bottom": "ankle" },
     })
 }
 
@@ -952,7 +954,7 @@ fn a_stocking_far_smaller_than_the_ankle_is_refused_on_the_coarse_grid() {
     let scene = scene_for(
         &leg,
         json!({}),
-        json!({ "tube": { "relaxed_circumference_m": 0.02 } }),
+        json!({ "tube": { "relaxed_circumference_m": 0.02, "bottom": "ankle" } }),
     );
     let (dir, out) = run_scene(&scene, "60x60", &[]);
     // Refused from the coarsest grid: its course count, not the 60 asked for.
