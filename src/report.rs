@@ -16,6 +16,7 @@ use crate::leg::{
 use crate::limits::MemoryCheck;
 use crate::plan::{Plan, PlannedStage, Stage};
 use crate::post::penetration::PenetrationStats;
+use crate::post::regions::RegionStretch;
 use crate::post::stitches::SlackDetails;
 use crate::post::StitchStats;
 use crate::preview::PreviewStats;
@@ -112,6 +113,9 @@ pub struct FitDetails {
     pub memory: MemoryDetails,
     /// Stitch density over the leg's vertices that yarn covers.
     pub stitch_density_per_cm2: DensityRange,
+    /// Mean stretch of the knit on each part of the leg, toe to thigh (empty where the leg's
+    /// landmarks were not looked for: a given axis).
+    pub stretch_by_region: Vec<RegionStretch>,
 }
 
 /// The leg of a fit.

@@ -33,6 +33,8 @@ pub const FAN_STATIONS: usize = 48;
 /// The last station lies this far behind the toe tip, metres: closer, the section is too small
 /// to place a ring around, and the toe seam covers the rest.
 pub const TOE_END_M: f64 = 0.004;
+/// How far the toe box reaches past the toe tip, metres.
+const TOE_BOX_PAST_M: f64 = 0.002;
 /// Angles at which a station keeps its section's extent.
 pub const RADIUS_SAMPLES: usize = 128;
 /// Gap kept between the leg and a ring before the fit, as a fraction of the ring's extent.
@@ -379,7 +381,8 @@ impl TubePath {
         let t = first.t;
         let along = |p: &Point3<f64>| (p - first.centre).dot(&t);
         let length = along(&last.centre);
-        // Inside the box, with a millimetre to spare; never the ball's own section.
+        // Well inside the box (half a millimetre in): a triangle of skin the box only nearly
+        // holds stays, or the yarn resting on the box would lie inside it.
         let inside = |p: &Point3<f64>| {
             let x = along(p);
             if x <= 0.001 || x > length + TOE_END_M {
@@ -400,7 +403,7 @@ impl TubePath {
             let (du, dv) = (d.dot(&a.u), d.dot(&a.v));
             let theta = dv.atan2(du);
             let reach = a.extent_at(theta) * (1.0 - f) + b.extent_at(theta) * f;
-            (du * du + dv * dv).sqrt() <= reach + 0.001
+            (du * du + dv * dv).sqrt() <= reach - 0.0005
         };
         let mut out_positions = positions.to_vec();
         let mut out_triangles: Vec<[u32; 3]> = triangles
@@ -415,17 +418,22 @@ impl TubePath {
                 out_positions.push(st.centre + st.u * p[0] + st.v * p[1]);
             }
         }
-        let tip = last.centre + t * TOE_END_M;
-        out_positions.push(tip);
+        // Past the last section, the last outline again, beyond the tip, and a flat end: the
+        // toe tip need not be at the outline's centre (a big toe is not).
+        let beyond = t * (TOE_END_M + TOE_BOX_PAST_M);
+        for p in last.outline() {
+            out_positions.push(last.centre + beyond + last.u * p[0] + last.v * p[1]);
+        }
+        out_positions.push(last.centre + beyond);
         let apex = out_positions.len() as u32 - 1;
         let at = |i: usize, k: usize| base + (i * n + k % n) as u32;
-        for i in 0..toes.len() - 1 {
+        for i in 0..toes.len() {
             for k in 0..n {
                 out_triangles.push([at(i, k), at(i, k + 1), at(i + 1, k + 1)]);
                 out_triangles.push([at(i, k), at(i + 1, k + 1), at(i + 1, k)]);
             }
         }
-        let end = toes.len() - 1;
+        let end = toes.len();
         for k in 0..n {
             out_triangles.push([at(end, k), at(end, k + 1), apex]);
         }

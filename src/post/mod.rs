@@ -1,8 +1,10 @@
 //! Post-processing of a relaxed knit: stitch measurements, per-point fields and their transfer
-//! to the leg, the penetration fix of the yarn polylines, and the surfaces the files show.
+//! to the leg, the stretch by part of the leg, the penetration fix of the yarn polylines, and
+//! the surfaces the files show.
 
 pub mod fields;
 pub mod penetration;
+pub mod regions;
 pub mod stitches;
 pub mod surfaces;
 

@@ -27,6 +27,7 @@ use crate::limits::{peak_memory, FitSize, MemoryCheck};
 use crate::plan::{fit_files, File, FitFile, Plan, Stage, PREVIEW_FILE};
 use crate::post::fields::{self, measure_fields, KnitFields};
 use crate::post::penetration::{fix_penetrations, PenetrationStats};
+use crate::post::regions::{regions, stretch_by_region};
 use crate::post::stitches::{
     bunched_courses, slack, slack_details, SlackDetails, MAX_BUNCHED_FRACTION,
 };
@@ -227,6 +228,14 @@ fn fit_details(
             check: fit.memory.clone(),
             peak_resident_bytes: peak_memory(),
         },
+        stretch_by_region: match &fit.landmarks {
+            Some(landmarks) => {
+                let regions = regions(knit, &fit.centreline, fit.path.as_ref(), landmarks);
+                let (course, wale) = fields::stretch(knit);
+                stretch_by_region(&regions, &course, &wale)
+            }
+            None => Vec::new(),
+        },
         stitch_density_per_cm2: DensityRange {
             leg_vertices_covered: covered.len(),
             leg_vertices: leg.positions.len(),
@@ -302,14 +311,19 @@ pub fn solve_fit(
         Some(path) => Centreline::of_path(path),
         None => Centreline::straight(&axis),
     };
-    let collider = clock.time(Stage::BuildCollider, || match &path {
-        // The stocking's contact sees the toes boxed (TubePath::box_the_toes).
-        Some(path) => {
-            let mut boxed = leg.clone();
-            (boxed.positions, boxed.triangles) = path.box_the_toes(&leg.positions, &leg.triangles);
-            Collider::new(&boxed, scene.contact.method)
-        }
-        None => Collider::new(&leg, scene.contact.method),
+    let (collider, boxed_toes) = clock.time(Stage::BuildCollider, || -> Result<_> {
+        let collider = Collider::new(&leg, scene.contact.method)?;
+        // The fit's contact sees the toes boxed (TubePath::box_the_toes).
+        let boxed_toes = match &path {
+            Some(path) => {
+                let mut boxed = leg.clone();
+                (boxed.positions, boxed.triangles) =
+                    path.box_the_toes(&leg.positions, &leg.triangles);
+                Some(Collider::new(&boxed, scene.contact.method)?)
+            }
+            None => None,
+        };
+        Ok((collider, boxed_toes))
     })?;
     let relaxed_length = relaxed_length(scene, centreline.length(), scene_name)?;
     let spec = TubeSpec {
@@ -332,7 +346,7 @@ pub fn solve_fit(
         },
         axis: &axis,
         leg: &leg,
-        collider: &collider,
+        collider: boxed_toes.as_ref().unwrap_or(&collider),
         offset,
         support_ratio: scene.yarns.support.stiffness / scene.yarns.nylon.stiffness,
         contact: None,
@@ -384,7 +398,7 @@ pub fn solve_fit(
         .take()
         .expect("the solver made the fine grid's contact");
     clock.time(Stage::ExactContactPass, || {
-        contact.finish(&mut knit.particles.x, &knit.particles.inv_mass)
+        contact.finish_on(&collider, &mut knit.particles.x, &knit.particles.inv_mass)
     });
 
     let mut counters = levels.retired;
@@ -535,12 +549,22 @@ pub struct Placement {
 
 /// The path of a stocking to the toe on `landmarks`, its top where `tube.top` puts it.
 fn stocking_path(scene: &Scene, leg: &Leg, landmarks: &Landmarks) -> Result<TubePath> {
-    let fail = |message: String| {
-        Error::Leg {
+    let fail = |message: String| Error::Leg {
         path: leg.path.clone(),
-        message: format!("cannot take the stocking to the toe: {message}; set tube.bottom to \"ankle\" for a stocking that ends there"),
-    }
+        message: format!(
+            "cannot take the stocking to the toe: {message}; or set tube.bottom to \"ankle\" \
+             (--bottom ankle) for a stocking that ends there"
+        ),
     };
+    let (wales, courses) = (scene.tube.wales, scene.tube.courses);
+    if wales.min(courses) < STOCKING_COARSEST {
+        return Err(fail(format!(
+            "at {wales}×{courses} the rings would be centimetres apart over the heel and the \
+             toe, where such a coarse fit chatters instead of settling; give at least \
+             {STOCKING_COARSEST}×{STOCKING_COARSEST} (--resolution, tube.wales and \
+             tube.courses)"
+        )));
+    }
     let axis = tube_axis(landmarks, TubeBottom::Toe, scene.tube.top).map_err(fail)?;
     let top_s = axis.top().coords.dot(&Vector3::from(landmarks.up));
     path_to_toe(landmarks, top_s, &leg.positions, &leg.triangles).map_err(fail)

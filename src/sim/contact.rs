@@ -164,6 +164,13 @@ impl<'a> LegContact<'a> {
         self.counters.finished_out += moved;
     }
 
+    /// [`LegContact::finish`] against `exact` instead of the surface the fit slid on: where the
+    /// fit's contact saw a simplified leg (toes boxed), the last word is the leg's own skin.
+    pub fn finish_on(&mut self, exact: &'a Collider, x: &mut [Vec3], inv_mass: &[f64]) {
+        self.collider = exact;
+        self.finish(x, inv_mass);
+    }
+
     /// Moves every free point closer to the skin than the offset (or inside) out to it, by exact
     /// queries; returns how many moved.
     fn push_out_all(&mut self, x: &mut [Vec3], inv_mass: &[f64]) -> u64 {

@@ -332,7 +332,16 @@ fn units_up_axis_and_side_flags_reach_the_fit() {
     let (_dir, r) = crate::support::fit(
         &leg,
         "32x32",
-        &["--side", "right", "--up-axis", "+y", "--units", "m"],
+        &[
+            "--side",
+            "right",
+            "--up-axis",
+            "+y",
+            "--units",
+            "m",
+            "--bottom",
+            "ankle",
+        ],
     );
     let l = &r["details"]["leg"];
     assert_eq!(

@@ -8,6 +8,7 @@ use knitfit::base::YarnKind;
 use knitfit::knit::tube::end_rings;
 use knitfit::knit::TubeBottom;
 use knitfit::leg::AxisSource;
+use knitfit::leg::{Units, UpChoice};
 use knitfit::plan::Plan;
 use knitfit::report::StageClock;
 use knitfit::run::fit::{solve_fit, FitInputs, SolvedFit};
@@ -107,4 +108,175 @@ fn a_heel_pocket_adds_short_rows_over_the_back_and_still_fits() {
     assert!(fit.knit.len() > fit.knit.grid_len());
     assert_eq!(fit.max_penetration_m, 0.0);
     assert!(fit.bunched_courses * 10 <= fit.knit.courses);
+}
+
+/// What one whole stocking on a sample leg with a foot measured.
+struct WholeStocking {
+    /// Deepest sample of the yarn polylines inside the exact leg, metres.
+    deepest_m: f64,
+    /// Toe tip to the nearest yarn point, metres.
+    toe_gap_m: f64,
+    /// Fraction of the skin between the sole and the ankle with yarn within two course
+    /// spacings of the fitted foot.
+    covered: f64,
+    /// Two course spacings, metres.
+    reach_m: f64,
+}
+
+/// Fits `leg` at the defaults (150×150, the toe, `heel`) and measures it against the exact,
+/// original leg.
+fn measure_whole_stocking(leg: &std::path::Path, heel: &str) -> WholeStocking {
+    let (dir, r) = crate::support::fit(leg, "150x150", &["--heel", heel]);
+    let name = format!("{} heel {heel}", leg.display());
+    let m = &r["metrics"];
+    assert_eq!(m["converged"], true, "{name}: {m}");
+    assert_eq!(m["max_penetration_m"], 0.0, "{name}: {m}");
+    assert_eq!(r["details"]["tube"]["bottom"], "toe", "{name}");
+    let out = dir.path().join("out");
+    let collider = crate::skin::collider_of(leg);
+    let depth = crate::skin::polyline_depth(&out, &collider, |_| true);
+    let deepest_m = depth.deepest;
+
+    let landmarks = &r["details"]["leg"]["landmarks"];
+    let v3 = |v: &serde_json::Value| Vector3::from(std::array::from_fn(|i| v[i].as_f64().unwrap()));
+    let (up, forward) = (v3(&landmarks["up"]), v3(&landmarks["foot_direction"]));
+    let tip = Point3::from(v3(&landmarks["toe_tip"]["m"]));
+    let sole = Point3::from(v3(&landmarks["sole"]["m"]));
+    let ankle = Point3::from(v3(&landmarks["ankle"]["centre"]["m"]));
+    let ankle_height = landmarks["ankle"]["height_m"].as_f64().unwrap();
+    let side = up.cross(&forward).normalize();
+    let d = depth.at - tip;
+    eprintln!(
+        "{name}: deepest at {:.1} mm forward of the toe tip, {:.1} up, {:.1} to the side",
+        1e3 * d.dot(&forward),
+        1e3 * d.dot(&up),
+        1e3 * d.dot(&side)
+    );
+
+    let yarns = crate::support::read_ply(&out.join("stocking.ply"));
+    let points: Vec<Point3<f64>> = yarns.payload["vertex"]
+        .iter()
+        .map(crate::support::point)
+        .collect();
+    let grid = Grid::of(&points, 0.01);
+    let toe_gap_m = grid.nearest(&tip, &points);
+    // Two course spacings: the mean distance between courses along the wales on the foot.
+    let index = |e: &ply_rs_bw::ply::DefaultElement, k: &str| match e[k] {
+        ply_rs_bw::ply::Property::Int(i) => i as usize,
+        ref other => panic!("{k}: {other:?}"),
+    };
+    let direction = |e: &ply_rs_bw::ply::DefaultElement| match e["direction"] {
+        ply_rs_bw::ply::Property::UChar(d) => d,
+        ref other => panic!("direction: {other:?}"),
+    };
+    let foot_wales: Vec<f64> = yarns.payload["edge"]
+        .iter()
+        .filter(|e| direction(e) == 1)
+        .map(|e| (points[index(e, "vertex1")], points[index(e, "vertex2")]))
+        .filter(|(a, _)| (a - sole).dot(&up) < ankle_height)
+        .map(|(a, b)| (b - a).norm())
+        .collect();
+    let reach_m = 2.0 * foot_wales.iter().sum::<f64>() / foot_wales.len() as f64;
+    // The dressed foot's skin from the sole to the ankle (not the other foot).
+    let skin = knitfit::leg::load_leg(leg, Units::Metres, UpChoice::Auto).unwrap();
+    let (mut area, mut covered_area) = (0.0, 0.0);
+    for t in &skin.triangles {
+        let [a, b, c] = t.map(|i| skin.positions[i as usize]);
+        let centre = Point3::from((a.coords + b.coords + c.coords) / 3.0);
+        let on_foot = (centre - sole).dot(&up) <= ankle_height
+            && (centre - ankle).dot(&side).abs() < 0.1
+            && (centre - tip).dot(&forward) < 0.01;
+        if !on_foot {
+            continue;
+        }
+        let a_t = (b - a).cross(&(c - a)).norm() / 2.0;
+        area += a_t;
+        if grid.nearest(&centre, &points) <= reach_m {
+            covered_area += a_t;
+        }
+    }
+    WholeStocking {
+        deepest_m,
+        toe_gap_m,
+        covered: covered_area / area,
+        reach_m,
+    }
+}
+
+/// Points binned in cubes, for nearest-point queries.
+struct Grid {
+    cell: f64,
+    bins: std::collections::HashMap<[i64; 3], Vec<usize>>,
+}
+
+impl Grid {
+    fn of(points: &[Point3<f64>], cell: f64) -> Grid {
+        let mut bins: std::collections::HashMap<[i64; 3], Vec<usize>> = Default::default();
+        for (i, p) in points.iter().enumerate() {
+            bins.entry(Self::key(p, cell)).or_default().push(i);
+        }
+        Grid { cell, bins }
+    }
+
+    fn key(p: &Point3<f64>, cell: f64) -> [i64; 3] {
+        [p.x, p.y, p.z].map(|c| (c / cell).floor() as i64)
+    }
+
+    /// Distance to the nearest point, looking up to 5 cells away (farther counts as 5 cells).
+    fn nearest(&self, q: &Point3<f64>, points: &[Point3<f64>]) -> f64 {
+        let k = Self::key(q, self.cell);
+        let mut best = f64::INFINITY;
+        for ring in 0..=5i64 {
+            for dx in -ring..=ring {
+                for dy in -ring..=ring {
+                    for dz in -ring..=ring {
+                        if dx.abs().max(dy.abs()).max(dz.abs()) != ring {
+                            continue;
+                        }
+                        if let Some(bin) = self.bins.get(&[k[0] + dx, k[1] + dy, k[2] + dz]) {
+                            for &i in bin {
+                                best = best.min((points[i] - q).norm());
+                            }
+                        }
+                    }
+                }
+            }
+            if best <= ring as f64 * self.cell {
+                break;
+            }
+        }
+        best.min(5.0 * self.cell)
+    }
+}
+
+#[test]
+fn every_sample_with_a_foot_gets_a_whole_stocking_at_the_defaults_with_either_heel() {
+    let feet = [
+        "makehuman_leg_foot.glb",
+        "lowpoly_leg.glb",
+        "makehuman_body.glb",
+        "makehuman_hips_heavy.glb",
+    ];
+    for foot in feet {
+        for heel in ["none", "pocket"] {
+            let w = measure_whole_stocking(&sample(foot), heel);
+            eprintln!(
+                "{foot} heel {heel}: deepest {:.1} µm, toe gap {:.1} mm, {:.2}% of the foot within {:.1} mm",
+                1e6 * w.deepest_m,
+                1e3 * w.toe_gap_m,
+                100.0 * w.covered,
+                1e3 * w.reach_m
+            );
+            assert!(
+                w.deepest_m <= 5e-5,
+                "{foot} {heel}: a yarn is {} mm inside",
+                1e3 * w.deepest_m
+            );
+            assert!(
+                w.toe_gap_m < 0.005,
+                "{foot} {heel}: toe gap {} mm",
+                1e3 * w.toe_gap_m
+            );
+        }
+    }
 }

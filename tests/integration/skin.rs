@@ -10,6 +10,7 @@ use nalgebra::Point3;
 
 use crate::support::{
     fit, float, knitfit, point, read_ply, report, sample_legs, stage_names, stderr, write_tube_leg,
+    OPEN_TUBE,
 };
 
 /// How deep a yarn polyline may reach into the leg: 0.05 mm.
@@ -18,16 +19,20 @@ const MAX_DEPTH_M: f64 = 5e-5;
 const SAMPLE_SPACING_M: f64 = 2.5e-5;
 
 /// A sample along a yarn polyline that lies inside the leg.
-struct Depth {
-    deepest: f64,
+pub(crate) struct Depth {
+    pub deepest: f64,
     /// Where the deepest sample is.
-    at: Point3<f64>,
-    samples: usize,
+    pub at: Point3<f64>,
+    pub samples: usize,
 }
 
 /// Samples every edge of `stocking.ply` in `out` every [`SAMPLE_SPACING_M`] against the exact
 /// leg, keeping the samples `region` accepts; returns the deepest.
-fn polyline_depth(out: &Path, collider: &Collider, region: impl Fn(&Point3<f64>) -> bool) -> Depth {
+pub(crate) fn polyline_depth(
+    out: &Path,
+    collider: &Collider,
+    region: impl Fn(&Point3<f64>) -> bool,
+) -> Depth {
     let yarns = read_ply(&out.join("stocking.ply"));
     let points: Vec<Point3<f64>> = yarns.payload["vertex"].iter().map(point).collect();
     let index = |e: &ply_rs_bw::ply::DefaultElement, name: &str| match e[name] {
@@ -58,7 +63,7 @@ fn polyline_depth(out: &Path, collider: &Collider, region: impl Fn(&Point3<f64>)
     depth
 }
 
-fn collider_of(leg: &Path) -> Collider {
+pub(crate) fn collider_of(leg: &Path) -> Collider {
     let leg = load_leg(leg, Units::Metres, UpChoice::Axis(UpAxis::PosY)).unwrap();
     Collider::new(&leg, ContactMethod::Bvh).unwrap()
 }
@@ -66,7 +71,7 @@ fn collider_of(leg: &Path) -> Collider {
 #[test]
 fn every_yarn_polyline_stays_on_the_skin_of_every_sample_leg() {
     for leg in sample_legs() {
-        let (dir, r) = fit(&leg, "60x60", &[]);
+        let (dir, r) = fit(&leg, "60x60", OPEN_TUBE);
         let out = dir.path().join("out");
         let name = leg.display();
         let fix = &r["details"]["penetration_fix"];
@@ -198,7 +203,7 @@ fn a_synthetic_crease_and_ridge_are_followed_without_cutting_through() {
 /// One leg vertex's values from the leg PLY.
 #[derive(Clone, Copy)]
 struct LegVertex {
-    at: Point3<f64>,
+    pub at: Point3<f64>,
     density: f64,
     stretch_course: f64,
     coverage: f64,
@@ -219,7 +224,7 @@ fn leg_fields(out: &Path) -> Vec<LegVertex> {
 #[test]
 fn coverage_and_density_rise_where_the_leg_is_thin_and_fall_where_it_is_stretched() {
     for leg in sample_legs() {
-        let (dir, r) = fit(&leg, "60x60", &[]);
+        let (dir, r) = fit(&leg, "60x60", OPEN_TUBE);
         let name = leg.display();
         let axis = &r["details"]["axis"];
         let (bottom, top) = (

@@ -13,5 +13,5 @@ pub use fixtures::{
 };
 pub use process::{
     files_in, fit, knitfit, knitfit_env, report, run_scene, scene_for, stage_names, stderr, stdout,
-    write,
+    write, OPEN_TUBE,
 };

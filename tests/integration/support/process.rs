@@ -55,6 +55,10 @@ pub fn report(dir: &Path) -> serde_json::Value {
     serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
 }
 
+/// The flags of a fit that ends at the ankle (an open tube), for tests about the open tube's
+/// axis or at grids too coarse for a stocking to the toe.
+pub const OPEN_TUBE: &[&str] = &["--bottom", "ankle"];
+
 /// Fits `leg` at `resolution` into a fresh directory and returns (dir, report).
 pub fn fit(leg: &Path, resolution: &str, extra: &[&str]) -> (tempfile::TempDir, serde_json::Value) {
     let dir = tempfile::tempdir().unwrap();
