@@ -1,8 +1,10 @@
 //! Per-point fields of a fitted knit, and their transfer to the leg's vertices.
 //!
-//! * **Stitch density** at a yarn point is one stitch over the mean area of the (up to four)
-//!   stitches around it, in stitches per cm². A stitch is a grid cell; its area is half the norm
-//!   of the cross product of its diagonals (exact for a planar quad).
+//! * **Stitch density** at a yarn point is the stitches of the faces around it over their area,
+//!   in stitches per cm² ([`Knit::faces`]: a grid cell is one stitch, a heel-pocket cell the
+//!   stitches its short rows add; the toe seam's faces are sewn, not knitted, and count neither
+//!   way). A face's area is the norm of its vector area (for a quad, half the norm of the cross
+//!   product of its diagonals; exact when planar). A point on no knitted face gets 0.
 //! * **Tension** at a yarn point is the mean signed force `c1 (|x_b − x_a| − l)` of its springs
 //!   (positive in tension), in the solver's force units (unit mass, per time unit squared, metres).
 //! * **Stretch** at a yarn point, along the course and along the wale: the summed length of its
@@ -32,45 +34,49 @@ use crate::sim::ForceTerms;
 /// Square metres per square centimetre.
 const M2_PER_CM2: f64 = 1e-4;
 
-/// Stitches per cm² at every yarn point of a grid knit.
+/// Stitches per cm² at every point of `knit` (see module docs).
 pub fn stitch_density(knit: &Knit) -> Vec<f64> {
-    let (wales, courses) = (knit.wales, knit.courses);
     let x = &knit.particles.x;
-    let cells_across = if knit.closed_courses {
-        wales
-    } else {
-        wales - 1
-    };
-    let cell_area = |w: usize, c: usize| {
-        let at = |w: usize, c: usize| x[knit.point(w % wales, c).index()];
-        let diagonal_a = at(w + 1, c + 1) - at(w, c);
-        let diagonal_b = at(w, c + 1) - at(w + 1, c);
-        diagonal_a.cross(&diagonal_b).norm() / 2.0
-    };
     let mut area_sum = vec![0.0; knit.len()];
-    let mut area_count = vec![0u32; knit.len()];
-    for c in 0..courses.saturating_sub(1) {
-        for w in 0..cells_across {
-            let area = cell_area(w, c);
-            for (dw, dc) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
-                let p = knit.point((w + dw) % wales, c + dc).index();
-                area_sum[p] += area;
-                area_count[p] += 1;
-            }
+    let mut stitch_sum = vec![0.0; knit.len()];
+    for face in knit.faces().iter().filter(|f| f.stitches > 0.0) {
+        let corners: Vec<Vec3> = face.corners.iter().map(|p| x[p.index()]).collect();
+        let area = polygon_area(&corners);
+        for p in &face.corners {
+            area_sum[p.index()] += area;
+            stitch_sum[p.index()] += face.stitches;
         }
     }
     area_sum
         .iter()
-        .zip(&area_count)
-        .map(|(&sum, &n)| {
-            let mean = sum / n.max(1) as f64;
-            if n > 0 && mean > 0.0 {
-                M2_PER_CM2 / mean
+        .zip(&stitch_sum)
+        .map(|(&area, &stitches)| {
+            // Written as one over the area per stitch, so a grid (one stitch a cell) gives the
+            // bytes it always has.
+            let per_stitch = area / stitches;
+            if stitches > 0.0 && per_stitch > 0.0 {
+                M2_PER_CM2 / per_stitch
             } else {
                 0.0
             }
         })
         .collect()
+}
+
+/// The norm of a polygon's vector area, `½ |Σ p_i × p_{i+1}|` (its area when planar), taken
+/// about the first corner; for a quad, half the norm of its diagonals' cross product.
+fn polygon_area(corners: &[Vec3]) -> f64 {
+    match corners {
+        [a, b, c, d] => (c - a).cross(&(d - b)).norm() / 2.0,
+        [first, rest @ ..] => {
+            rest.windows(2)
+                .map(|pair| (pair[0] - first).cross(&(pair[1] - first)))
+                .sum::<Vec3>()
+                .norm()
+                / 2.0
+        }
+        [] => 0.0,
+    }
 }
 
 /// Mean signed spring force of every point's springs (see module docs).
@@ -343,6 +349,43 @@ mod tests {
         for d in stitch_density(&knit) {
             assert!((d - 100.0).abs() < 1e-9, "{d}");
         }
+    }
+
+    #[test]
+    fn a_heel_pockets_short_rows_add_stitches_and_the_toe_seam_none() {
+        // A flat 4×3 grid, 2 mm across a wale and 1 mm along it, closed by a toe seam, with
+        // short rows over wales 1 and 2 (one each way) laid on the wales between courses 0 and 1.
+        let (a, b) = (0.002, 0.001);
+        let tile = Tile::of(Pattern::Plain);
+        let at = |w: usize, c: f64| Vec3::new(w as f64 * a, c * b, 0.0);
+        let knit = Knit::grid(4, 3, false, &tile, a, b, |w, c| at(w, c as f64))
+            .with_toe_seam(b)
+            .with_short_rows(0, vec![0, 1, 1, 0], &tile, a, b, at);
+        let density = stitch_density(&knit);
+        let cell = a * b / M2_PER_CM2;
+        let expect = |p: PointId, stitches_per_cell: f64| {
+            let d = density[p.index()];
+            assert!(
+                (d - stitches_per_cell / cell).abs() < 1e-9,
+                "{p:?}: {d} vs {}",
+                stitches_per_cell / cell
+            );
+        };
+        // The toe seam's faces (across the flat last course) count for nothing.
+        for w in 0..4 {
+            expect(knit.point(w, 2), 1.0);
+        }
+        // The cells beside the pocket hold two stitches (one side three, the other one): wale 0's
+        // first point has only that one; above it, one plain cell joins.
+        expect(knit.point(0, 0), 2.0);
+        expect(knit.point(0, 1), 3.0 / 2.0);
+        // Between the two short-rowed wales, three faces of one stitch a third of a cell each:
+        // wale 1's grid point meets the two-stitch cell and one of them (3 stitches over 4/3 of
+        // a cell), its first short-row point the two-stitch cell and two (4 over 5/3).
+        expect(knit.point(1, 0), 3.0 / (1.0 + 1.0 / 3.0));
+        let first_short = PointId(knit.grid_len() as u32);
+        assert_eq!(knit.fabric_coords(first_short), [1.0, 1.0 / 3.0]);
+        expect(first_short, 4.0 / (1.0 + 2.0 / 3.0));
     }
 
     /// A flat 6×6 grid at `spacing` metres, stretched by `sx` along the course and `sy` along

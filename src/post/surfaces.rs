@@ -1,12 +1,13 @@
 //! The fitted knit and the leg as the triangle surfaces the writers and the preview take: the
-//! leg with its per-vertex fields and a density heat map, and the stocking as a surface whose
-//! texture coordinates run along the knit (u around, v along) without a jump at the seam.
+//! leg with its per-vertex fields and a density heat map, and the stocking as a surface over the
+//! knit's faces whose texture coordinates run along the knit (u around, v along) without a jump
+//! where the courses close.
 
 use std::collections::BTreeMap;
 
 use super::fields::KnitFields;
 use crate::base::{colour, SurfaceMesh, YarnGeometry};
-use crate::knit::Knit;
+use crate::knit::{Knit, PointId};
 use crate::leg::Leg;
 
 /// The leg with its fields as attributes (`stitch_density`, `stretch_course`, `stretch_wale`,
@@ -43,21 +44,19 @@ pub fn leg_surface(leg: &Leg, fields: &KnitFields) -> SurfaceMesh {
     mesh
 }
 
-/// The fitted knit as a triangle surface: the grid triangulated with the seam column repeated
-/// so texture coordinates (wale, course) run 0–1 without a jump; per vertex, the yarn point's
-/// attributes and its fields (density, stretch, coverage: what a sheer shader on this surface
-/// needs). Only the knit's own points are used: `yarns` may hold points the penetration fix
-/// inserted after them.
+/// The fitted knit as a triangle surface: its faces ([`Knit::faces`]: the grid, the heel
+/// pocket's short rows, the toe seam that closes it) triangulated, with a vertex per knit point
+/// and the points of the first wale repeated where a face wraps round to it, so texture
+/// coordinates run 0–1 without a jump (u = wale / wales, v = 1 − course / (courses − 1), from
+/// [`Knit::fabric_coords`]); per vertex, the yarn point's attributes and its fields (density,
+/// stretch, coverage: what a sheer shader on this surface needs). Only the knit's own points are
+/// used: `yarns` may hold points the penetration fix inserted after them.
 pub fn stocking_surface(
     knit: &Knit,
     knit_fields: &KnitFields,
     yarns: &YarnGeometry,
 ) -> SurfaceMesh {
     let (wales, courses) = (knit.wales, knit.courses);
-    let columns = wales + 1;
-    let source = |w: usize, c: usize| knit.point(w % wales, c).index();
-    let mut positions = Vec::with_capacity(columns * courses);
-    let mut texcoords = Vec::with_capacity(columns * courses);
     let point_fields: Vec<(&str, &[f32])> = yarns
         .point_attributes
         .iter()
@@ -73,40 +72,69 @@ pub fn stocking_surface(
         .into_iter()
         .chain(knit_fields.iter().map(|(k, v)| (*k, &v[..])))
         .collect();
-    let mut attributes: BTreeMap<String, Vec<f32>> = sources
-        .iter()
-        .map(|(k, _)| (k.to_string(), Vec::new()))
-        .collect();
+
+    // Vertices: the grid course by course, each course's first point repeated after its last
+    // when the courses close; then the short rows' points, likewise.
+    let mut vertices = Vertices {
+        knit,
+        source: Vec::with_capacity(knit.len() + courses),
+        texcoords: Vec::with_capacity(knit.len() + courses),
+        of_point: vec![0; knit.len()],
+        wrapped: vec![None; knit.len()],
+    };
     for c in 0..courses {
-        for w in 0..columns {
-            let i = source(w, c);
-            let p = knit.particles.x[i];
-            positions.push([p.x, p.y, p.z]);
-            texcoords.push([
-                w as f32 / wales as f32,
-                1.0 - c as f32 / (courses - 1).max(1) as f32,
-            ]);
-            for (name, values) in &sources {
-                attributes
-                    .get_mut(*name)
-                    .expect("made above")
-                    .push(values[i]);
-            }
-        }
-    }
-    let id = |w: usize, c: usize| (c * columns + w) as u32;
-    let mut triangles = Vec::with_capacity(2 * wales * courses);
-    for c in 0..courses.saturating_sub(1) {
         for w in 0..wales {
-            // Counter-clockwise seen from outside: around the axis, then up it.
-            triangles.push([id(w, c), id(w + 1, c), id(w + 1, c + 1)]);
-            triangles.push([id(w, c), id(w + 1, c + 1), id(w, c + 1)]);
+            vertices.add(knit.point(w, c));
+        }
+        if knit.closed_courses {
+            vertices.add_wrapped(knit.point(0, c));
         }
     }
+    for i in knit.grid_len()..knit.len() {
+        let p = PointId(i as u32);
+        vertices.add(p);
+        if knit.closed_courses && knit.fabric_coords(p)[0] == 0.0 {
+            vertices.add_wrapped(p);
+        }
+    }
+
+    let mut triangles = Vec::with_capacity(2 * knit.len());
+    let wale_of = |p: PointId| knit.fabric_coords(p)[0];
+    let last_wale = wales.saturating_sub(1) as f64;
+    for face in knit.faces() {
+        // A face across the wrap takes the first wale's repeated points.
+        let wraps = knit.closed_courses
+            && face.corners.iter().any(|&p| wale_of(p) == 0.0)
+            && face.corners.iter().any(|&p| wale_of(p) == last_wale);
+        let vertex = |p: PointId| match vertices.wrapped[p.index()] {
+            Some(v) if wraps => v,
+            _ => vertices.of_point[p.index()],
+        };
+        for t in triangulate(knit, &face.corners) {
+            triangles.push(t.map(vertex));
+        }
+    }
+
+    let positions = vertices
+        .source
+        .iter()
+        .map(|p| {
+            let x = knit.particles.x[p.index()];
+            [x.x, x.y, x.z]
+        })
+        .collect();
+    let attributes: BTreeMap<String, Vec<f32>> = sources
+        .iter()
+        .map(|(name, values)| {
+            let per_vertex = vertices.source.iter().map(|p| values[p.index()]);
+            (name.to_string(), per_vertex.collect())
+        })
+        .collect();
     let mut mesh = SurfaceMesh::new("stocking", positions, triangles);
-    // The repeated seam column must share the normal of the column it repeats.
-    for c in 0..courses {
-        let (first, last) = (id(0, c) as usize, id(wales, c) as usize);
+    // A repeated point must share the normal of the point it repeats.
+    for (first, last) in vertices.of_point.iter().zip(&vertices.wrapped) {
+        let Some(last) = last else { continue };
+        let (first, last) = (*first as usize, *last as usize);
         let n = nalgebra::Vector3::from(mesh.normals[first])
             + nalgebra::Vector3::from(mesh.normals[last]);
         let n = if n.norm() > 0.0 {
@@ -117,7 +145,238 @@ pub fn stocking_surface(
         mesh.normals[first] = n.into();
         mesh.normals[last] = n.into();
     }
-    mesh.texcoords = Some(texcoords);
+    mesh.texcoords = Some(vertices.texcoords);
     mesh.point_attributes = attributes;
     mesh
+}
+
+/// The stocking surface's vertices as they are made: the knit point each stands for and its
+/// texture coordinates.
+struct Vertices<'a> {
+    knit: &'a Knit,
+    /// The knit point of each vertex.
+    source: Vec<PointId>,
+    /// `TEXCOORD_0` of each vertex.
+    texcoords: Vec<[f32; 2]>,
+    /// Per knit point, its vertex.
+    of_point: Vec<u32>,
+    /// Per knit point of the first wale of a closed knit, its repeat at u = 1.
+    wrapped: Vec<Option<u32>>,
+}
+
+impl Vertices<'_> {
+    fn add(&mut self, p: PointId) {
+        let [wale, _] = self.knit.fabric_coords(p);
+        self.of_point[p.index()] = self.push(p, wale as f32 / self.knit.wales as f32);
+    }
+
+    fn add_wrapped(&mut self, p: PointId) {
+        self.wrapped[p.index()] = Some(self.push(p, 1.0));
+    }
+
+    fn push(&mut self, p: PointId, u: f32) -> u32 {
+        let [_, course] = self.knit.fabric_coords(p);
+        let last_course = self.knit.courses.saturating_sub(1).max(1);
+        self.source.push(p);
+        self.texcoords
+            .push([u, 1.0 - course as f32 / last_course as f32]);
+        (self.source.len() - 1) as u32
+    }
+}
+
+/// A face's triangles, counter-clockwise as the face is. A face with a wale up each side (a
+/// grid cell, a heel-pocket cell) is laced up its two sides, each step taking the shorter
+/// diagonal in the fabric, so a side with short rows the other lacks meets both of the other's
+/// corners rather than a sliver fan from one (a grid cell gives its two triangles either side
+/// of the diagonal from its first corner). Any other face (the toe seam's) is fanned from its
+/// first corner.
+fn triangulate(knit: &Knit, corners: &[PointId]) -> Vec<[PointId; 3]> {
+    let coords = |p: PointId| knit.fabric_coords(p);
+    let fan = || {
+        corners[1..]
+            .windows(2)
+            .map(|pair| [corners[0], pair[0], pair[1]])
+            .collect()
+    };
+    // Corners run up the right side, then down the left back to the first.
+    let Some(&first) = corners.first() else {
+        return Vec::new();
+    };
+    let (left_wale, right_wale) = match corners.get(1) {
+        Some(&p) => (coords(first)[0], coords(p)[0]),
+        None => return Vec::new(),
+    };
+    let up_right = corners[1..]
+        .iter()
+        .take_while(|&&p| coords(p)[0] == right_wale)
+        .count();
+    let right = &corners[1..1 + up_right];
+    let down_left = &corners[1 + up_right..];
+    if left_wale == right_wale
+        || right.len() < 2
+        || down_left.is_empty()
+        || down_left.iter().any(|&p| coords(p)[0] != left_wale)
+    {
+        return fan();
+    }
+    let left: Vec<PointId> = std::iter::once(first)
+        .chain(down_left.iter().rev().copied())
+        .collect();
+    let course = |p: PointId| coords(p)[1];
+    let (mut l, mut r) = (0, 0);
+    let mut triangles = Vec::with_capacity(corners.len() - 2);
+    while l + 1 < left.len() || r + 1 < right.len() {
+        let up_the_right = if l + 1 == left.len() {
+            true
+        } else if r + 1 == right.len() {
+            false
+        } else {
+            // The diagonal each step would leave; the right on a tie, as a grid cell has it.
+            let right_diagonal = (course(right[r + 1]) - course(left[l])).abs();
+            let left_diagonal = (course(left[l + 1]) - course(right[r])).abs();
+            right_diagonal <= left_diagonal
+        };
+        if up_the_right {
+            triangles.push([left[l], right[r], right[r + 1]]);
+            r += 1;
+        } else {
+            triangles.push([left[l], right[r], left[l + 1]]);
+            l += 1;
+        }
+    }
+    triangles
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeMap;
+    use std::f64::consts::TAU;
+
+    use super::*;
+    use crate::base::Vec3;
+    use crate::knit::{Pattern, Tile};
+
+    const WALES: usize = 8;
+    const COURSES: usize = 5;
+    const RADIUS: f64 = 0.05;
+    const SPACING: f64 = 0.01;
+
+    /// A round tube up +Y, its courses running counter-clockwise seen from outside, closed by a
+    /// toe seam across its (flat, round) last course, with a heel pocket above course 1 whose
+    /// points lie on the tube between the courses.
+    fn shaped_tube() -> Knit {
+        let tile = Tile::of(Pattern::Alternating);
+        let at = |w: usize, c: f64| {
+            let theta = TAU * w as f64 / WALES as f64;
+            Vec3::new(RADIUS * theta.sin(), c * SPACING, RADIUS * theta.cos())
+        };
+        let rest_course = TAU * RADIUS / WALES as f64;
+        Knit::grid(WALES, COURSES, true, &tile, rest_course, SPACING, |w, c| {
+            at(w, c as f64)
+        })
+        .with_toe_seam(SPACING)
+        .with_short_rows(
+            1,
+            vec![2, 1, 0, 0, 0, 1, 2, 2],
+            &tile,
+            rest_course,
+            SPACING,
+            |w, f| at(w, 1.0 + f),
+        )
+    }
+
+    fn surface(knit: &Knit) -> SurfaceMesh {
+        let fields = KnitFields::measure(knit, [0.00003, 0.00004, 0.00003]);
+        stocking_surface(knit, &fields, &knit.yarn_geometry("stocking", [0.0; 3]))
+    }
+
+    fn vector(p: [f64; 3]) -> Vec3 {
+        Vec3::from(p)
+    }
+
+    #[test]
+    fn a_shaped_stocking_has_every_knit_point_and_is_closed_at_the_toe() {
+        let knit = shaped_tube();
+        let mesh = surface(&knit);
+        // Each vertex stands for the knit point with its (wale, course).
+        let point_of: BTreeMap<[u32; 2], usize> = (0..knit.len())
+            .map(|i| {
+                let coords = knit.fabric_coords(PointId(i as u32));
+                (coords.map(|x| (x as f32).to_bits()), i)
+            })
+            .collect();
+        let source: Vec<usize> = (0..mesh.positions.len())
+            .map(|v| {
+                let key = ["wale", "course"].map(|name| mesh.point_attributes[name][v].to_bits());
+                let i = point_of[&key];
+                assert_eq!(vector(mesh.positions[v]), knit.particles.x[i]);
+                i
+            })
+            .collect();
+        let mut seen = vec![false; knit.len()];
+        source.iter().for_each(|&i| seen[i] = true);
+        assert!(seen.iter().all(|&s| s), "every knit point is a vertex");
+
+        // Every edge between knit points joins two triangles, but the welt's.
+        let mut edges: BTreeMap<(usize, usize), u32> = BTreeMap::new();
+        for t in &mesh.triangles {
+            for k in 0..3 {
+                let (a, b) = (source[t[k] as usize], source[t[(k + 1) % 3] as usize]);
+                *edges.entry((a.min(b), a.max(b))).or_default() += 1;
+            }
+        }
+        let open: Vec<(usize, usize)> = edges
+            .iter()
+            .filter(|(_, &n)| n != 2)
+            .map(|(&e, _)| e)
+            .collect();
+        let welt: Vec<(usize, usize)> = (0..WALES)
+            .map(|w| (w.min((w + 1) % WALES), w.max((w + 1) % WALES)))
+            .collect::<std::collections::BTreeSet<_>>()
+            .into_iter()
+            .collect();
+        assert_eq!(open, welt);
+    }
+
+    #[test]
+    fn a_shaped_stockings_triangles_face_out_and_its_texture_does_not_jump() {
+        let knit = shaped_tube();
+        let mesh = surface(&knit);
+        let uv = mesh.texcoords.as_ref().unwrap();
+        let middle = Vec3::new(0.0, (COURSES - 1) as f64 * SPACING / 2.0, 0.0);
+        let mut wrapping = 0;
+        for t in &mesh.triangles {
+            let [a, b, c] = t.map(|v| vector(mesh.positions[v as usize]));
+            let normal = (b - a).cross(&(c - a));
+            // The smallest: a fifth of a course high (the pocket) by a wale across.
+            assert!(
+                normal.norm() / 2.0 > 1e-5,
+                "{t:?}: area {}",
+                normal.norm() / 2.0
+            );
+            let out = (a + b + c) / 3.0 - middle;
+            assert!(normal.dot(&out) > 0.0, "{t:?} faces in");
+            let [u, v] = [0, 1].map(|k| t.map(|i| uv[i as usize][k]));
+            let on_the_toe = v.iter().all(|&v| v == 0.0);
+            if !on_the_toe {
+                // Around by at most a wale, the seam's folded faces aside.
+                let span = u.iter().fold(f32::MIN, |m, &x| m.max(x))
+                    - u.iter().fold(f32::MAX, |m, &x| m.min(x));
+                assert!(span <= 1.0 / WALES as f32 + 1e-6, "{t:?}: u {u:?}");
+                wrapping += u.contains(&1.0) as usize;
+            }
+        }
+        // Two triangles a cell across the wrap; the pocket's cell there, with four short rows on
+        // both sides, is five cells.
+        assert_eq!(wrapping, 2 * (COURSES - 1) + 2 * 4);
+        // The repeated first wale shares its normals.
+        for (v, t) in uv.iter().enumerate() {
+            if t[0] == 1.0 {
+                let twin = (0..uv.len())
+                    .find(|&o| uv[o] == [0.0, t[1]])
+                    .expect("a point of the first wale");
+                assert_eq!(mesh.normals[v], mesh.normals[twin]);
+            }
+        }
+    }
 }
