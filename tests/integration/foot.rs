@@ -145,13 +145,6 @@ fn measure_whole_stocking(leg: &std::path::Path, heel: &str) -> WholeStocking {
     let ankle = Point3::from(v3(&landmarks["ankle"]["centre"]["m"]));
     let ankle_height = landmarks["ankle"]["height_m"].as_f64().unwrap();
     let side = up.cross(&forward).normalize();
-    let d = depth.at - tip;
-    eprintln!(
-        "{name}: deepest at {:.1} mm forward of the toe tip, {:.1} up, {:.1} to the side",
-        1e3 * d.dot(&forward),
-        1e3 * d.dot(&up),
-        1e3 * d.dot(&side)
-    );
 
     let yarns = crate::support::read_ply(&out.join("stocking.ply"));
     let points: Vec<Point3<f64>> = yarns.payload["vertex"]
@@ -267,8 +260,9 @@ fn every_sample_with_a_foot_gets_a_whole_stocking_at_the_defaults_with_either_he
                 100.0 * w.covered,
                 1e3 * w.reach_m
             );
+            // No yarn inside the leg (f32 positions: their rounding, no more).
             assert!(
-                w.deepest_m <= 5e-5,
+                w.deepest_m <= 1e-7,
                 "{foot} {heel}: a yarn is {} mm inside",
                 1e3 * w.deepest_m
             );
@@ -276,6 +270,13 @@ fn every_sample_with_a_foot_gets_a_whole_stocking_at_the_defaults_with_either_he
                 w.toe_gap_m < 0.005,
                 "{foot} {heel}: toe gap {} mm",
                 1e3 * w.toe_gap_m
+            );
+            // What is left bare is mostly the skin between the toes, which fabric bridges
+            // (the issue asks for 98%; docs/decisions/0050).
+            assert!(
+                w.covered >= 0.95,
+                "{foot} {heel}: {:.1}% covered",
+                100.0 * w.covered
             );
         }
     }

@@ -352,6 +352,9 @@ fn plan_shows_the_landmarks_and_the_axis_the_fit_then_uses() {
             "--resolution",
             // The heavy sample does not converge on coarser grids.
             "32x32",
+            // The open tube, whose axis the plan and the fit share.
+            "--bottom",
+            "ankle",
         ];
         let plan = plan_json(dir.path(), &args);
         let text = stdout(&knitfit(dir.path(), &[&["plan"][..], &args].concat()));

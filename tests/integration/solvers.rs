@@ -119,7 +119,7 @@ fn the_report_says_which_solver_ran_and_how_each_level_went() {
         .collect();
     assert!(!stages.contains(&"knit tube"), "{stages:?}");
 
-    let (_dir, r) = fit(leg, "30x30", &["--solver", "paper"]);
+    let (_dir, r) = fit(leg, "30x30", &["--solver", "paper", "--bottom", "ankle"]);
     assert_eq!(r["details"]["solver"]["method"], "paper");
     assert!(r["details"]["solver"]["time_step_limit"].as_f64().unwrap() > 0.0);
     assert!(r["metrics"].get("force_step").is_none());
@@ -152,6 +152,7 @@ fn the_bench_reference_tolerance_converges_on_every_sample_leg() {
     for leg in sample_legs() {
         let mut scene = Scene::load(None).unwrap();
         (scene.tube.wales, scene.tube.courses) = (50, 50);
+        scene.tube.bottom = Some(knitfit::knit::TubeBottom::Ankle);
         scene.solver.tolerance = 1e-6;
         scene.solver.max_steps = 20_000;
         let (fit, _) = solve_scene(&leg, scene);
