@@ -81,7 +81,11 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
         let d = &report.details;
         say!(
             "stocking: {}",
-            stocking_extent(&d.axis, d.leg.landmarks.as_ref())
+            stocking_extent(
+                &d.axis,
+                d.leg.landmarks.as_ref(),
+                (d.tube.bottom == knitfit::knit::TubeBottom::Toe).then_some(d.tube.centreline_m)
+            )
         );
         print_written(&args.out_dir(), &outcome.written);
     }

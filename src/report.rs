@@ -221,10 +221,16 @@ impl LandmarkDetails {
 const AT_THE_ANKLE_M: f64 = 0.005;
 
 /// Where the stocking runs, in words, metres to the millimetre: `the left leg, from the ankle
-/// (0.117 m above the sole) to 0.050 m below the crotch, 0.580 m long`, or `along --axis,
-/// 0.432 m long`. `landmarks` are those `axis` was placed on (`None` for a given axis). What
+/// (0.117 m above the sole) to 0.050 m below the crotch, 0.580 m long`, `the left leg, from the
+/// toe, over the heel, to 0.050 m below the crotch, 0.924 m long along the leg and foot` (a
+/// stocking to the toe, `to_the_toe_m` its centreline's length), or `along --axis, 0.432 m
+/// long`. `landmarks` are those `axis` was placed on (`None` for a given axis). What
 /// `knitfit fit` prints after its summary and `knitfit plan` shows.
-pub fn stocking_extent(axis: &Axis, landmarks: Option<&LandmarkDetails>) -> String {
+pub fn stocking_extent(
+    axis: &Axis,
+    landmarks: Option<&LandmarkDetails>,
+    to_the_toe_m: Option<f64>,
+) -> String {
     let length = axis.length();
     let Some(l) = landmarks else {
         let given = match axis.source {
@@ -239,7 +245,9 @@ pub fn stocking_extent(axis: &Axis, landmarks: Option<&LandmarkDetails>) -> Stri
         .map(|side| format!("the {} leg, ", side.name()))
         .unwrap_or_default();
     let bottom = l.height_m(axis.bottom);
-    let from = if (bottom - l.ankle.height_m).abs() <= AT_THE_ANKLE_M {
+    let from = if to_the_toe_m.is_some() {
+        "the toe, over the heel,".to_string()
+    } else if (bottom - l.ankle.height_m).abs() <= AT_THE_ANKLE_M {
         format!("the ankle ({bottom:.3} m above the sole)")
     } else {
         format!("{bottom:.3} m above the sole")
@@ -255,7 +263,10 @@ pub fn stocking_extent(axis: &Axis, landmarks: Option<&LandmarkDetails>) -> Stri
     } else {
         format!("{below:.3} m below {thigh_top}")
     };
-    format!("{leg}from {from} to {to}, {length:.3} m long")
+    match to_the_toe_m {
+        Some(path) => format!("{leg}from {from} to {to}, {path:.3} m long along the leg and foot"),
+        None => format!("{leg}from {from} to {to}, {length:.3} m long"),
+    }
 }
 
 /// An axis-aligned box, metres.
@@ -286,6 +297,9 @@ pub struct TubeDetails {
     pub stiffness_scale: PerDirection,
     /// Where the stocking ends at the bottom: `toe` (closed by a toe seam) or `ankle` (open).
     pub bottom: TubeBottom,
+    /// Length of the stocking's centreline, metres (a stocking to the toe: along the leg, around
+    /// the heel and along the foot).
+    pub centreline_m: f64,
     /// The heel: `none` or `pocket` (short rows).
     pub heel: TubeHeel,
     /// Nearest and furthest yarn along the stocking's centreline, metres from its start (the

@@ -35,6 +35,8 @@ pub const FAN_STATIONS: usize = 48;
 pub const TOE_END_M: f64 = 0.004;
 /// How far the toe box reaches past the toe tip, metres.
 const TOE_BOX_PAST_M: f64 = 0.002;
+/// Skin this close outside the toe box is replaced by it too, metres.
+const TOE_BOX_SLACK_M: f64 = 0.005;
 /// Angles at which a station keeps its section's extent.
 pub const RADIUS_SAMPLES: usize = 128;
 /// Gap kept between the leg and a ring before the fit, as a fraction of the ring's extent.
@@ -286,6 +288,10 @@ pub fn path_to_toe(
         }
     }
     let toes = add_toe_cap(&mut stations, foot.toe_tip.into());
+    // The cap moved some centres: distances along the path from the centres as they are.
+    for k in 1..stations.len() {
+        stations[k].s = stations[k - 1].s + (stations[k].centre - stations[k - 1].centre).norm();
+    }
     Ok(TubePath {
         stations,
         pivot,
@@ -381,11 +387,13 @@ impl TubePath {
         let t = first.t;
         let along = |p: &Point3<f64>| (p - first.centre).dot(&t);
         let length = along(&last.centre);
-        // Well inside the box (half a millimetre in): a triangle of skin the box only nearly
-        // holds stays, or the yarn resting on the box would lie inside it.
+        // In the box or within a few millimetres of it (it is interpolated between sections):
+        // skin the box replaces must not be left overlapping it, where the closest surface
+        // would flip between the two. What little of it the box misses, the exact pass after
+        // the fit settles against the real skin.
         let inside = |p: &Point3<f64>| {
             let x = along(p);
-            if x <= 0.001 || x > length + TOE_END_M {
+            if x <= 0.001 || x > length + TOE_END_M + TOE_BOX_PAST_M + TOE_BOX_SLACK_M {
                 return false;
             }
             let k = toes
@@ -403,7 +411,7 @@ impl TubePath {
             let (du, dv) = (d.dot(&a.u), d.dot(&a.v));
             let theta = dv.atan2(du);
             let reach = a.extent_at(theta) * (1.0 - f) + b.extent_at(theta) * f;
-            (du * du + dv * dv).sqrt() <= reach - 0.0005
+            (du * du + dv * dv).sqrt() <= reach + TOE_BOX_SLACK_M
         };
         let mut out_positions = positions.to_vec();
         let mut out_triangles: Vec<[u32; 3]> = triangles
@@ -419,7 +427,8 @@ impl TubePath {
             }
         }
         // Past the last section, the last outline again, beyond the tip, and a flat end: the
-        // toe tip need not be at the outline's centre (a big toe is not).
+        // toe tip need not be at the outline's centre (a big toe is not). (A rounded end made
+        // the toe seam chatter more, docs/decisions/0050.)
         let beyond = t * (TOE_END_M + TOE_BOX_PAST_M);
         for p in last.outline() {
             out_positions.push(last.centre + beyond + last.u * p[0] + last.v * p[1]);

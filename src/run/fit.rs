@@ -202,6 +202,7 @@ fn fit_details(
                 course: knit.stiffness_scale[0],
                 wale: knit.stiffness_scale[1],
             },
+            centreline_m: fit.centreline.length(),
             bottom: if fit.knit.has_toe_seam() {
                 TubeBottom::Toe
             } else {

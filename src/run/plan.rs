@@ -63,6 +63,8 @@ pub struct Placed {
     pub axis: Axis,
     /// The axis's bottom and top in the leg file's coordinates and units (what `--axis` takes).
     pub axis_file: [[f64; 3]; 2],
+    /// For a stocking to the toe, the length of its path along the leg and foot, metres.
+    pub to_the_toe_m: Option<f64>,
 }
 
 /// The plan of `knitfit fit` for `loaded`, writing into `out_dir`.
@@ -84,11 +86,9 @@ pub fn plan_fit(loaded: &LoadedScene, out_dir: &Path) -> Result<PlanOutcome> {
         let leg = decode_leg(file, scene.leg.units, scene.leg.up_axis)?;
         // The fit's own stages, on a clock nobody reads.
         let placed = place_axis(scene, &inputs, &leg, &mut StageClock::new(&plan))?;
-        Placement::Placed(Box::new(Placed::new(
-            &leg,
-            placed.landmarks.as_ref(),
-            placed.axis,
-        )))
+        let mut shown = Placed::new(&leg, placed.landmarks.as_ref(), placed.axis);
+        shown.to_the_toe_m = placed.path.as_ref().map(|p| p.length());
+        Placement::Placed(Box::new(shown))
     };
     Ok(PlanOutcome {
         memory: Some(memory),
@@ -111,6 +111,7 @@ impl Placed {
             landmarks: landmarks.map(|l| LandmarkDetails::of(l, leg)),
             axis_file: [file(axis.bottom()), file(axis.top())],
             axis,
+            to_the_toe_m: None,
         }
     }
 }
@@ -273,7 +274,7 @@ impl Placement {
         }
         out += &format!(
             "stocking: {}\n",
-            stocking_extent(a, placed.landmarks.as_ref())
+            stocking_extent(a, placed.landmarks.as_ref(), placed.to_the_toe_m)
         );
         out += &row("axis", format!("{} → {}", m(a.bottom), m(a.top)));
         // Millimetres in the file's units, so the numbers can be given back as `--axis`.
