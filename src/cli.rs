@@ -37,8 +37,8 @@ pub enum Command {
     Fit(Box<FitArgs>),
     /// The paper's flat-patch experiment: hold two edges of a knit patch, pull them apart, relax.
     Patch(PatchArgs),
-    /// What accuracy costs in time: sweep resolution × solver × tolerance on the bundled legs;
-    /// write bench.md, bench.csv and bench.png.
+    /// What accuracy costs in time: sweep resolution × solver × tolerance on the bundled legs,
+    /// then time whole fits of a stocking to the toe; write bench.md, bench.csv and bench.png.
     Bench(BenchArgs),
     /// Ray-trace the yarn-level preview of a fit from its stocking.glb (or its directory).
     Render(RenderArgs),
@@ -70,7 +70,8 @@ pub enum PlanOf {
 
 #[derive(clap::Args, Debug, Default)]
 pub struct BenchArgs {
-    /// The short sweep (50×50 and 100×100 on the MakeHuman leg): under two minutes.
+    /// The short sweep (50×50 and 100×100 on the MakeHuman leg, the whole stocking at 150×150):
+    /// under two minutes.
     #[arg(long)]
     pub quick: bool,
     /// Output directory (created if missing).

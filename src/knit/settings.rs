@@ -139,6 +139,16 @@ pub enum TubeBottom {
     Ankle,
 }
 
+impl TubeBottom {
+    /// Name as in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            TubeBottom::Toe => "toe",
+            TubeBottom::Ankle => "ankle",
+        }
+    }
+}
+
 /// The heel of a stocking that reaches the toe.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(rename_all = "snake_case")]
@@ -148,6 +158,16 @@ pub enum TubeHeel {
     None,
     /// A heel pocket of short rows over the back half of the tube (see `knit::tube`).
     Pocket,
+}
+
+impl TubeHeel {
+    /// Name as in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            TubeHeel::None => "none",
+            TubeHeel::Pocket => "pocket",
+        }
+    }
 }
 
 /// Where the stocking ends.

@@ -9,6 +9,11 @@
 //! same rest state (a test checks it), so it serves both. Cases run one after another in one
 //! process; the peak memory of each is the process's peak resident set since the case began
 //! (Linux `/proc/self/clear_refs`), `None` where the system does not tell.
+//!
+//! After the sweep, [`stocking`] times `knitfit fit` end to end, every file written, for a
+//! stocking to the toe: bench.md's section "Whole stocking (to the toe)".
+
+pub mod stocking;
 
 use std::path::{Path, PathBuf};
 
@@ -18,6 +23,7 @@ use crate::base::YarnKind;
 use crate::draw::bench_plot::{self, Curve};
 use crate::error::Result;
 use crate::export;
+use crate::knit::TubeBottom;
 use crate::leg::AxisSource;
 use crate::limits::{peak_memory, reset_peak_memory};
 use crate::plan::{Plan, Stage};
@@ -25,6 +31,7 @@ use crate::post::fields::measure_fields;
 use crate::report::StageClock;
 use crate::scene::{Scene, BUNDLED_SCENE_DIR};
 use crate::sim::SolverMethod;
+use stocking::StockingRow;
 
 /// Tolerance of the reference fits: a hundred times tighter than the tightest swept.
 pub const REFERENCE_TOLERANCE: f64 = 1e-6;
@@ -32,7 +39,8 @@ pub const REFERENCE_TOLERANCE: f64 = 1e-6;
 /// What to sweep.
 #[derive(Clone, Debug)]
 pub struct BenchOptions {
-    /// The short sweep (two small resolutions, one leg): under two minutes on two cores.
+    /// The short sweep (two small resolutions, one leg, and the whole stocking at 150 around):
+    /// under two minutes on two cores.
     pub quick: bool,
     /// Where `bench.md`, `bench.csv` and `bench.png` go.
     pub out_dir: PathBuf,
@@ -105,6 +113,8 @@ pub struct BenchOutcome {
     pub skipped: Vec<SkippedCase>,
     /// The reference fits, one per leg and grid, in sweep order.
     pub references: Vec<ReferenceRun>,
+    /// The whole stockings to the toe, every file written.
+    pub stockings: Vec<StockingRow>,
     /// `bench.md` as written.
     pub markdown: String,
     /// Files written.
@@ -159,13 +169,47 @@ pub fn bench_cases(options: &BenchOptions) -> (Vec<BenchCase>, Vec<SkippedCase>)
     (cases, skipped)
 }
 
-/// Runs the sweep, writes `bench.md`, `bench.csv` and `bench.png` into `options.out_dir`.
+/// Runs the sweep and the whole stockings, writes `bench.md`, `bench.csv` and `bench.png` into
+/// `options.out_dir`.
 pub fn run_bench(options: &BenchOptions, progress: &mut dyn Progress) -> Result<BenchOutcome> {
     let files = ["bench.md", "bench.csv", "bench.png"];
     let prepared = export::atomic::prepare_dir(&options.out_dir, &files, &[])?;
     let (cases, skipped) = bench_cases(options);
+    let stocking_cases = stocking::stocking_cases(options.quick);
+    progress.begin("bench", (cases.len() + stocking_cases.len()) as u64);
+    let (rows, references) = sweep(&cases, progress)?;
+    let stockings = stocking::measure_stockings(&stocking_cases, progress, cases.len() as u64)?;
+    progress.end();
+    let mut markdown = markdown(&rows, &skipped, &references, options.quick);
+    markdown.push_str(&stocking::markdown(&stockings));
+    let png = bench_plot::draw(&curves(&rows), "bench.png")?;
+    let csv = csv(&rows) + &stocking::csv_rows(&stockings);
+    let written = export::atomic::write_all(
+        &options.out_dir,
+        &[
+            ("bench.md".to_string(), markdown.clone().into_bytes()),
+            ("bench.csv".to_string(), csv.into_bytes()),
+            ("bench.png".to_string(), png),
+        ],
+        &[],
+    )?;
+    prepared.keep();
+    Ok(BenchOutcome {
+        rows,
+        skipped,
+        references,
+        stockings,
+        markdown,
+        written,
+    })
+}
+
+/// Fits every case and its leg and grid's reference; advances `progress` once per case.
+fn sweep(
+    cases: &[BenchCase],
+    progress: &mut dyn Progress,
+) -> Result<(Vec<BenchRow>, Vec<ReferenceRun>)> {
     let base = Scene::load(None)?;
-    progress.begin("bench", cases.len() as u64);
     let mut rows = Vec::new();
     let mut reference: Option<(BenchCase, Reference)> = None;
     let mut references = Vec::new();
@@ -210,26 +254,7 @@ pub fn run_bench(options: &BenchOptions, progress: &mut dyn Progress) -> Result<
         });
         progress.advance(n as u64 + 1, fit.solver.residual());
     }
-    progress.end();
-    let markdown = markdown(&rows, &skipped, &references, options.quick);
-    let png = bench_plot::draw(&curves(&rows), "bench.png")?;
-    let written = export::atomic::write_all(
-        &options.out_dir,
-        &[
-            ("bench.md".to_string(), markdown.clone().into_bytes()),
-            ("bench.csv".to_string(), csv(&rows).into_bytes()),
-            ("bench.png".to_string(), png),
-        ],
-        &[],
-    )?;
-    prepared.keep();
-    Ok(BenchOutcome {
-        rows,
-        skipped,
-        references,
-        markdown,
-        written,
-    })
+    Ok((rows, references))
 }
 
 /// Fits one case with the bundled scene; returns the fit, the solve's seconds and the peak
@@ -529,16 +554,22 @@ fn same_accuracy(rows: &[BenchRow]) -> Vec<(&BenchRow, &BenchRow)> {
         .collect()
 }
 
-/// `bench.csv`: one line per case, SI units.
+/// `bench.csv`'s columns. The last four came with the whole stockings, after the sweep's so
+/// that a reader of those still finds them where it did: `bottom` (`ankle` for the sweep, whose
+/// bundled scene ends there; `toe`), `heel` (empty where there is none to choose),
+/// `whole_seconds` (the whole run, whole stockings only) and `reach_m` (toe tip to the nearest
+/// yarn point).
+const CSV_HEADER: &str = "leg,wales,courses,points,solver,tolerance,seconds,iterations,residual,\
+                          max_move,converged,max_penetration_m,peak_memory_bytes,density_error,\
+                          rms_distance_m,bottom,heel,whole_seconds,reach_m\n";
+
+/// `bench.csv`'s header and the sweep's lines, one per case, SI units.
 fn csv(rows: &[BenchRow]) -> String {
-    let mut out = String::from(
-        "leg,wales,courses,points,solver,tolerance,seconds,iterations,residual,max_move,\
-         converged,max_penetration_m,peak_memory_bytes,density_error,rms_distance_m\n",
-    );
+    let mut out = String::from(CSV_HEADER);
     for r in rows {
         let c = &r.case;
         out.push_str(&format!(
-            "{},{},{},{},{},{:e},{:.6},{},{:e},{:e},{},{:e},{},{},{}\n",
+            "{},{},{},{},{},{:e},{:.6},{},{:e},{:e},{},{:e},{},{},{},{},,,\n",
             c.leg,
             c.wales,
             c.courses,
@@ -554,6 +585,7 @@ fn csv(rows: &[BenchRow]) -> String {
             r.peak_memory_bytes.map_or(String::new(), |b| b.to_string()),
             r.density_error.map_or(String::new(), |e| format!("{e:e}")),
             r.rms_distance_m.map_or(String::new(), |d| format!("{d:e}")),
+            TubeBottom::Ankle.name(),
         ));
     }
     out
