@@ -392,7 +392,14 @@ pub fn solve_fit(
         // A stocking stopped while bunched is refused as that: it says more.
         let ratio = levels.support_ratio;
         refuse_bunched(&knit, &centreline, spec.relaxed_circumference_m, ratio)?;
-        return Err(stalled(scene, &leg, &axis, landmarks.as_ref(), level));
+        return Err(stalled(
+            scene,
+            &leg,
+            &axis,
+            &centreline,
+            landmarks.as_ref(),
+            level,
+        ));
     }
     let mut contact = levels
         .contact
@@ -787,12 +794,15 @@ fn stalled(
     scene: &Scene,
     leg: &Leg,
     axis: &Axis,
+    centreline: &Centreline,
     landmarks: Option<&Landmarks>,
     level: &LevelStats,
 ) -> Error {
     let stall = level.stall.expect("a stalled level says where");
     let last = level.courses.saturating_sub(1).max(1) as f64;
-    let [from, to] = stall.courses.map(|c| c as f64 / last * axis.length());
+    let [from, to] = stall.courses.map(|c| c as f64 / last * centreline.length());
+    // A stocking to the toe is knitted from its welt down: course 0 is its top.
+    let to_the_toe = centreline.length() > axis.length() + 1e-9;
     // Landmarks name the place; a given axis has none yet, so they are looked for here.
     let found;
     let landmarks = match landmarks {
@@ -805,13 +815,17 @@ fn stalled(
     let worst = Point3::from(stall.worst_point);
     let mut at_foot = landmarks.is_none();
     let mut place = format!(
-        "courses {}–{} of {} ({:.0}–{:.0} cm up the stocking from its bottom end) are out of \
-         balance",
+        "courses {}–{} of {} ({:.0}–{:.0} cm {}) are out of balance",
         stall.courses[0],
         stall.courses[1],
         level.courses,
         100.0 * from,
-        100.0 * to
+        100.0 * to,
+        if to_the_toe {
+            "down the stocking from its top"
+        } else {
+            "up the stocking from its bottom end"
+        }
     );
     if let Some(l) = landmarks {
         let up = Vector3::from(l.up);
@@ -839,6 +853,12 @@ fn stalled(
              against an ankle of {:.3} m; raise tube.relaxed_circumference_m.",
             l.ankle.girth_m
         ),
+        (Some(_), _) if to_the_toe && at_foot => {
+            "A stocking to the toe does not settle over the toe at every grid size yet (it does at \
+             150×150, the default, on the sample legs): try --resolution 150x150, or end the \
+             stocking at the ankle (--bottom ankle)."
+                .to_string()
+        }
         (_, AxisSource::CommandLine | AxisSource::Scene) if at_foot => {
             let flag = if axis.source == AxisSource::CommandLine {
                 "--axis"

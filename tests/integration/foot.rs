@@ -281,3 +281,37 @@ fn every_sample_with_a_foot_gets_a_whole_stocking_at_the_defaults_with_either_he
         }
     }
 }
+
+#[test]
+fn a_stocking_to_the_toe_that_cannot_settle_stops_saying_where_and_what_to_do() {
+    // At 120×120 the toe of the lowpoly leg keeps chattering (a known limit, decisions/0050):
+    // the fit must stop with one clear line, counting courses from the welt, and write nothing.
+    let dir = tempfile::tempdir().unwrap();
+    let leg = sample("lowpoly_leg.glb");
+    let out = crate::support::knitfit(
+        dir.path(),
+        &[
+            "fit",
+            "--leg",
+            leg.to_str().unwrap(),
+            "--resolution",
+            "120x120",
+            "-q",
+        ],
+    );
+    let err = crate::support::stderr(&out);
+    if out.status.success() {
+        // Settling at this size is no failure: the limit has been lifted.
+        return;
+    }
+    assert_eq!(out.status.code(), Some(3), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    for expected in [
+        "going nowhere",
+        "down the stocking from its top",
+        "--bottom ankle",
+    ] {
+        assert!(err.contains(expected), "expected {expected:?} in {err}");
+    }
+    assert!(crate::support::files_in(&dir.path().join("out")).is_empty());
+}
