@@ -111,12 +111,8 @@ impl TubePath {
     /// clear of the section by a margin. Wale `w` lies at angle `2π w / wales` from `u` towards
     /// `v`, so wale 0 and wale `wales / 2` are the two sides of the leg and the foot.
     pub fn ring(&self, s: f64, wales: usize) -> Vec<Point3<f64>> {
-        let (a, b, f) = self.bracket(s);
-        let centre = a.centre + (b.centre - a.centre) * f;
-        let t = (a.t * (1.0 - f) + b.t * f).normalize();
-        let u = a.u * (1.0 - f) + b.u * f;
-        let u = (u - t * t.dot(&u)).normalize();
-        let v = t.cross(&u);
+        let (a, b, _) = self.bracket(s);
+        let (centre, _, u, v) = self.frame_at(s);
         (0..wales)
             .map(|w| {
                 let theta = std::f64::consts::TAU * w as f64 / wales as f64;

@@ -110,9 +110,10 @@ pub struct TubeSettings {
     /// Circumference of the stocking lying relaxed, metres (default: 0.20, a typical sheer
     /// stocking's leg measured flat and doubled).
     pub relaxed_circumference_m: f64,
-    /// Length of the relaxed stocking between the two axis points, metres; must be shorter than
-    /// the axis, since a stocking is worn stretched along the leg. Absent means
-    /// [`RELAXED_LENGTH_FRACTION`] of the axis length (default: absent).
+    /// Length of the relaxed stocking along its centreline (between the two axis points of an
+    /// open tube; from the welt over the heel to the toe of a whole stocking), metres; must be
+    /// shorter than that line, since a stocking is worn stretched along the leg. Absent means
+    /// [`RELAXED_LENGTH_FRACTION`] of its length (default: absent).
     pub relaxed_length_m: Option<f64>,
     /// Where the stocking ends at the bottom: `"toe"` (over the foot, closed by a toe seam) or
     /// `"ankle"` (an open end at the ankle). Absent means the toe on a leg with a foot and the

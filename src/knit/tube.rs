@@ -1,6 +1,9 @@
 //! The stocking as a tube of mass points (Sakaguchi & Miyata §6.1–6.2, Fig. 10–11): `wales`
-//! points around × `courses` rings along, stretched between the two axis points and widened so
-//! that every ring encloses the leg before the fit starts.
+//! points around × `courses` rings along, placed so that every ring encloses the leg before the
+//! fit starts. Two shapes: an open tube stretched between two axis points ([`build_tube`], held
+//! at both ends), and a whole stocking along the path over the foot ([`build_stocking`], held
+//! at its welt, closed by a toe seam, with an optional heel pocket). Either way, where each
+//! course came to rest along its [`Centreline`] tells slack from sliding.
 //!
 //! Rest lengths come from a physical stocking lying relaxed: a course spring is the relaxed
 //! circumference over the number of wales, a wale spring the relaxed length over the number of
@@ -16,7 +19,7 @@
 //! vertex at that height: in a file with both legs, the ring around one leg must not take in the
 //! other.
 
-use nalgebra::{Point3, Vector3};
+use nalgebra::Point3;
 
 use super::path::{PathPart, TubePath};
 use super::settings::{TubeBottom, TubeHeel, TubeTop};
@@ -49,7 +52,7 @@ pub struct TubeSpec {
     pub pattern: Pattern,
     /// Circumference of the relaxed stocking, metres.
     pub relaxed_circumference_m: f64,
-    /// Length of the relaxed stocking between the axis points, metres.
+    /// Length of the relaxed stocking along its centreline, metres.
     pub relaxed_length_m: f64,
     /// The knit's stitch: distance between wales along a course and between courses along a
     /// wale, metres (`knit.course_spacing_m`, `knit.wale_spacing_m`). Only their ratio matters
@@ -57,15 +60,14 @@ pub struct TubeSpec {
     pub stitch_m: [f64; 2],
 }
 
-/// A tube ready to fit: the knit and, per point, whether it is on an end ring (held at its
-/// height along the axis).
-pub struct Tube {
-    /// The knit, closed around its courses.
-    pub knit: Knit,
-    /// True for points of the first and last ring.
-    pub end_ring: Vec<bool>,
-    /// Orthonormal frame: `u`, `v` across the axis.
-    pub frame: (Vector3<f64>, Vector3<f64>),
+impl TubeSpec {
+    /// Rest lengths of a course spring and a wale spring on this grid, metres.
+    pub fn rest_lengths(&self) -> [f64; 2] {
+        [
+            self.relaxed_circumference_m / self.wales as f64,
+            self.relaxed_length_m / (self.courses - 1).max(1) as f64,
+        ]
+    }
 }
 
 /// The stocking's axis on the leg's landmarks: from the centre of the section at `bottom` to
@@ -118,14 +120,14 @@ pub fn tube_axis(landmarks: &Landmarks, bottom: TubeBottom, top: TubeTop) -> Res
     })
 }
 
-/// Builds the tube around the leg (world-space `leg_vertices` and the `leg_triangles` that
+/// Builds the open tube around the leg (world-space `leg_vertices` and the `leg_triangles` that
 /// index them) between the axis points.
 pub fn build_tube(
     spec: &TubeSpec,
     axis: &Axis,
     leg_vertices: &[Point3<f64>],
     leg_triangles: &[[u32; 3]],
-) -> Tube {
+) -> Knit {
     let (w_count, c_count) = (spec.wales, spec.courses);
     let bottom = axis.bottom();
     let a = axis.direction();
@@ -133,9 +135,8 @@ pub fn build_tube(
     let (u, v) = perpendicular_frame(&a);
     let radii = enclosing_radii(c_count, &bottom, &a, length, leg_vertices, leg_triangles);
     let tile = Tile::of(spec.pattern);
-    let rest_course = spec.relaxed_circumference_m / w_count as f64;
-    let rest_wale = spec.relaxed_length_m / (c_count - 1).max(1) as f64;
-    let knit = Knit::grid(
+    let [rest_course, rest_wale] = spec.rest_lengths();
+    Knit::grid(
         w_count,
         c_count,
         true,
@@ -148,12 +149,7 @@ pub fn build_tube(
             bottom.coords + a * s + (u * theta.cos() + v * theta.sin()) * radii[c]
         },
     )
-    .with_stitch_shape(spec.stitch_m[0], spec.stitch_m[1]);
-    Tube {
-        end_ring: end_rings(&knit),
-        knit,
-        frame: (u, v),
-    }
+    .with_stitch_shape(spec.stitch_m[0], spec.stitch_m[1])
 }
 
 /// Per point of a tube's knit, true on a held end ring (held at its height along the axis during
@@ -172,11 +168,10 @@ pub fn end_rings(knit: &Knit) -> Vec<bool> {
 /// Builds a whole stocking along `path` (top to toe): course 0 is the welt, held; the last
 /// course is closed by a toe seam; with [`TubeHeel::Pocket`], short rows over the back half at
 /// the middle of the heel (see [`heel_pocket_depths`]).
-pub fn build_stocking(spec: &TubeSpec, path: &TubePath, heel: TubeHeel) -> Tube {
+pub fn build_stocking(spec: &TubeSpec, path: &TubePath, heel: TubeHeel) -> Knit {
     let (w_count, c_count) = (spec.wales, spec.courses);
     let tile = Tile::of(spec.pattern);
-    let rest_course = spec.relaxed_circumference_m / w_count as f64;
-    let rest_wale = spec.relaxed_length_m / (c_count - 1).max(1) as f64;
+    let [rest_course, rest_wale] = spec.rest_lengths();
     let length = path.length();
     let along = |c: usize| length * c as f64 / (c_count - 1).max(1) as f64;
     let rings: Vec<Vec<Point3<f64>>> = (0..c_count).map(|c| path.ring(along(c), w_count)).collect();
@@ -210,12 +205,7 @@ pub fn build_stocking(spec: &TubeSpec, path: &TubePath, heel: TubeHeel) -> Tube 
         };
         knit = knit.with_short_rows(course, depth.clone(), &tile, rest_course, rest_wale, place);
     }
-    let (_, t, u, _) = path.frame_at(0.0);
-    Tube {
-        end_ring: end_rings(&knit),
-        knit,
-        frame: (u, t.cross(&u)),
-    }
+    knit
 }
 
 /// Short rows per half of a heel pocket over each of `wales` wales, on a grid whose wale springs

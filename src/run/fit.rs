@@ -194,8 +194,8 @@ fn fit_details(
         tube: TubeDetails {
             wales: spec.wales,
             courses: spec.courses,
-            rest_course_spacing_m: spec.relaxed_circumference_m / spec.wales as f64,
-            rest_wale_spacing_m: spec.relaxed_length_m / (spec.courses - 1) as f64,
+            rest_course_spacing_m: spec.rest_lengths()[0],
+            rest_wale_spacing_m: spec.rest_lengths()[1],
             relaxed_length_m: spec.relaxed_length_m,
             relaxed_circumference_m: spec.relaxed_circumference_m,
             stiffness_scale: PerDirection {
@@ -625,8 +625,8 @@ impl<'a> Levels for TubeLevels<'a> {
             ..self.spec
         };
         match self.path {
-            Some(path) => build_stocking(&spec, path, self.heel).knit,
-            None => build_tube(&spec, self.axis, &self.leg.positions, &self.leg.triangles).knit,
+            Some(path) => build_stocking(&spec, path, self.heel),
+            None => build_tube(&spec, self.axis, &self.leg.positions, &self.leg.triangles),
         }
     }
 
@@ -920,9 +920,10 @@ fn relaxed_length(scene: &Scene, length: f64, scene_name: &str) -> Result<f64> {
             path: scene_name.to_string(),
             field: "tube.relaxed_length_m".into(),
             message: format!(
-                "{l} m is not shorter than the leg axis ({length:.3} m): the stocking would bunch \
-                 up instead of being stretched onto the leg; give a shorter length, leave it out \
-                 ({RELAXED_LENGTH_FRACTION} × the axis), or place the axis points further apart"
+                "{l} m is not shorter than the stocking's centreline ({length:.3} m): the \
+                 stocking would bunch up instead of being stretched onto the leg; give a shorter \
+                 length, leave it out ({RELAXED_LENGTH_FRACTION} × the centreline), or place the \
+                 axis points further apart"
             ),
         }),
     }

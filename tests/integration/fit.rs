@@ -583,7 +583,8 @@ fn a_stocking_longer_than_the_axis_is_refused_before_fitting() {
     let out = knitfit(dir.path(), &["fit", "s.json", "--leg", &leg]);
     assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
     assert!(
-        stderr(&out).contains("tube.relaxed_length_m: 0.9 m is not shorter than the leg axis"),
+        stderr(&out)
+            .contains("tube.relaxed_length_m: 0.9 m is not shorter than the stocking's centreline"),
         "{}",
         stderr(&out)
     );

@@ -340,7 +340,7 @@ fn fit_time_step_limit(ratio: f64, circumference_m: f64) -> f64 {
         relaxed_length_m: knitfit::knit::RELAXED_LENGTH_FRACTION * axis.length(),
         stitch_m: [scene.knit.course_spacing_m, scene.knit.wale_spacing_m],
     };
-    let knit = build_tube(&spec, &axis, &leg.positions, &leg.triangles).knit;
+    let knit = build_tube(&spec, &axis, &leg.positions, &leg.triangles);
     stability_limit(&knit, &Plan::fit(&scene).forces)
 }
 
@@ -711,7 +711,7 @@ fn a_tube_started_partly_inside_the_leg_ends_outside_with_its_rings_in_order() {
         relaxed_length_m: knitfit::knit::RELAXED_LENGTH_FRACTION * axis.length(),
         stitch_m: [scene.knit.course_spacing_m, scene.knit.wale_spacing_m],
     };
-    let mut knit = build_tube(&spec, &axis, &leg.positions, &leg.triangles).knit;
+    let mut knit = build_tube(&spec, &axis, &leg.positions, &leg.triangles);
     // Pull the middle third of the rings halfway to the axis: deep inside calf and knee.
     let (bottom, a) = (axis.bottom(), axis.direction());
     let mut started_inside = 0;
