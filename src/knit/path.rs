@@ -35,6 +35,12 @@ pub const FAN_STATIONS: usize = 48;
 pub const TOE_END_M: f64 = 0.004;
 /// How far the toe box reaches past the toe tip, metres.
 const TOE_BOX_PAST_M: f64 = 0.002;
+/// A foot section whose area is below this fraction of its hull's dips between toes.
+const TOE_CLEFT_SOLIDITY: f64 = 0.95;
+/// The toe box starts this far before the first section that dips between toes, metres: its
+/// open rim must lie where the hull fits the skin, or fabric slips under the rim and chatters
+/// there (at 400 wales the fit never settled).
+const TOE_BOX_LEAD_M: f64 = 0.02;
 /// Skin this close outside the toe box is replaced by it too, metres.
 const TOE_BOX_SLACK_M: f64 = 0.005;
 /// Angles at which a station keeps its section's extent.
@@ -73,6 +79,9 @@ pub struct Station {
     pub part: PathPart,
     /// The hull's extent from `centre` at angle `2π k / RADIUS_SAMPLES` from `u` towards `v`.
     extent: Vec<f64>,
+    /// The section's area over its hull's: 1 where the section is convex, less where the
+    /// skin dips between toes.
+    solidity: f64,
 }
 
 /// The whole path, first station at the stocking's top.
@@ -82,8 +91,8 @@ pub struct TubePath {
     pub stations: Vec<Station>,
     /// The heel fan's pivot line passes through here (along the stations' `u`).
     pub pivot: Point3<f64>,
-    /// The toes as the stocking meets them: the sections' convex hulls from the ball of the foot
-    /// to the last section (see [`TubePath::box_the_toes`]).
+    /// The toes as the stocking meets them: the sections' convex hulls from just before the
+    /// toes' clefts to the last section (see [`TubePath::box_the_toes`]).
     pub toes: Vec<Station>,
 }
 
@@ -239,6 +248,7 @@ pub fn path_to_toe(
             s,
             part,
             extent: hull.extent,
+            solidity: hull.solidity,
         });
         Ok(())
     };
@@ -305,7 +315,8 @@ const TOE_CAP_END: f64 = 0.05;
 /// [`TOE_CAP_M`] in front of the toe tip (while still clearing the toes' own sections), where
 /// the toe seam joins its two sides. Without this the rings would follow the toes down to the
 /// big toe alone, and the toe's courses would start bunched many times over.
-/// Returns the foot's stations from the ball on as they were (the toes' own hulls).
+/// Returns the foot's stations from the start of the toe box on (a lead before the toes'
+/// clefts, [`TOE_BOX_LEAD_M`]) as they were (their own hulls).
 fn add_toe_cap(stations: &mut Vec<Station>, toe_tip: Point3<f64>) -> Vec<Station> {
     let foot: Vec<usize> = (0..stations.len())
         .filter(|&k| stations[k].part == PathPart::Foot)
@@ -317,7 +328,14 @@ fn add_toe_cap(stations: &mut Vec<Station>, toe_tip: Point3<f64>) -> Vec<Station
     }) else {
         return Vec::new();
     };
-    let toes = stations[widest..].to_vec();
+    // The box of the toes starts on skin its hull fits closely: a lead before the run of
+    // sections, up to the ball, that dip between the toes.
+    let mut cleft = widest;
+    while cleft > foot[0] && stations[cleft - 1].solidity < TOE_CLEFT_SOLIDITY {
+        cleft -= 1;
+    }
+    let lead = (TOE_BOX_LEAD_M / STATION_STEP_M).round() as usize;
+    let toes = stations[cleft.saturating_sub(lead).max(foot[0])..].to_vec();
     let ball = stations[widest].clone();
     let last = stations.last().cloned().expect("the foot has stations");
     let end = (toe_tip - ball.centre).dot(&ball.t) + TOE_CAP_M;
@@ -364,12 +382,12 @@ fn add_toe_cap(stations: &mut Vec<Station>, toe_tip: Point3<f64>) -> Vec<Station
 }
 
 impl TubePath {
-    /// The leg `positions`/`triangles` with its toes boxed: the toes' own triangles, from the
-    /// ball of the foot on, replaced by the surface through their sections' convex hulls, closed
-    /// at the tip. This is the leg the stocking's contact sees: fabric bridges the gaps between
-    /// toes, and a point let into one chatters between its two sides (the futility watch
-    /// stopped the whole body's fit there). The box holds the toes, so a point outside it is
-    /// outside them. Unchanged where the path has no toes.
+    /// The leg `positions`/`triangles` with its toes boxed: the skin from a little before the
+    /// toes' clefts on replaced by the convex hull of the sections there, closed just past the
+    /// tip. This is the leg the stocking's contact sees: fabric bridges the gaps between toes,
+    /// and a point let into one chatters between its two sides (the futility watch stopped the
+    /// whole body's fit there). The box holds the toes, so a point outside it is outside them.
+    /// Unchanged where the path has no toes.
     pub fn box_the_toes(
         &self,
         positions: &[Point3<f64>],
@@ -415,33 +433,42 @@ impl TubePath {
             .filter(|tri| !tri.iter().all(|&i| inside(&positions[i as usize])))
             .copied()
             .collect();
-        let n = RADIUS_SAMPLES;
-        let base = out_positions.len() as u32;
-        for st in toes {
-            for p in st.outline() {
-                out_positions.push(st.centre + st.u * p[0] + st.v * p[1]);
-            }
-        }
-        // Past the last section, the last outline again, beyond the tip, and a flat end: the
-        // toe tip need not be at the outline's centre (a big toe is not). (A rounded end made
-        // the toe seam chatter more, docs/decisions/0050.)
+        // The box is the convex hull of the toes' section outlines and of the last one again
+        // just past the tip, less its face on the first section (the rim, on the skin): being
+        // convex it has no valley where a point's closest face flips from one side to the other
+        // (a loft through the outlines has one wherever the sections change shape fast, and
+        // the fit chattered there at 100 wales).
         let beyond = t * (TOE_END_M + TOE_BOX_PAST_M);
-        for p in last.outline() {
-            out_positions.push(last.centre + beyond + last.u * p[0] + last.v * p[1]);
-        }
-        out_positions.push(last.centre + beyond);
-        let apex = out_positions.len() as u32 - 1;
-        let at = |i: usize, k: usize| base + (i * n + k % n) as u32;
-        for i in 0..toes.len() {
-            for k in 0..n {
-                out_triangles.push([at(i, k), at(i, k + 1), at(i + 1, k + 1)]);
-                out_triangles.push([at(i, k), at(i + 1, k + 1), at(i + 1, k)]);
+        let mut outlines: Vec<Point3<f64>> = toes
+            .iter()
+            .flat_map(|st| {
+                st.outline()
+                    .into_iter()
+                    .map(|p| st.centre + st.u * p[0] + st.v * p[1])
+            })
+            .collect();
+        outlines.extend(
+            last.outline()
+                .into_iter()
+                .map(|p| last.centre + beyond + last.u * p[0] + last.v * p[1]),
+        );
+        let Ok((corners, faces)) = parry3d_f64::transformation::try_convex_hull(&outlines) else {
+            return (positions.to_vec(), triangles.to_vec());
+        };
+        let middle =
+            corners.iter().fold(Vector3::zeros(), |m, c| m + c.coords) / corners.len() as f64;
+        let base = out_positions.len() as u32;
+        for face in &faces {
+            let [a, b, c] = face.map(|i| corners[i as usize]);
+            if [a, b, c].iter().all(|p| along(p) < 1e-9) {
+                continue;
             }
+            // Outward winding, whatever the hull's own.
+            let outward = (b - a).cross(&(c - a)).dot(&(a.coords - middle)) >= 0.0;
+            let [i, j, k] = face.map(|i| base + i);
+            out_triangles.push(if outward { [i, j, k] } else { [i, k, j] });
         }
-        let end = toes.len();
-        for k in 0..n {
-            out_triangles.push([at(end, k), at(end, k + 1), apex]);
-        }
+        out_positions.extend(corners);
         (out_positions, out_triangles)
     }
 }
@@ -492,6 +519,8 @@ struct Hull {
     /// The hull's corners, 2-D from `centre` in `(u, t × u)`.
     corners: Vec<[f64; 2]>,
     v: Vector3<f64>,
+    /// The section's area over its hull's.
+    solidity: f64,
 }
 
 impl Hull {
@@ -541,13 +570,19 @@ impl Sections<'_> {
                 .filter(|l| distance(l) < reach)
                 .min_by(|a, b| distance(a).total_cmp(&distance(b)))
         })?;
+        let loop_area = |l: &slice::Loop| {
+            let flat: Vec<[f64; 2]> = l.points.iter().map(flat).collect();
+            polygon_area(&flat).abs()
+        };
         let mut points: Vec<Point3<f64>> = chosen.points.clone();
+        let mut area = loop_area(chosen);
         if gather {
             // The toes: every loop whose centre lies within the last section's extent.
             let near = previous.map_or(0.0, |s| s.extent.iter().copied().fold(0.0, f64::max));
             for l in &loops {
                 if !std::ptr::eq(l, chosen) && distance(l) < near {
                     points.extend(&l.points);
+                    area += loop_area(l);
                 }
             }
         }
@@ -555,6 +590,7 @@ impl Sections<'_> {
         if hull.len() < 3 {
             return None;
         }
+        let hull_area = polygon_area(&hull).abs();
         let [cx, cy] = polygon_centroid(&hull);
         let corners: Vec<[f64; 2]> = hull.iter().map(|c| [c[0] - cx, c[1] - cy]).collect();
         let (_, extent) = star_extent(hull);
@@ -564,6 +600,11 @@ impl Sections<'_> {
             extent,
             corners,
             v,
+            solidity: if hull_area > 0.0 {
+                (area / hull_area).min(1.0)
+            } else {
+                1.0
+            },
         })
     }
 }
@@ -581,6 +622,15 @@ fn encloses(points: &[Point3<f64>], flat: &impl Fn(&Point3<f64>) -> [f64; 2], p:
         }
     }
     inside
+}
+
+/// Signed area of a simple polygon (positive counter-clockwise).
+fn polygon_area(corners: &[[f64; 2]]) -> f64 {
+    0.5 * corners
+        .iter()
+        .zip(corners.iter().cycle().skip(1))
+        .map(|(a, b)| a[0] * b[1] - b[0] * a[1])
+        .sum::<f64>()
 }
 
 /// Area centroid of a simple polygon (its corners' mean if it has no area).
