@@ -854,9 +854,9 @@ fn stalled(
             l.ankle.girth_m
         ),
         (Some(_), _) if to_the_toe && at_foot => {
-            "A stocking to the toe does not settle over the toe at every grid size yet (it does at \
-             150×150, the default, on the sample legs): try --resolution 150x150, or end the \
-             stocking at the ankle (--bottom ankle)."
+            "The foot of the stocking cannot settle on this foot (look for debris or a broken \
+             surface there): end the stocking at the ankle (--bottom ankle), or try another grid \
+             (--resolution)."
                 .to_string()
         }
         (_, AxisSource::CommandLine | AxisSource::Scene) if at_foot => {
@@ -1016,5 +1016,77 @@ impl FitProducts<'_> {
                 draw::encode_png(&picture, file.name())
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sim::accelerated::Stall;
+
+    #[test]
+    fn a_stocking_to_the_toe_stopped_at_the_foot_counts_from_its_top_and_offers_the_ankle() {
+        let scene = Scene::load(None).unwrap();
+        let leg_path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("samples")
+            .join("lowpoly_leg.glb");
+        let leg = decode_leg(
+            read_leg_file(&leg_path).unwrap(),
+            scene.leg.units,
+            scene.leg.up_axis,
+        )
+        .unwrap();
+        let inputs = FitInputs {
+            leg: leg_path,
+            axis_source: AxisSource::Scene,
+        };
+        let plan = Plan::fit(&scene);
+        let placed = place_axis(&scene, &inputs, &leg, &mut StageClock::new(&plan)).unwrap();
+        let path = placed
+            .path
+            .as_ref()
+            .expect("a leg with a foot gets a path to the toe");
+        let centreline = Centreline::of_path(path);
+        let tip = placed.landmarks.as_ref().unwrap().foot.unwrap().toe_tip;
+        let level = LevelStats {
+            wales: 150,
+            courses: 150,
+            iterations: 1700,
+            restarts: 1500,
+            stall_restarts: 0,
+            start_residual: 1.5,
+            residual: 2.7e-3,
+            force_step: 0.1,
+            max_move: 0.1,
+            converged: false,
+            stall: Some(Stall {
+                courses: [140, 148],
+                worst_point: tip,
+                worst_force_step: 0.1,
+            }),
+            seconds: 1.0,
+        };
+        let message = stalled(
+            &scene,
+            &leg,
+            &placed.axis,
+            &centreline,
+            placed.landmarks.as_ref(),
+            &level,
+        )
+        .to_string();
+        for expected in [
+            "going nowhere",
+            "courses 140–148 of 150",
+            "down the stocking from its top",
+            "at the foot",
+            "--bottom ankle",
+        ] {
+            assert!(
+                message.contains(expected),
+                "expected {expected:?} in {message}"
+            );
+        }
+        assert_eq!(message.lines().count(), 1, "{message}");
     }
 }
