@@ -914,3 +914,75 @@ fn a_body_on_one_foot_is_dressed_up_to_its_crotch_not_its_head() {
         );
     }
 }
+
+// ---------------------------------------------------------------------------------------------
+// 4. A messy export, dressed to the toe.
+
+#[test]
+fn a_messy_whole_body_export_gets_the_same_whole_stocking_as_the_clean_file() {
+    // Everything at once, as a character export arrives: every kind of damage, turned to Z-up
+    // and about its own up, moved, and in centimetres; the stocking runs to the toe (the
+    // default on a leg with a foot) at a grid fine enough for one.
+    let dir = tempfile::tempdir().unwrap();
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/makehuman_body.glb");
+    let places = Places::of(&fit_checked("body", &path, json!({})));
+    let mut meshes = read_glb_meshes(&path);
+    for damage in Damage::ALL {
+        meshes = damage.apply(&meshes, &places).0;
+    }
+    let (_, z_up, _) = motions()[0];
+    let about_up = Isometry3::rotation(Vector3::z() * 20f64.to_radians());
+    let file_from_world = Isometry3::translation(3.0, -1.0, 0.5) * about_up * z_up;
+    for m in &mut meshes {
+        for p in &mut m.positions {
+            *p = file_from_world * *p * 100.0;
+        }
+    }
+    let messy = write_raw_meshes(dir.path(), "messy.glb", &meshes);
+    let whole = |leg: &Path, units: &str| {
+        let scene = scene_for(leg, json!({ "units": units }), json!({}));
+        let (dir, out) = run_scene(&scene, "100x100", &[]);
+        assert!(out.status.success(), "{}: {}", leg.display(), stderr(&out));
+        let r = report(&dir.path().join("out"));
+        let m = &r["metrics"];
+        assert_eq!(m["converged"], true, "{}: {m}", leg.display());
+        assert_eq!(m["max_penetration_m"], 0.0, "{}: {m}", leg.display());
+        assert_eq!(r["details"]["tube"]["bottom"], "toe", "{}", leg.display());
+        let yarn: Vec<Point3<f64>> = read_ply(&dir.path().join("out").join("stocking.ply")).payload
+            ["vertex"]
+            .iter()
+            .map(point)
+            .collect();
+        let tip = Point3::from(vec3(&r["details"]["leg"]["landmarks"]["toe_tip"]["m"]));
+        let toe_gap = yarn
+            .iter()
+            .map(|p| (p - tip).norm())
+            .fold(f64::INFINITY, f64::min);
+        (r, toe_gap)
+    };
+    let (clean, clean_gap) = whole(&path, "m");
+    let (got, gap) = whole(&messy, "cm");
+    let length = |r: &Value| r["details"]["tube"]["centreline_m"].as_f64().unwrap();
+    let density = |r: &Value| {
+        r["details"]["stitch_density_per_cm2"]["max"]
+            .as_f64()
+            .unwrap()
+    };
+    println!(
+        "messy body: toe gap {:.1} mm (clean {:.1}), centreline {:.4} m (clean {:.4}), \
+         densest {:.2} per cm² (clean {:.2})",
+        1e3 * gap,
+        1e3 * clean_gap,
+        length(&got),
+        length(&clean),
+        density(&got),
+        density(&clean)
+    );
+    assert_eq!(got["details"]["leg"]["up_axis"], "+z");
+    assert!(
+        gap < 0.005,
+        "the messy stocking stops {gap} m short of the toe"
+    );
+    assert!((length(&got) / length(&clean) - 1.0).abs() < 0.01);
+    assert!((density(&got) / density(&clean) - 1.0).abs() < 0.05);
+}
