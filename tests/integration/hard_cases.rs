@@ -1070,3 +1070,74 @@ fn a_floor_and_a_backdrop_in_the_file_change_nothing() {
     let cleaned = &report(&run.path().join("out"))["details"]["leg"]["cleaned"];
     assert_eq!(cleaned["debris_pieces"], 2, "{cleaned}");
 }
+
+#[test]
+fn stiff_and_narrow_stockings_to_the_toe_fit_or_are_refused_as_bunched() {
+    // The stiff and narrow cases above, on a stocking that runs over the heel to the toe.
+    let toe = |ratio: f64, circumference_m: f64| {
+        json!({
+            "yarns": { "support": { "stiffness": ratio, "radius_m": 0.00004 } },
+            "tube": { "relaxed_circumference_m": circumference_m },
+        })
+    };
+    let feet = [
+        "makehuman_leg_foot.glb",
+        "lowpoly_leg.glb",
+        "makehuman_body.glb",
+        "makehuman_hips_heavy.glb",
+    ];
+    for foot in feet {
+        let leg_path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("samples")
+            .join(foot);
+        let wide = wide_stocking_m(&load_leg(&leg_path, Units::Metres, UpChoice::Auto).unwrap());
+        // Nearly inextensible support courses on a wide stocking; a stocking relaxed at about
+        // half the ankle's girth.
+        for (ratio, circumference) in [(1000.0, wide), (10.0, 0.12)] {
+            let name = format!("{foot} to the toe, ratio {ratio}, relaxed {circumference} m");
+            let (dir, out) = run_scene(
+                &scene_for(&leg_path, json!({}), toe(ratio, circumference)),
+                "60x60",
+                &[],
+            );
+            if foot == "makehuman_hips_heavy.glb" && circumference < 0.2 {
+                // The heavy thigh is 4.5 times the narrow stocking's girth: stopped there, with
+                // the way out.
+                check_refused(
+                    &name,
+                    dir.path(),
+                    &out,
+                    3,
+                    &["going nowhere", "raise tube.relaxed_circumference_m"],
+                );
+                continue;
+            }
+            assert!(out.status.success(), "{name}: {}", stderr(&out));
+            let r = report(&dir.path().join("out"));
+            let m = &r["metrics"];
+            println!(
+                "{name}: {} steps, residual {:.2e}",
+                m["steps"],
+                m["residual"].as_f64().unwrap()
+            );
+            assert_eq!(m["converged"], true, "{name}: {m}");
+            assert_eq!(m["max_penetration_m"], 0.0, "{name}: {m}");
+            assert_eq!(r["details"]["tube"]["bottom"], "toe", "{name}");
+        }
+        let (dir, out) = run_scene(
+            &scene_for(&leg_path, json!({}), toe(1000.0, 0.2)),
+            "60x60",
+            &[],
+        );
+        check_refused(
+            &format!("{foot} to the toe, ratio 1000, relaxed 0.2 m"),
+            dir.path(),
+            &out,
+            1,
+            &[
+                "not a stocking",
+                "yarns.support.stiffness (now 1000× nylon's)",
+            ],
+        );
+    }
+}
