@@ -115,6 +115,7 @@ impl Tile {
                     seen.push(springs);
                 }
                 if springs == target {
+                    // Pushed just above when it was new, so it is in `seen`.
                     return seen.iter().position(|s| *s == target).unwrap() as u8 + 1;
                 }
             }

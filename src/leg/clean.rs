@@ -244,6 +244,7 @@ fn close_t_junctions(positions: &[Point3<f64>], triangles: &mut Vec<[u32; 3]>) -
             on_edge.sort_unstable_by(|p, q| p.0.total_cmp(&q.0).then(p.1.cmp(&q.1)));
             // Fanned from the opposite corner, in the triangle's winding.
             let t = triangles[e.triangle];
+            // `e` is an edge of this triangle, unsplit this pass (`done`), so `e.b` is a corner.
             let c = t[(t.iter().position(|&i| i == e.b).unwrap() + 1) % 3];
             let chain: Vec<u32> = std::iter::once(e.a)
                 .chain(on_edge.iter().map(|&(_, v)| v))

@@ -45,6 +45,16 @@ impl Collider {
                 path: leg.path.clone(),
                 message: format!("cannot use the mesh for contact: {e}"),
             })?;
+        // Parry drops triangles by an absolute area threshold where cleaning's is relative, so
+        // a leg of tiny triangles could keep none; every query below needs one.
+        if mesh.indices().is_empty() {
+            return Err(Error::Leg {
+                path: leg.path.clone(),
+                message: "cannot use the mesh for contact: every triangle is too small to \
+                          collide with"
+                    .into(),
+            });
+        }
         Ok(Collider { mesh, method })
     }
 
@@ -78,9 +88,20 @@ impl Collider {
                 (proj, loc)
             }
         };
-        let offset = p - projection.point;
+        Some(self.closest_from(p, projection.point, triangle, location))
+    }
+
+    /// The [`Closest`] of `p` whose nearest point is `point`, on `triangle` at `location`.
+    fn closest_from(
+        &self,
+        p: &Point3<f64>,
+        point: Point3<f64>,
+        triangle: u32,
+        location: TrianglePointLocation,
+    ) -> Closest {
+        let offset = p - point;
         let distance = offset.norm();
-        let inside = self.is_inside(p, &projection.point, triangle, location);
+        let inside = self.is_inside(p, &point, triangle, location);
         let outward = if distance > 1e-12 {
             if inside {
                 -offset / distance
@@ -90,18 +111,27 @@ impl Collider {
         } else {
             self.face_normal(triangle)
         };
-        Some(Closest {
-            point: projection.point,
+        Closest {
+            point,
             signed_distance: if inside { -distance } else { distance },
             outward,
             triangle,
-        })
+        }
     }
 
-    /// The closest point of the leg to `p`.
+    /// The closest point of the leg to `p`. The BVH's best-first search ranks triangles by
+    /// distance and finds none when it cannot compare them (a non-finite query point, or
+    /// distances that overflow); then every triangle is tried in turn, ordered by
+    /// `total_cmp`, which always picks one, and the distance it gives is what the caller's
+    /// finiteness checks see.
     pub fn closest(&self, p: &Point3<f64>) -> Closest {
-        self.closest_within(p, f64::MAX)
-            .expect("a non-empty mesh always has a closest point")
+        if let Some(closest) = self.closest_within(p, f64::MAX) {
+            return closest;
+        }
+        let (projection, (triangle, location)) = self
+            .brute_closest(p)
+            .expect("Collider::new refuses a mesh without triangles");
+        self.closest_from(p, projection.point, triangle, location)
     }
 
     /// The first surface met moving from `from` along the unit vector `dir` within `max_distance`:

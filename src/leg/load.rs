@@ -50,6 +50,12 @@ pub struct Leg {
 /// in other units than assumed.
 pub const PLAUSIBLE_HEIGHT_M: (f64, f64) = (0.2, 3.0);
 
+/// Largest coordinate accepted, metres from the file's origin, on any axis. Beyond it 32-bit
+/// floats (glTF's positions) are coarser than a millimetre, several stitches, and a coordinate
+/// far beyond it (a flipped exponent bit gives up to 3.4e38) makes the products of contact's
+/// closest-point arithmetic overflow into infinities and NaN; so it is refused at the load.
+pub const MAX_COORDINATE_M: f64 = 10_000.0;
+
 /// Geometry compression extensions we cannot decode.
 const COMPRESSION_EXTENSIONS: [&str; 3] = [
     "KHR_draco_mesh_compression",
@@ -328,6 +334,7 @@ pub fn decode_leg(file: LegFile, units: Units, choice: UpChoice) -> Result<Leg> 
         .iter()
         .map(|p| Point3::from(p.coords * units.metres()))
         .collect();
+    check_coordinates(&scaled, &mesh.triangles, units).map_err(fail)?;
     let (scaled, mut triangles, cleaned) = clean_mesh(&scaled, &mesh.triangles);
     if triangles.is_empty() {
         return Err(fail("has no triangles with area".into()));
@@ -462,6 +469,31 @@ fn check_accessor_types(prim: &gltf::Primitive) -> std::result::Result<(), Strin
         }
     }
     Ok(())
+}
+
+/// Refuses a mesh with a vertex of its triangles further than [`MAX_COORDINATE_M`] from the
+/// origin on any axis (`scaled`: metres, file axes), before anything computes with it.
+fn check_coordinates(
+    scaled: &[Point3<f64>],
+    triangles: &[[u32; 3]],
+    units: Units,
+) -> std::result::Result<(), String> {
+    let far = triangles
+        .iter()
+        .flatten()
+        .map(|&i| (i, &scaled[i as usize]))
+        .find(|(_, p)| p.iter().any(|c| c.abs() > MAX_COORDINATE_M));
+    match far {
+        None => Ok(()),
+        Some((i, p)) => Err(format!(
+            "vertex {i} is at ({:e}, {:e}, {:e}) m, beyond the ±{MAX_COORDINATE_M} m knitfit \
+             accepts on any axis: the file is damaged, or not in {} (leg.units, --units)",
+            p.x,
+            p.y,
+            p.z,
+            units.name()
+        )),
+    }
 }
 
 /// Refuses a leg whose height is implausible in the assumed units, and says which units would fit.

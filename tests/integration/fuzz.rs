@@ -13,7 +13,7 @@ use std::sync::OnceLock;
 
 use knitfit::base::{Direction, Segment, SurfaceMesh, YarnGeometry, YarnKind};
 use knitfit::export::ply::{write_mesh_ply, write_ply};
-use knitfit::leg::load::PLAUSIBLE_HEIGHT_M;
+use knitfit::leg::load::{MAX_COORDINATE_M, PLAUSIBLE_HEIGHT_M};
 use knitfit::leg::{load_leg, Collider, ContactMethod, Leg, Units, UpAxis, UpChoice};
 use knitfit::{Error, Scene};
 use ply_rs_bw::ply::Encoding;
@@ -30,13 +30,13 @@ use crate::support::{
 
 /// The chunks of a GLB file: its JSON and its binary buffer.
 #[derive(Clone, Debug)]
-struct Glb {
-    json: Value,
-    bin: Vec<u8>,
+pub(crate) struct Glb {
+    pub(crate) json: Value,
+    pub(crate) bin: Vec<u8>,
 }
 
 impl Glb {
-    fn parse(bytes: &[u8]) -> Glb {
+    pub(crate) fn parse(bytes: &[u8]) -> Glb {
         let u32_at = |i: usize| u32::from_le_bytes(bytes[i..i + 4].try_into().unwrap()) as usize;
         let json_len = u32_at(12);
         let json = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
@@ -50,7 +50,7 @@ impl Glb {
     }
 
     /// The file, with a consistent header and chunk lengths.
-    fn bytes(&self) -> Vec<u8> {
+    pub(crate) fn bytes(&self) -> Vec<u8> {
         let mut json = serde_json::to_vec(&self.json).unwrap();
         while !json.len().is_multiple_of(4) {
             json.push(b' ');
@@ -78,7 +78,7 @@ impl Glb {
 
 /// A small leg (an open tube, 0.8 m tall, 64 triangles) written by our own glTF writer, so that
 /// most cases are cheap.
-fn small_tube_glb() -> Vec<u8> {
+pub(crate) fn small_tube_glb() -> Vec<u8> {
     let dir = tempfile::tempdir().unwrap();
     let path = write_tube_leg(dir.path(), "tube.glb", 8, 4, |t, angle| {
         [0.05 * angle.cos(), 0.8 * t, -0.05 * angle.sin()]
@@ -97,7 +97,7 @@ fn originals() -> &'static [Vec<u8>] {
 }
 
 /// Values that break assumptions: huge, negative, fractional, subnormal, of the wrong type.
-fn nasty_value() -> impl Strategy<Value = Value> {
+pub(crate) fn nasty_value() -> impl Strategy<Value = Value> {
     prop_oneof![
         Just(json!(0)),
         Just(json!(1)),
@@ -128,7 +128,7 @@ fn nasty_value() -> impl Strategy<Value = Value> {
 /// One edit of a GLB's JSON: the `at`-th node of the tree (in document order, wrapping) is
 /// replaced by `value`, or, when it is an object or array, loses or gains a member.
 #[derive(Clone, Debug)]
-enum JsonEdit {
+pub(crate) enum JsonEdit {
     Replace {
         at: usize,
         value: Value,
@@ -144,7 +144,7 @@ enum JsonEdit {
     },
 }
 
-fn json_edit() -> impl Strategy<Value = JsonEdit> {
+pub(crate) fn json_edit() -> impl Strategy<Value = JsonEdit> {
     let key = prop_oneof![
         Just("count"),
         Just("byteOffset"),
@@ -193,7 +193,7 @@ fn node_count(v: &Value) -> usize {
 }
 
 impl JsonEdit {
-    fn apply(&self, json: &mut Value) {
+    pub(crate) fn apply(&self, json: &mut Value) {
         let n = node_count(json);
         match self {
             JsonEdit::Replace { at, value } => {
@@ -334,6 +334,10 @@ fn check_leg(leg: &Leg) -> Result<(), TestCaseError> {
     let (lo, hi) = leg.bounds();
     let (min, max) = PLAUSIBLE_HEIGHT_M;
     prop_assert!((min..=max).contains(&(hi.y - lo.y)));
+    prop_assert!(leg
+        .positions
+        .iter()
+        .all(|p| p.iter().all(|c| c.abs() <= MAX_COORDINATE_M)));
     // What the fit does next: the collider, then a query; a refusal must be an error too.
     match Collider::new(leg, ContactMethod::Bvh) {
         Ok(collider) => {
@@ -381,7 +385,7 @@ proptest! {
 
 /// The small tube as PLY, in each encoding: binary little-endian (knitfit's own writer), binary
 /// big-endian and ASCII.
-fn ply_originals() -> &'static [Vec<u8>] {
+pub(crate) fn ply_originals() -> &'static [Vec<u8>] {
     static ORIGINALS: OnceLock<Vec<Vec<u8>>> = OnceLock::new();
     ORIGINALS.get_or_init(|| {
         let dir = tempfile::tempdir().unwrap();
@@ -891,4 +895,51 @@ fn regression_a_node_that_is_its_own_child_is_refused_not_a_stack_overflow() {
     );
     let err = stderr(&knitfit(dir.path(), &["fit", "--leg", "cycle.glb", "-q"]));
     assert!(err.contains("node 0 is reached twice"), "{err}");
+}
+
+/// Issue 22: `Collider::closest` panicked ("a non-empty mesh always has a closest point") when
+/// parry's best-first search found no triangle, which it does when it cannot rank them: a query
+/// point that is not finite, or one so far out that squared distances overflow. Now every
+/// triangle is tried instead, and the distance it gives is left to the callers' finiteness
+/// checks.
+#[test]
+fn regression_closest_to_a_point_the_bvh_cannot_rank_is_not_a_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("tube.glb");
+    std::fs::write(&path, small_tube_glb()).unwrap();
+    let leg = load_sample(&path);
+    let collider = Collider::new(&leg, ContactMethod::Bvh).unwrap();
+    for p in [
+        nalgebra::Point3::new(f64::NAN, 0.4, 0.0),
+        nalgebra::Point3::new(1e200, 0.4, 1e200),
+    ] {
+        assert!(collider.closest_within(&p, f64::MAX).is_none(), "{p:?}");
+        let c = collider.closest(&p);
+        assert!((c.triangle as usize) < collider.triangles().len());
+        assert!(
+            !c.signed_distance.is_finite() || c.signed_distance > 1e199,
+            "{c:?}"
+        );
+    }
+}
+
+/// Issue 22: a coordinate far beyond any body (here f32::MAX, as a flipped exponent bit makes)
+/// was accepted whenever cleaning kept a triangle using it, and contact's arithmetic on it can
+/// overflow; it is refused at the load, by the bound `MAX_COORDINATE_M`, in one line.
+#[test]
+fn regression_a_coordinate_beyond_the_limit_is_refused_at_the_load() {
+    let mut glb = Glb::parse(&originals()[0]);
+    // Vertex 9's x and vertex 10's z: a triangle with two far corners that is no sliver.
+    glb.bin[9 * 12..9 * 12 + 4].copy_from_slice(&f32::MAX.to_le_bytes());
+    glb.bin[10 * 12 + 8..10 * 12 + 12].copy_from_slice(&f32::MAX.to_le_bytes());
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("far.glb"), glb.bytes()).unwrap();
+    let err = load_leg(
+        &dir.path().join("far.glb"),
+        Units::Metres,
+        UpChoice::Axis(UpAxis::PosY),
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("beyond the ±10000 m"), "{err}");
+    refused(dir.path(), &["fit", "--leg", "far.glb", "-q"], "far.glb");
 }

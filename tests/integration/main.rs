@@ -15,6 +15,7 @@ mod layers;
 mod limits;
 mod physics;
 mod plan;
+mod process_fuzz;
 mod properties;
 mod render;
 mod skin;

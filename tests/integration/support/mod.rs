@@ -12,6 +12,6 @@ pub use fixtures::{
     write_mesh, write_meshes, write_raw_meshes, write_tube_leg, RawMesh,
 };
 pub use process::{
-    files_in, fit, knitfit, knitfit_env, report, run_scene, scene_for, stage_names, stderr, stdout,
-    write, OPEN_TUBE,
+    files_in, fit, knitfit, knitfit_env, knitfit_within, report, run_scene, scene_for, stage_names,
+    stderr, stdout, write, OPEN_TUBE,
 };

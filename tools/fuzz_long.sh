@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Long fuzz runs, for overnight: every fuzz target, far past the default suite's case counts.
+#
+#   tools/fuzz_long.sh [CASES] [PROCESS_CASES]
+#
+# CASES (default 100000) is each proptest fuzz test's case count, through PROPTEST_CASES: the
+# leg loader on damaged GLB/glTF files, on damaged PLY files, the scene parser on damaged scenes,
+# and the two PLY writers (tests/integration/fuzz.rs). PROCESS_CASES (default CASES / 100) is the
+# number of damaged files run through the `knitfit` binary itself, through
+# KNITFIT_PROCESS_FUZZ_CASES (tests/integration/process_fuzz.rs: exit codes, one-line refusals,
+# nothing written, a time bound per run). Every case comes from the suite's fixed seed, so a run
+# with more cases tries the same cases first and then new ones; a failure prints its minimal
+# input, to be kept as a named regression_… test.
+#
+# Rough rates on 2 shared cores: the five proptest targets together about 600 cases a second
+# (500000 each in about 14 minutes), the process target 20 to 30 runs a second. Ten million
+# inputs in all: CASES=2000000 (five targets) is about 5 hours.
+#
+# Runs under nice; exits non-zero on the first target that fails.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cases="${1:-100000}"
+process_cases="${2:-$((cases / 100))}"
+start=$(date +%s)
+echo "fuzz_long: ${cases} cases per proptest fuzz target, ${process_cases} process runs"
+PROPTEST_CASES="$cases" nice -n 10 cargo test --release --test integration -- fuzz:: --skip process_fuzz
+KNITFIT_PROCESS_FUZZ_CASES="$process_cases" nice -n 10 cargo test --release --test integration -- process_fuzz --nocapture
+echo "fuzz_long: done in $(($(date +%s) - start)) s"
