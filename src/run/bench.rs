@@ -263,6 +263,9 @@ fn fit_case(base: &Scene, case: &BenchCase) -> Result<(SolvedFit, f64, Option<u6
     let mut scene = base.clone();
     scene.tube.wales = case.wales;
     scene.tube.courses = case.courses;
+    // The sweep compares solvers on the open tube, on every leg alike (the whole stocking has
+    // its own section).
+    scene.tube.bottom = Some(TubeBottom::Ankle);
     scene.solver.method = case.solver;
     scene.solver.tolerance = case.tolerance;
     let plan = Plan::fit(&scene);
