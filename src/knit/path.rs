@@ -386,8 +386,9 @@ impl TubePath {
     /// toes' clefts on replaced by the convex hull of the sections there, closed just past the
     /// tip. This is the leg the stocking's contact sees: fabric bridges the gaps between toes,
     /// and a point let into one chatters between its two sides (the futility watch stopped the
-    /// whole body's fit there). The box holds the toes, so a point outside it is outside them.
-    /// Unchanged where the path has no toes.
+    /// whole body's fit there). The box holds the toes to within the sections' sampling (under a
+    /// millimetre), which the exact contact pass after the fit settles. Unchanged where the path
+    /// has no toes.
     pub fn box_the_toes(
         &self,
         positions: &[Point3<f64>],
