@@ -10,7 +10,9 @@
 # KNITFIT_PROCESS_FUZZ_CASES (tests/integration/process_fuzz.rs: exit codes, one-line refusals,
 # nothing written, a time bound per run). Every case comes from the suite's fixed seed, so a run
 # with more cases tries the same cases first and then new ones; a failure prints its minimal
-# input, to be kept as a named regression_… test.
+# input, to be kept as a named regression_… test. To isolate a process-fuzz failure, see the
+# KNITFIT_PROCESS_FUZZ_FROM / _KIND / _KEEP / _TIME_BOUND_S / _VERBOSE variables at the top of
+# tests/integration/process_fuzz.rs.
 #
 # Rough rates on 2 shared cores: the five proptest targets together about 600 cases a second
 # (500000 each in about 14 minutes), the process target 20 to 30 runs a second. Ten million

@@ -16,7 +16,11 @@
 //! The grid: cubic cells of side ≈ the median segment length; every segment is listed in each
 //! cell its radius-inflated bounding box touches. A query walks the cells the ray's stretch
 //! through the yarn layer crosses, front to back, and stops once the nearest hit is settled. Cells are found through a hash map
-//! with a fixed multiplicative hash (no per-process seed, so behaviour is reproducible).
+//! with a fixed multiplicative hash (no per-process seed, so behaviour is reproducible), its
+//! bits mixed down so that keys differing only in their y or z cell still spread over the
+//! table. A capsule whose box covers more than [`LARGE_CAPSULE_CELLS`] cells is not listed in
+//! cells at all but tried by every query: a fit writes none, but a damaged file can hold a
+//! segment kilometres long, and listing it cell by cell would be work without bound (issue 22).
 
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -60,8 +64,15 @@ pub struct YarnIndex {
     /// Cell key → range in `items`.
     cells: HashMap<u64, (u32, u32), BuildHasherDefault<CellHasher>>,
     items: Vec<u32>,
+    /// Capsules over [`LARGE_CAPSULE_CELLS`] cells, tried by every query.
+    large: Vec<u32>,
     max_radius: f64,
 }
+
+/// Most cells a capsule's box may cover and still be listed in each (8 × 8 × 8). A fit's
+/// segments cover a few: the cell is at least the median segment length. Bounds the grid's
+/// (cell, segment) pairs to this many per segment.
+const LARGE_CAPSULE_CELLS: u64 = 512;
 
 /// Cell coordinates are packed in 21 bits each; a grid wider than this many cells is coarsened.
 const MAX_CELLS_PER_AXIS: f64 = 2_000_000.0;
@@ -127,20 +138,31 @@ impl YarnIndex {
             origin,
             cells: HashMap::default(),
             items: Vec::new(),
+            large: Vec::new(),
             max_radius,
         };
+        let boxes: Vec<(Point3<f64>, Point3<f64>)> = index
+            .capsules
+            .iter()
+            .map(|c| {
+                let r = Vector3::repeat(c.radius);
+                (c.a.inf(&c.b) - r, c.a.sup(&c.b) + r)
+            })
+            .collect();
+        let is_large: Vec<bool> = boxes
+            .iter()
+            .map(|(lo, hi)| index.cell_count(lo, hi) > LARGE_CAPSULE_CELLS)
+            .collect();
+        index.large = (0..index.capsules.len() as u32)
+            .filter(|&i| is_large[i as usize])
+            .collect();
         // (cell, segment) pairs, sorted: the layout, and so every query, is the same whatever
         // the thread count.
-        let mut pairs: Vec<(u64, u32)> = index
-            .capsules
+        let mut pairs: Vec<(u64, u32)> = boxes
             .par_iter()
             .enumerate()
-            .flat_map_iter(|(i, c)| {
-                let r = Vector3::repeat(c.radius);
-                let lo = c.a.inf(&c.b) - r;
-                let hi = c.a.sup(&c.b) + r;
-                index.cell_range(&lo, &hi).map(move |key| (key, i as u32))
-            })
+            .filter(|(i, _)| !is_large[*i])
+            .flat_map_iter(|(i, (lo, hi))| index.cell_range(lo, hi).map(move |key| (key, i as u32)))
             .collect();
         pairs.par_sort_unstable();
         let mut cells = HashMap::default();
@@ -186,6 +208,14 @@ impl YarnIndex {
         c.clamp(0.0, (1u64 << 21) as f64 - 1.0) as u64
     }
 
+    /// How many cells the box `lo..hi` overlaps.
+    fn cell_count(&self, lo: &Point3<f64>, hi: &Point3<f64>) -> u64 {
+        // At most 2²¹ per axis, so the product fits in a u64 (2⁶³).
+        (0..3)
+            .map(|k| self.coord(hi[k], k).max(self.coord(lo[k], k)) - self.coord(lo[k], k) + 1)
+            .product()
+    }
+
     /// The keys of the cells the box `lo..hi` overlaps.
     fn cell_range(&self, lo: &Point3<f64>, hi: &Point3<f64>) -> impl Iterator<Item = u64> {
         let l: [u64; 3] = std::array::from_fn(|k| self.coord(lo[k], k));
@@ -213,6 +243,20 @@ impl YarnIndex {
         let start = origin + dir * t0;
         let span = t1 - t0;
         let mut best: Option<(f64, u32)> = None;
+        let try_capsule = |i: u32, best: &mut Option<(f64, u32)>| {
+            let c = &self.capsules[i as usize];
+            if let Some(t) = ray_capsule(&start, dir, c) {
+                let better = best.is_none_or(|(bt, bi)| t < bt || (t == bt && i < bi));
+                if t <= span && better {
+                    *best = Some((t, i));
+                }
+            }
+        };
+        // The capsules too large for the grid first: the walk below stops at the first cell
+        // past the best hit, which may be one of theirs.
+        for &i in &self.large {
+            try_capsule(i, &mut best);
+        }
         // Cells in the order the ray crosses them (Amanatides & Woo's traversal), so a long
         // stretch costs the cells it crosses, not its bounding box; and it stops at the first
         // cell whose exit lies beyond the best hit: a capsule is listed in every cell its box
@@ -239,13 +283,7 @@ impl YarnIndex {
                 let key = cell[0] as u64 | (cell[1] as u64) << 21 | (cell[2] as u64) << 42;
                 if let Some(&(first, count)) = self.cells.get(&key) {
                     for &i in &self.items[first as usize..(first + count) as usize] {
-                        let c = &self.capsules[i as usize];
-                        if let Some(t) = ray_capsule(&start, dir, c) {
-                            let better = best.is_none_or(|(bt, bi)| t < bt || (t == bt && i < bi));
-                            if t <= span && better {
-                                best = Some((t, i));
-                            }
-                        }
+                        try_capsule(i, &mut best);
                     }
                 }
             }
@@ -380,12 +418,21 @@ pub fn paper_tangent_frame(
 }
 
 /// FxHash-style multiplicative hasher for cell keys: fast and the same in every process.
+/// `finish` mixes the high bits down (MurmurHash3's fmix64): a product's low bits depend only
+/// on the key's low bits, the x cell, and the table picks buckets by the low bits, so without
+/// it every cell of one x column lands in one probe sequence (a yarn segment 10³⁷ m long in y
+/// made 2 million such keys, and building the table ran past the process fuzz's 60 s).
 #[derive(Default)]
 pub struct CellHasher(u64);
 
 impl Hasher for CellHasher {
     fn finish(&self) -> u64 {
-        self.0
+        let mut h = self.0;
+        h ^= h >> 33;
+        h = h.wrapping_mul(0xff51_afd7_ed55_8ccd);
+        h ^= h >> 33;
+        h = h.wrapping_mul(0xc4ce_b9fe_1a85_ec53);
+        h ^ (h >> 33)
     }
 
     fn write(&mut self, bytes: &[u8]) {
@@ -500,5 +547,41 @@ mod tests {
                 other => panic!("{k}: {other:?}"),
             }
         }
+    }
+
+    #[test]
+    fn a_capsule_too_large_for_the_grid_is_still_found_and_lists_in_no_cell() {
+        let r = 4e-5;
+        let mut capsules: Vec<Capsule> = (0..20)
+            .map(|i| {
+                let y = i as f64 * 5e-4;
+                capsule([0.0, y, r], [1e-2, y, r], r)
+            })
+            .collect();
+        // Kilometres long in y and z: millions of cells by two axes.
+        capsules.push(capsule([5e-3, 0.0, r], [5e-3, 5e3, 5e3], r));
+        let index = YarnIndex::from_capsules(capsules.clone());
+        assert_eq!(index.large, vec![20]);
+        assert!(index.items.len() < 100 * capsules.len());
+        // Straight down onto the long capsule's start.
+        let dir = -Vector3::z();
+        let origin = Point3::new(5e-3, 2.5e-4, 1e-3);
+        let hit = index.nearest_hit(&origin, &dir, 0.0, 1e-3).unwrap();
+        let scan = capsules
+            .iter()
+            .filter_map(|c| ray_capsule(&origin, &dir, c))
+            .fold(f64::INFINITY, f64::min);
+        assert!((hit.t - scan).abs() < 1e-12, "{} vs {scan}", hit.t);
+    }
+
+    #[test]
+    fn cell_keys_differing_only_in_y_or_z_spread_over_the_table() {
+        use std::hash::BuildHasher;
+        let build = BuildHasherDefault::<CellHasher>::default();
+        let low: std::collections::BTreeSet<u64> = (0..1024u64)
+            .flat_map(|j| [j << 21, j << 42])
+            .map(|key| build.hash_one(key) & 1023)
+            .collect();
+        assert!(low.len() > 512, "{} distinct low bits", low.len());
     }
 }

@@ -9,9 +9,19 @@
 //!
 //! The default suite runs [`DEFAULT_RUNS`] cases at 24×24; `KNITFIT_PROCESS_FUZZ_CASES=N` runs
 //! N (`tools/fuzz_long.sh`). `PROPTEST_CASES` does not change it: each case is a process.
+//!
+//! To isolate a failure of a long run: `KNITFIT_PROCESS_FUZZ_FROM=K` passes cases before the
+//! K-th (counted from 0; the same cases are generated, so case K is the same input) without
+//! running them; `KNITFIT_PROCESS_FUZZ_KIND=Render` (or `Scene`, `Glb`, `GltfExternal`,
+//! `PlyBinary`, `PlyAscii`) runs only that kind; `KNITFIT_PROCESS_FUZZ_KEEP=DIR` copies the
+//! files of each failing run (shrinking included) to `DIR/case-N` with the command line in
+//! `DIR/case-N/command`; `KNITFIT_PROCESS_FUZZ_TIME_BOUND_S` shortens the time bound while
+//! hunting a hang. Each case run prints its number and kind with `--nocapture` when
+//! `KNITFIT_PROCESS_FUZZ_VERBOSE` is set.
 
 use std::collections::BTreeMap;
 use std::path::Path;
+use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::OnceLock;
 use std::time::Duration;
 
@@ -533,21 +543,75 @@ fn prepare(dir: &Path, case: &Case) -> (Vec<String>, String, Vec<String>) {
     }
 }
 
+/// Cases generated so far (shrinking steps included): the number [`FROM_VARIABLE`] counts.
+static CASE_NUMBER: AtomicU32 = AtomicU32::new(0);
+
+/// Skips the cases before this number.
+const FROM_VARIABLE: &str = "KNITFIT_PROCESS_FUZZ_FROM";
+/// Runs only this kind of case.
+const KIND_VARIABLE: &str = "KNITFIT_PROCESS_FUZZ_KIND";
+/// Keeps each failing run's files under this directory.
+const KEEP_VARIABLE: &str = "KNITFIT_PROCESS_FUZZ_KEEP";
+/// Replaces [`TIME_BOUND`], seconds.
+const TIME_BOUND_VARIABLE: &str = "KNITFIT_PROCESS_FUZZ_TIME_BOUND_S";
+/// Prints each case's number and kind.
+const VERBOSE_VARIABLE: &str = "KNITFIT_PROCESS_FUZZ_VERBOSE";
+
+fn env_number(name: &str) -> Option<u64> {
+    std::env::var(name).ok().and_then(|v| v.parse().ok())
+}
+
+/// Copies the files of a failing run (in `dir`) to `KEEP/case-N`, with its command line.
+fn keep_failure(number: u32, dir: &Path, args: &[&str]) {
+    let Ok(keep) = std::env::var(KEEP_VARIABLE) else {
+        return;
+    };
+    let to = Path::new(&keep).join(format!("case-{number}"));
+    let copy = |from: &Path, to: &Path| {
+        std::fs::create_dir_all(to).unwrap();
+        for name in files_in(from) {
+            let (src, dst) = (from.join(&name), to.join(&name));
+            if src.is_file() {
+                std::fs::copy(&src, &dst).unwrap();
+            }
+        }
+    };
+    copy(dir, &to);
+    for sub in files_in(dir) {
+        if dir.join(&sub).is_dir() {
+            copy(&dir.join(&sub), &to.join(&sub));
+        }
+    }
+    std::fs::write(to.join("command"), format!("knitfit {}\n", args.join(" "))).unwrap();
+    eprintln!("process fuzz: case {number} kept in {}", to.display());
+}
+
 /// Runs the case and checks the contract of the module docs.
 fn check_run(case: &Case) -> Result<(), TestCaseError> {
-    let dir = tempfile::tempdir().unwrap();
-    let (args, out_dir, before) = prepare(dir.path(), case);
-    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let number = CASE_NUMBER.fetch_add(1, Ordering::Relaxed);
     let kind = match case {
         Case::Leg { format, .. } => format!("{format:?}"),
         Case::Scene { .. } => "Scene".into(),
         Case::Render { .. } => "Render".into(),
     };
+    let skipped = env_number(FROM_VARIABLE).is_some_and(|from| u64::from(number) < from)
+        || std::env::var(KIND_VARIABLE).is_ok_and(|only| only != kind);
+    if skipped {
+        return Ok(());
+    }
+    if std::env::var_os(VERBOSE_VARIABLE).is_some() {
+        eprintln!("process fuzz: case {number} {kind}: {case:?}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let (args, out_dir, before) = prepare(dir.path(), case);
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
     tally(format!("cases {kind}"));
-    let Some(out) = knitfit_within(dir.path(), &args, TIME_BOUND) else {
+    let bound = env_number(TIME_BOUND_VARIABLE).map_or(TIME_BOUND, Duration::from_secs);
+    let Some(out) = knitfit_within(dir.path(), &args, bound) else {
         tally("exit timeout".into());
+        keep_failure(number, dir.path(), &args);
         return Err(TestCaseError::fail(format!(
-            "knitfit {} did not end within {TIME_BOUND:?}",
+            "case {number}: knitfit {} did not end within {bound:?}",
             args.join(" ")
         )));
     };
@@ -557,23 +621,30 @@ fn check_run(case: &Case) -> Result<(), TestCaseError> {
         Some(code) => format!("exit {code}"),
         None => "exit signal".into(),
     });
-    prop_assert!(
-        matches!(code, Some(0..=3)),
-        "exit {:?} (None: a signal): {}",
-        code,
-        err
-    );
-    if matches!(code, Some(1 | 2)) {
-        prop_assert_eq!(err.lines().count(), 1, "one line: {}", err);
-        prop_assert!(err.starts_with("knitfit: error: "), "{}", err);
-        prop_assert_eq!(
-            files_in(&dir.path().join(&out_dir)),
-            before,
-            "nothing written on a refusal: {}",
+    let checked = (|| {
+        prop_assert!(
+            matches!(code, Some(0..=3)),
+            "case {}: exit {:?} (None: a signal): {}",
+            number,
+            code,
             err
         );
+        if matches!(code, Some(1 | 2)) {
+            prop_assert_eq!(err.lines().count(), 1, "one line: {}", err);
+            prop_assert!(err.starts_with("knitfit: error: "), "{}", err);
+            prop_assert_eq!(
+                files_in(&dir.path().join(&out_dir)),
+                before.clone(),
+                "nothing written on a refusal: {}",
+                err
+            );
+        }
+        Ok(())
+    })();
+    if checked.is_err() {
+        keep_failure(number, dir.path(), &args);
     }
-    Ok(())
+    checked
 }
 
 /// How many cases to run: [`RUNS_VARIABLE`] where set, else [`DEFAULT_RUNS`].
@@ -607,4 +678,86 @@ fn the_binary_on_damaged_files_ends_cleanly_and_writes_nothing_when_it_refuses()
     if let Err(e) = result {
         panic!("{e}");
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Regressions the process fuzz found
+
+/// A run of a case must end well within this; a regression that hangs fails here, not at the
+/// fuzz's [`TIME_BOUND`].
+const REGRESSION_BOUND: Duration = Duration::from_secs(20);
+
+/// The fit's outputs in `dir/fit`, with the first yarn point of `stocking.glb` moved to `at`
+/// (metres, the yarns node has no transform); returns the files `fit` then holds.
+fn fit_with_yarn_point(dir: &Path, at: [f32; 3]) -> Vec<String> {
+    std::fs::create_dir(dir.join("fit")).unwrap();
+    for (name, bytes) in fit_outputs() {
+        std::fs::write(dir.join("fit").join(name), bytes).unwrap();
+    }
+    let glb = &fit_outputs()
+        .iter()
+        .find(|f| f.0 == "stocking.glb")
+        .unwrap()
+        .1;
+    let mut glb = Glb::parse(glb);
+    let yarns = glb.json["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| n["name"] == "yarns")
+        .unwrap()["mesh"]
+        .as_u64()
+        .unwrap() as usize;
+    let accessor = &glb.json["accessors"][glb.json["meshes"][yarns]["primitives"][0]["attributes"]
+        ["POSITION"]
+        .as_u64()
+        .unwrap() as usize];
+    let view = &glb.json["bufferViews"][accessor["bufferView"].as_u64().unwrap() as usize];
+    let start = view["byteOffset"].as_u64().unwrap_or(0) as usize
+        + accessor["byteOffset"].as_u64().unwrap_or(0) as usize;
+    for (k, c) in at.iter().enumerate() {
+        glb.bin[start + 4 * k..start + 4 * k + 4].copy_from_slice(&c.to_le_bytes());
+    }
+    std::fs::write(dir.join("fit/stocking.glb"), glb.bytes()).unwrap();
+    files_in(&dir.join("fit"))
+}
+
+const RENDER_ARGS: [&str; 9] = [
+    "render", "fit", "--width", "24", "--height", "24", "--spp", "1", "-q",
+];
+
+/// Case 1563 of `KNITFIT_PROCESS_FUZZ_CASES=2000`: one flipped exponent bit
+/// (`FlipBits([(0.27048156537095847, 6)])`) put the first yarn point of `stocking.glb` at
+/// y = 6.38e37 m. Its segments then spanned the yarn grid's 2 million cells in y, every key of
+/// one x column fell in one probe sequence of the cell table, and `knitfit render` at 24×24 ran
+/// past 60 s. Such a point is refused where the file is read, naming it.
+#[test]
+fn regression_render_of_a_yarn_point_flipped_to_6e37_m_is_refused_in_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let before = fit_with_yarn_point(dir.path(), [6.345_215e-3, 6.380_294e37, -4.740_42e-2]);
+    let out = knitfit_within(dir.path(), &RENDER_ARGS, REGRESSION_BOUND)
+        .expect("knitfit render ends within the bound");
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.starts_with("knitfit: error: "), "{err}");
+    assert!(
+        err.contains("stocking.glb") && err.contains("\"yarns\"") && err.contains("vertex 0"),
+        "{err}"
+    );
+    assert_eq!(files_in(&dir.path().join("fit")), before);
+}
+
+/// The same damage within the ±10 km the read accepts: a yarn segment kilometres long in y and
+/// z covers millions of grid cells on two axes (10¹² cell entries). The grid tries such a
+/// segment on every ray instead of listing it in cells, so the render ends as quickly as the
+/// clean one and writes its picture.
+#[test]
+fn regression_render_of_a_yarn_segment_kilometres_long_ends_quickly() {
+    let dir = tempfile::tempdir().unwrap();
+    fit_with_yarn_point(dir.path(), [6.345_215e-3, 5e3, 5e3]);
+    let out = knitfit_within(dir.path(), &RENDER_ARGS, REGRESSION_BOUND)
+        .expect("knitfit render ends within the bound");
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    assert!(dir.path().join("fit/preview.png").is_file());
 }

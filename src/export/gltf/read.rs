@@ -15,6 +15,7 @@ use nalgebra::{Matrix3, Matrix4, Point3, Vector3};
 
 use crate::base::{vertex_normals, Direction, Segment, SurfaceMesh, YarnGeometry, YarnKind};
 use crate::error::{Error, Result};
+use crate::leg::load::MAX_COORDINATE_M;
 
 /// The leg and yarns of a `stocking.glb`, world space, metres.
 #[derive(Clone, Debug)]
@@ -26,7 +27,10 @@ pub struct StockingGlb {
 }
 
 /// Reads `path`. Errors ([`Error::Read`], [`Error::RenderInput`]) name the file: missing,
-/// not glTF, no `leg` node with triangles, no `yarns` node with lines.
+/// not glTF, no `leg` node with triangles, no `yarns` node with lines, a vertex of the leg's
+/// triangles or of the yarns' segments further than [`MAX_COORDINATE_M`] from the origin on an
+/// axis (world space; the bound `knitfit fit` puts on the leg it reads, so no fit writes one:
+/// such a point is damage, and one flipped exponent bit puts a yarn point at 1e37 m).
 pub fn read_stocking_glb(path: &Path) -> Result<StockingGlb> {
     let bad = |message: String| Error::RenderInput {
         path: path.to_path_buf(),
@@ -135,6 +139,9 @@ pub fn read_stocking_glb(path: &Path) -> Result<StockingGlb> {
     if triangles.is_empty() {
         return Err(bad("node \"leg\" has no triangles".into()));
     }
+    if let Some(message) = far_vertex("leg", &positions, triangles.iter().flatten().copied()) {
+        return Err(bad(message));
+    }
     let mut leg = SurfaceMesh::new("leg", positions, triangles);
     if has_normals && normals.len() == leg.positions.len() {
         leg.normals = normals;
@@ -195,6 +202,10 @@ pub fn read_stocking_glb(path: &Path) -> Result<StockingGlb> {
     if segments.is_empty() {
         return Err(bad("node \"yarns\" has no line segments".into()));
     }
+    let ends = segments.iter().flat_map(|s| [s.a, s.b]);
+    if let Some(message) = far_vertex("yarns", &yarn_positions, ends) {
+        return Err(bad(message));
+    }
     let yarns = YarnGeometry {
         name: "yarns".into(),
         offset_m: [0.0; 3],
@@ -203,4 +214,28 @@ pub fn read_stocking_glb(path: &Path) -> Result<StockingGlb> {
         segments,
     };
     Ok(StockingGlb { leg, yarns })
+}
+
+/// The refusal for the first of `used` (indices into `positions`, world space, metres) further
+/// than [`MAX_COORDINATE_M`] from the origin on an axis; `None` when every one is within it.
+/// Every index in `used` is in range (checked where triangles and segments are kept).
+/// Points that are not finite pass here: the renderer leaves them out.
+fn far_vertex(
+    node: &str,
+    positions: &[[f64; 3]],
+    used: impl IntoIterator<Item = u32>,
+) -> Option<String> {
+    let (i, p) = used
+        .into_iter()
+        .map(|i| (i, positions[i as usize]))
+        .find(|(_, p)| {
+            p.iter()
+                .any(|c| c.is_finite() && c.abs() > MAX_COORDINATE_M)
+        })?;
+    Some(format!(
+        "node {node:?}: vertex {i} is at ({:e}, {:e}, {:e}) m, beyond the ±{MAX_COORDINATE_M} m \
+         knitfit accepts on any axis; the file is damaged: give the stocking.glb a `knitfit \
+         fit` wrote",
+        p[0], p[1], p[2]
+    ))
 }
