@@ -310,13 +310,7 @@ impl Grid {
 
 #[test]
 fn every_sample_with_a_foot_gets_a_whole_stocking_at_the_defaults_with_either_heel() {
-    let feet = [
-        "makehuman_leg_foot.glb",
-        "lowpoly_leg.glb",
-        "makehuman_body.glb",
-        "makehuman_hips_heavy.glb",
-    ];
-    for foot in feet {
+    for foot in crate::support::FEET {
         for heel in ["none", "pocket"] {
             let w = measure_whole_stocking(&sample(foot), heel);
             eprintln!(

@@ -1080,13 +1080,7 @@ fn stiff_and_narrow_stockings_to_the_toe_fit_or_are_refused_as_bunched() {
             "tube": { "relaxed_circumference_m": circumference_m },
         })
     };
-    let feet = [
-        "makehuman_leg_foot.glb",
-        "lowpoly_leg.glb",
-        "makehuman_body.glb",
-        "makehuman_hips_heavy.glb",
-    ];
-    for foot in feet {
+    for foot in crate::support::FEET {
         let leg_path = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("samples")
             .join(foot);

@@ -294,10 +294,15 @@ fn write_floats(
 
 /// The damaged GLB.
 fn damaged_glb(damage: &Damage) -> Vec<u8> {
-    let tube = small_tube_glb();
-    let glb = Glb::parse(&tube);
+    damage_glb(&small_tube_glb(), damage)
+}
+
+/// `original` (a GLB) with `damage` done: numbers edited in its JSON, or its position floats
+/// overwritten, or its bytes flipped or cut.
+fn damage_glb(original: &[u8], damage: &Damage) -> Vec<u8> {
+    let glb = Glb::parse(original);
     damage_bytes(
-        &tube,
+        original,
         damage,
         |_, edits| {
             let json = serde_json::to_vec(&glb.json).unwrap();
@@ -510,28 +515,12 @@ fn prepare(dir: &Path, case: &Case) -> (Vec<String>, String, Vec<String>) {
             for (name, bytes) in fit_outputs() {
                 write(&format!("fit/{name}"), bytes);
             }
-            let glb = Glb::parse(
-                &fit_outputs()
-                    .iter()
-                    .find(|f| f.0 == "stocking.glb")
-                    .unwrap()
-                    .1,
-            );
-            let original = glb.bytes();
-            let damaged = damage_bytes(
-                &original,
-                damage,
-                |_, edits| {
-                    let json = serde_json::to_vec(&glb.json).unwrap();
-                    glb_with_json_text(&glb, &edit_numbers(&json, edits))
-                },
-                |bytes, writes| {
-                    let mut edited = Glb::parse(bytes);
-                    let range = position_bytes(&edited);
-                    write_floats(&mut edited.bin, range, 12, writes);
-                    *bytes = edited.bytes();
-                },
-            );
+            let stocking = &fit_outputs()
+                .iter()
+                .find(|f| f.0 == "stocking.glb")
+                .unwrap()
+                .1;
+            let damaged = damage_glb(stocking, damage);
             write("fit/stocking.glb", &damaged);
             let args = [
                 "render", "fit", "--width", "24", "--height", "24", "--spp", "1", "-q",

@@ -25,6 +25,14 @@ pub fn sample_legs() -> Vec<PathBuf> {
     legs
 }
 
+/// The bundled sample legs with a foot (the stocking runs to the toe on them).
+pub const FEET: [&str; 4] = [
+    "makehuman_leg_foot.glb",
+    "lowpoly_leg.glb",
+    "makehuman_body.glb",
+    "makehuman_hips_heavy.glb",
+];
+
 /// The procedural sample leg: closed, Y-up, at the origin; the tests that edit a leg file or
 /// know its triangle count use it.
 pub fn procedural_leg() -> PathBuf {
