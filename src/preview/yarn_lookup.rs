@@ -18,7 +18,7 @@
 //! through the yarn layer crosses, front to back, and stops once the nearest hit is settled. Cells are found through a hash map
 //! with a fixed multiplicative hash (no per-process seed, so behaviour is reproducible), its
 //! bits mixed down so that keys differing only in their y or z cell still spread over the
-//! table. A capsule whose box covers more than [`LARGE_CAPSULE_CELLS`] cells is not listed in
+//! table. A capsule whose box covers more than `LARGE_CAPSULE_CELLS` (512) cells is not listed in
 //! cells at all but tried by every query: a fit writes none, but a damaged file can hold a
 //! segment kilometres long, and listing it cell by cell would be work without bound (issue 22).
 
