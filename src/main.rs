@@ -87,6 +87,29 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
                 (d.tube.bottom == knitfit::knit::TubeBottom::Toe).then_some(d.tube.centreline_m)
             )
         );
+        let k = &d.knit;
+        let on_leg = match d.stitch_density_per_cm2.leg_vertices_covered {
+            0 => String::new(),
+            _ => format!(
+                "; on the leg {:.0}–{:.0} stitches/cm², coverage {:.2}–{:.2}, pressure up to {:.1} \
+                 mmHg",
+                d.stitch_density_per_cm2.min,
+                d.stitch_density_per_cm2.max,
+                d.coverage.min,
+                d.coverage.max,
+                d.pressure_mmhg.max
+            ),
+        };
+        say!(
+            "knit: {} needles × {:.0} courses of {}/{} den yarn, each grid cell {:.1} × {:.1} \
+             stitches{on_leg}",
+            k.needles,
+            k.courses,
+            scene.yarns.nylon.denier,
+            scene.yarns.support.denier,
+            k.stitches_per_cell.course,
+            k.stitches_per_cell.wale
+        );
         print_written(&args.out_dir(), &outcome.written);
     }
     // Damping shapes only the paper solver's steps; the multilevel solver has none to tune.

@@ -458,7 +458,7 @@ impl Plan {
         if leg_files || scene.wants(Output::Picture) || density_preview {
             plan.add(
                 Stage::LegAttributes,
-                "stitch density, stretch and coverage per leg vertex, for the leg in the files \
+                "stitch density, stretch, coverage, tension and pressure per leg vertex, for the leg in the files \
                  and the density pictures",
             );
         } else {

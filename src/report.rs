@@ -111,8 +111,14 @@ pub struct FitDetails {
     pub preview: Option<PreviewStats>,
     /// The memory estimate checked before the leg was decoded, and the peak measured.
     pub memory: MemoryDetails,
+    /// The real stocking the grid stands for.
+    pub knit: KnitDetails,
     /// Stitch density over the leg's vertices that yarn covers.
     pub stitch_density_per_cm2: DensityRange,
+    /// Coverage (0–1) over the covered leg vertices.
+    pub coverage: FieldRange,
+    /// Pressure on the skin over the covered leg vertices, mmHg.
+    pub pressure_mmhg: FieldRange,
     /// Mean stretch of the knit on each part of the leg, toe to thigh (empty where the leg's
     /// landmarks were not looked for: a given axis).
     pub stretch_by_region: Vec<RegionStretch>,
@@ -379,6 +385,57 @@ pub struct DensityRange {
     pub min: f64,
     /// Highest density, stitches per cm².
     pub max: f64,
+}
+
+/// The lowest, median and highest value of a field over the covered leg vertices (0 when none
+/// is covered).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct FieldRange {
+    /// Lowest value.
+    pub min: f64,
+    /// Median value.
+    pub median: f64,
+    /// Highest value.
+    pub max: f64,
+}
+
+impl FieldRange {
+    /// The range of `values` (all 0 when empty).
+    pub fn of(values: &[f64]) -> FieldRange {
+        let mut sorted = values.to_vec();
+        sorted.sort_by(f64::total_cmp);
+        FieldRange {
+            min: sorted.first().copied().unwrap_or(0.0),
+            median: sorted.get(sorted.len() / 2).copied().unwrap_or(0.0),
+            max: sorted.last().copied().unwrap_or(0.0),
+        }
+    }
+}
+
+/// The real stocking a fit's grid stands for (`knit::Fabric`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct KnitDetails {
+    /// Needles: real stitches around.
+    pub needles: usize,
+    /// Real courses along the relaxed stocking.
+    pub courses: f64,
+    /// The relaxed stitch, metres: between wales along a course, between courses along a wale.
+    pub stitch_m: PerDirection,
+    /// Yarn diameters from their denier, micrometres.
+    pub yarn_diameter_um: YarnValues,
+    /// One nylon stitch's stiffness, newtons per metre of extension.
+    pub loop_stiffness_n_per_m: f64,
+    /// Real stitches one grid cell stands for, around (course) and along (wale).
+    pub stitches_per_cell: PerDirection,
+}
+
+/// A value per yarn material.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct YarnValues {
+    /// The nylon yarn.
+    pub nylon: f64,
+    /// The support yarn.
+    pub support: f64,
 }
 
 /// `details` of the patch experiment.

@@ -17,7 +17,7 @@ use crate::base::settings::Invalid;
 use crate::error::{Error, Result};
 use crate::export::{default_outputs, Output};
 use crate::knit::settings::{KnitSettings, PatchSettings, TubeSettings, Yarns};
-use crate::knit::Pattern;
+use crate::knit::{Fabric, Pattern};
 use crate::leg::settings::LegSettings;
 use crate::limits::Limits;
 use crate::preview::settings::PreviewSettings;
@@ -105,6 +105,11 @@ impl Scene {
         Ok(LoadedScene::load(path, Vec::new())?.scene)
     }
 
+    /// The real stocking the scene describes: needles, stitch, yarns.
+    pub fn fabric(&self) -> Fabric {
+        Fabric::of(&self.knit, &self.yarns, &self.tube)
+    }
+
     /// True when the scene lists `effect`.
     pub fn has(&self, effect: Effect) -> bool {
         self.effects.contains(&effect)
@@ -130,6 +135,18 @@ impl Scene {
         self.patch.validate().map_err(|e| e.within("patch"))?;
         self.render.validate().map_err(|e| e.within("render"))?;
         self.tube.validate().map_err(|e| e.within("tube"))?;
+        if self.tube.wales > self.knit.needles {
+            // A grid point stands for one or more real stitches, never for less than one.
+            return Err(Invalid::new(
+                "knit.needles",
+                format!(
+                    "{} needles are fewer than the grid's {} wales; a grid point stands for one \
+                     real stitch or more: lower tube.wales (--resolution) or raise knit.needles",
+                    self.knit.needles, self.tube.wales
+                ),
+            )
+            .with(&["tube.wales"]));
+        }
         self.contact.validate().map_err(|e| e.within("contact"))?;
         self.leg.validate().map_err(|e| e.within("leg"))?;
         self.limits.validate().map_err(|e| e.within("limits"))
@@ -393,13 +410,57 @@ mod tests {
     #[test]
     fn negative_stiffness_names_the_field() {
         let err = Scene::from_json(
-            r#"{"yarns": {"support": {"stiffness": -1, "radius_m": 1e-5}}}"#,
+            r#"{"yarns": {"support": {"stiffness": -1, "denier": 5}}}"#,
             "s.json",
         )
         .unwrap_err();
         assert_eq!(
             err.to_string(),
             "s.json: yarns.support.stiffness: must be a positive number, got -1"
+        );
+    }
+
+    #[test]
+    fn the_real_stocking_is_checked_by_field() {
+        let refused = |text: &str| Scene::from_json(text, "s.json").unwrap_err().to_string();
+        assert_eq!(
+            refused(r#"{"yarns": {"nylon": {"stiffness": 1, "denier": 0}}}"#),
+            "s.json: yarns.nylon.denier: must be a positive number, got 0"
+        );
+        assert_eq!(
+            refused(r#"{"yarns": {"support": {"stiffness": 10, "denier": -20}}}"#),
+            "s.json: yarns.support.denier: must be a positive number, got -20"
+        );
+        assert_eq!(
+            refused(r#"{"knit": {"needles": 100}}"#),
+            "s.json: knit.needles: 100 needles are fewer than the grid's 150 wales; a grid point \
+             stands for one real stitch or more: lower tube.wales (--resolution) or raise \
+             knit.needles"
+        );
+        // Values that would put the geometry out of any sane range are refused at the scene,
+        // not met as a failed fit.
+        assert_eq!(
+            refused(r#"{"knit": {"course_spacing_m": 1e308}}"#),
+            "s.json: knit.course_spacing_m: must be at most 0.02, got 1e308"
+        );
+        assert!(refused(r#"{"tube": {"relaxed_circumference_m": 1e9}}"#)
+            .starts_with("s.json: tube.relaxed_circumference_m: must be at most 10"));
+        assert!(refused(r#"{"knit": {"needles": 1000000}}"#).starts_with("s.json: knit.needles:"));
+    }
+
+    #[test]
+    fn too_few_needles_for_the_grid_names_the_flag_that_set_it() {
+        let err = LoadedScene::from_json(
+            "{}",
+            "s.json",
+            None,
+            vec![Override::new("--resolution", "tube.wales", 500)],
+        )
+        .unwrap_err();
+        assert!(
+            err.to_string()
+                .starts_with("--resolution: 400 needles are fewer than"),
+            "{err}"
         );
     }
 
@@ -493,7 +554,7 @@ mod tests {
 
     #[test]
     fn flags_leave_every_other_field_as_the_scene_file_has_it() {
-        let text = r#"{"yarns": {"nylon": {"stiffness": 2, "radius_m": 5e-5}},
+        let text = r#"{"yarns": {"nylon": {"stiffness": 2, "denier": 40}},
                       "tube": {"relaxed_length_m": 0.5}}"#;
         let plain = LoadedScene::from_json(text, "s.json", None, Vec::new()).unwrap();
         let flagged = LoadedScene::from_json(

@@ -69,6 +69,28 @@ pub fn positive(field: &str, value: f64) -> Result<(), Invalid> {
     }
 }
 
+/// Checks that `value` is a finite number above zero and at most `max`.
+pub fn positive_at_most(field: &str, value: f64, max: f64) -> Result<(), Invalid> {
+    positive(field, value)?;
+    if value <= max {
+        Ok(())
+    } else {
+        Err(Invalid::new(
+            field,
+            format!("must be at most {max}, got {}", number(value)),
+        ))
+    }
+}
+
+/// A number as a person would write it: `0.5`, but `1e308` rather than 309 digits.
+pub fn number(value: f64) -> String {
+    if value != 0.0 && !(1e-4..1e6).contains(&value.abs()) {
+        format!("{value:e}")
+    } else {
+        format!("{value}")
+    }
+}
+
 /// Checks that `value` is a finite number, zero or above.
 pub fn non_negative(field: &str, value: f64) -> Result<(), Invalid> {
     if value.is_finite() && value >= 0.0 {

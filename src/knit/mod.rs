@@ -1,6 +1,7 @@
 //! The knit: pattern (yarn kinds, point classes), the mass-spring model, and the shapes it is
 //! built in: the flat patch of the paper's experiment and the tube a fit starts from.
 
+pub mod fabric;
 pub mod model;
 pub mod patch;
 pub mod path;
@@ -8,6 +9,7 @@ pub mod pattern;
 pub mod settings;
 pub mod tube;
 
+pub use fabric::Fabric;
 pub use model::{Connection, Face, Incident, Knit, Particles, PointId, ShortRows, Spring};
 pub use pattern::{Pattern, Tile};
 pub use settings::{

@@ -19,7 +19,7 @@
 use std::collections::BTreeMap;
 
 use super::pattern::Tile;
-use crate::base::{Direction, Segment, Vec3, YarnGeometry, YarnKind};
+use crate::base::{Direction, PerYarn, Segment, Vec3, YarnGeometry, YarnKind};
 
 /// Index of a mass point: `course * wales + wale`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -113,6 +113,11 @@ pub struct Knit {
     /// [`Direction::index`]): 1 when a grid cell is one stitch, as in the paper; see
     /// [`Knit::with_stitch_shape`] for a grid coarser than the stitches.
     pub stiffness_scale: [f64; 2],
+    /// On a grid that stands for the fabric ([`Knit::with_stitch_shape`]): the share of each
+    /// yarn kind among the grid's springs along each direction, which every spring of that
+    /// direction then stands for together. `None` on a knit of single stitches (the patch),
+    /// which knits the pattern spring by spring.
+    pub yarn_blend: Option<[PerYarn<f64>; 2]>,
     /// Springs of the grid (the first ones); those after are the shaping's.
     grid_springs: usize,
     /// True when the last course is closed by a toe seam.
@@ -260,6 +265,7 @@ impl Knit {
             class,
             course_yarn,
             stiffness_scale: [1.0, 1.0],
+            yarn_blend: None,
             grid_springs,
             toe_seam: false,
             short_rows: None,
@@ -491,18 +497,45 @@ impl Knit {
     /// rest_course)`, gives every grid the stitch's membrane, so the grid size only sets how
     /// finely that fabric is resolved (and the multilevel solver's coarse grids are the same
     /// fabric as the fine one).
+    ///
+    /// A cell that stands for a block of stitches holds both yarns of an alternating pattern,
+    /// so the springs are blended ([`Knit::yarn_blend`]) rather than alternating cell by cell:
+    /// knitted cell by cell, the yarns' stripes would be as wide as a cell, and how much they
+    /// stiffen the fabric would change with the cells' shape. A grid of the real stitches is
+    /// blended too: knitted spring by spring, its soft nylon courses zigzag between the support
+    /// courses, a loop-scale wrinkle that is not the fabric's shape and that the solver takes
+    /// ten times longer to settle (docs/decisions/0053).
     pub fn with_stitch_shape(mut self, course_spacing: f64, wale_spacing: f64) -> Knit {
-        let rest = |direction: Direction| {
+        let [course, wale] = self.grid_rest_m();
+        if course > 0.0 && wale > 0.0 {
+            let alpha = (course_spacing / wale_spacing) * (wale / course);
+            self.stiffness_scale = [alpha, 1.0 / alpha];
+            self.yarn_blend = Some(self.yarn_shares());
+        }
+        self
+    }
+
+    /// The share of each yarn kind among the grid's springs, along the course and the wale.
+    pub fn yarn_shares(&self) -> [PerYarn<f64>; 2] {
+        let mut count = [[0usize; 3]; 2];
+        for s in &self.springs[..self.grid_springs] {
+            count[s.direction.index()][s.yarn.index() as usize] += 1;
+        }
+        count.map(|per_yarn| {
+            let total = per_yarn.iter().sum::<usize>().max(1) as f64;
+            per_yarn.map(|n| n as f64 / total)
+        })
+    }
+
+    /// Rest lengths of the grid's course and wale springs, metres (the first of each; a grid's
+    /// are all alike). 0 for a direction without springs.
+    pub fn grid_rest_m(&self) -> [f64; 2] {
+        [Direction::Course, Direction::Wale].map(|direction| {
             self.springs
                 .iter()
                 .find(|s| s.direction == direction)
-                .map(|s| s.rest)
-        };
-        if let (Some(course), Some(wale)) = (rest(Direction::Course), rest(Direction::Wale)) {
-            let alpha = (course_spacing / wale_spacing) * (wale / course);
-            self.stiffness_scale = [alpha, 1.0 / alpha];
-        }
-        self
+                .map_or(0.0, |s| s.rest)
+        })
     }
 
     /// Number of mass points.

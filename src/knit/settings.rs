@@ -1,6 +1,7 @@
 //! The knit's settings (the scene's `knit`, `yarns`, `tube` and `patch`): the pattern and the
 //! relaxed stitch, the two yarn materials, the tube a fit starts from, and the flat patch of the
-//! paper's experiment. Lengths in metres; stiffness in the paper's solver units.
+//! paper's experiment. Lengths in metres; yarn sizes in denier; stiffness relative to one nylon
+//! stitch ([`super::fabric`]).
 
 use serde::{Deserialize, Serialize};
 
@@ -15,13 +16,17 @@ pub struct KnitSettings {
     /// `"plain"` (one nylon yarn) or `"alternating"` (nylon and support yarn in alternate courses,
     /// the paper's 交編). Default: `"alternating"`.
     pub pattern: Pattern,
-    /// Rest length of a course spring: the distance between neighbouring wales along a course,
-    /// in metres (default: 0.0005, i.e. 20 wales per cm, typical of a sheer stocking).
+    /// Needles of the knitting machine: real stitches (wales) around the stocking, fixed down
+    /// the leg (default: 400, a sheer stocking's machine). At least the grid's `tube.wales`.
+    pub needles: usize,
+    /// The relaxed stitch's width: the distance between neighbouring wales along a course, in
+    /// metres (default: 0.0005, i.e. 20 wales per cm, typical of a sheer stocking). Used unless
+    /// `tube.relaxed_circumference_m` is given, which sets it to that over `needles`.
     pub course_spacing_m: f64,
-    /// Rest length of a wale spring: the distance between neighbouring courses along a wale,
-    /// in metres (default: 0.00074). With `course_spacing_m` it sets the fabric's stitch shape,
-    /// which a fit keeps at any grid size (`Knit::with_stitch_shape`); why not a square stitch:
-    /// docs/decisions/0024.
+    /// The relaxed stitch's height: the distance between neighbouring courses along a wale, in
+    /// metres (default: 0.00074). With the width it sets the fabric's stitch shape, which a fit
+    /// keeps at any grid size (`Knit::with_stitch_shape`; why not a square stitch:
+    /// docs/decisions/0024), and the real stitch count each grid cell stands for.
     pub wale_spacing_m: f64,
     /// Connection factor c2 of eq. (2), dimensionless (default: 0.2, the paper's value). Used only
     /// when `effects` lists `yarn_connection`.
@@ -32,6 +37,7 @@ impl Default for KnitSettings {
     fn default() -> Self {
         KnitSettings {
             pattern: Pattern::Alternating,
+            needles: 400,
             course_spacing_m: 0.0005,
             wale_spacing_m: 0.00074,
             connection_factor: 0.2,
@@ -43,9 +49,10 @@ impl Default for KnitSettings {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Yarns {
-    /// Nylon yarn (default: c1 = 1, radius 0.03 mm). The only yarn of a plain pattern.
+    /// Nylon yarn (default: stiffness 1, 20 denier). The only yarn of a plain pattern.
     pub nylon: Yarn,
-    /// Support yarn (default: c1 = 10, radius 0.04 mm). Used by the alternating pattern.
+    /// Support yarn, an elastane core wrapped in nylon (default: stiffness 10, 40 denier). Used
+    /// by the alternating pattern.
     pub support: Yarn,
 }
 
@@ -54,12 +61,12 @@ impl Default for Yarns {
         Yarns {
             nylon: Yarn {
                 stiffness: 1.0,
-                radius_m: 0.00003,
+                denier: 20.0,
                 colour: [0.16, 0.11, 0.09],
             },
             support: Yarn {
                 stiffness: 10.0,
-                radius_m: 0.00004,
+                denier: 40.0,
                 colour: [0.08, 0.07, 0.10],
             },
         }
@@ -85,14 +92,24 @@ impl Yarns {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Yarn {
-    /// Spring stiffness c1 of eq. (1), per solver time unit squared for a unit mass point
-    /// (force per metre of extension per unit mass). The paper uses 1 for nylon, 10 for support.
+    /// Spring stiffness c1 of eq. (1), relative to one stitch of the nylon yarn (whose loop
+    /// stiffness follows from its denier and nylon's modulus, [`super::fabric`]). The paper uses
+    /// 1 for nylon, 10 for support.
     pub stiffness: f64,
-    /// Yarn radius, metres: the contact offset (nylon), the coverage and every picture.
-    pub radius_m: f64,
+    /// Yarn size, denier (grams per 9 km); its diameter follows from nylon's density
+    /// ([`super::fabric::yarn_diameter_m`]): the contact offset (nylon), the coverage and every
+    /// picture. Under 10 is ultra-sheer, 15–20 sheer, 30–40 semi-opaque, 50 and up opaque.
+    pub denier: f64,
     /// Linear-RGB base colour, each channel 0–1.
     #[serde(default = "default_colour")]
     pub colour: [f64; 3],
+}
+
+impl Yarn {
+    /// The yarn's radius, metres, from its denier ([`super::fabric::yarn_diameter_m`]).
+    pub fn radius_m(&self) -> f64 {
+        super::fabric::yarn_diameter_m(self.denier) / 2.0
+    }
 }
 
 fn default_colour() -> [f64; 3] {
@@ -107,9 +124,10 @@ pub struct TubeSettings {
     pub wales: usize,
     /// Rings along the tube (courses) (default: 150).
     pub courses: usize,
-    /// Circumference of the stocking lying relaxed, metres (default: 0.20, a typical sheer
-    /// stocking's leg measured flat and doubled).
-    pub relaxed_circumference_m: f64,
+    /// Circumference of the stocking lying relaxed, metres. Absent means `knit.needles` ×
+    /// `knit.course_spacing_m` (default: absent, 0.20 m for 400 needles at 0.5 mm, a typical
+    /// sheer stocking's leg measured flat and doubled).
+    pub relaxed_circumference_m: Option<f64>,
     /// Length of the relaxed stocking along its centreline (between the two axis points of an
     /// open tube; from the welt over the heel to the toe of a whole stocking), metres; must be
     /// shorter than that line, since a stocking is worn stretched along the leg. Absent means
@@ -197,7 +215,7 @@ impl Default for TubeSettings {
         TubeSettings {
             wales: 150,
             courses: 150,
-            relaxed_circumference_m: 0.20,
+            relaxed_circumference_m: None,
             relaxed_length_m: None,
             bottom: None,
             heel: TubeHeel::None,
@@ -280,11 +298,33 @@ pub const MAX_PATCH_POINTS: usize = 4_000_000;
 /// tube is the memory it needs (`crate::limits`), which can be overridden; this cannot.
 pub const MAX_TUBE_POINTS: usize = (u32::MAX / 4) as usize;
 
+/// Most needles accepted: hosiery machines have a few hundred; beyond this a "stocking" is a
+/// mistake in the scene, and its stitch count would overflow what a run can hold.
+pub const MAX_NEEDLES: usize = 10_000;
+/// Largest relaxed stitch accepted, metres: a knitted stitch is well under a centimetre.
+pub const MAX_STITCH_M: f64 = 0.02;
+/// Heaviest yarn accepted, denier (10,000 den is a nylon cord over 1 mm across).
+pub const MAX_DENIER: f64 = 10_000.0;
+/// Largest yarn stiffness accepted, relative to nylon's: far past any yarn pair the solver can
+/// balance.
+pub const MAX_STIFFNESS: f64 = 1e6;
+/// Longest relaxed circumference or length of a stocking accepted, metres.
+pub const MAX_STOCKING_M: f64 = 10.0;
+
 impl KnitSettings {
     /// Checks every value; the error names the field under `knit`.
     pub fn validate(&self) -> Result<(), Invalid> {
-        settings::positive("course_spacing_m", self.course_spacing_m)?;
-        settings::positive("wale_spacing_m", self.wale_spacing_m)?;
+        if !(3..=MAX_NEEDLES).contains(&self.needles) {
+            return Err(Invalid::new(
+                "needles",
+                format!(
+                    "must be 3 to {MAX_NEEDLES} (a sheer stocking has about 400), got {}",
+                    self.needles
+                ),
+            ));
+        }
+        settings::positive_at_most("course_spacing_m", self.course_spacing_m, MAX_STITCH_M)?;
+        settings::positive_at_most("wale_spacing_m", self.wale_spacing_m, MAX_STITCH_M)?;
         let c2 = self.connection_factor;
         if !(c2.is_finite() && (0.0..1.0).contains(&c2)) {
             return Err(Invalid::new(
@@ -302,8 +342,8 @@ impl Yarns {
         for kind in YarnKind::KNITTED {
             let yarn = self.get(kind);
             let check = || -> Result<(), Invalid> {
-                settings::positive("stiffness", yarn.stiffness)?;
-                settings::positive("radius_m", yarn.radius_m)?;
+                settings::positive_at_most("stiffness", yarn.stiffness, MAX_STIFFNESS)?;
+                settings::positive_at_most("denier", yarn.denier, MAX_DENIER)?;
                 settings::colour("colour", yarn.colour)
             };
             check().map_err(|e| e.within(kind.name()))?;
@@ -331,9 +371,11 @@ impl TubeSettings {
                 ),
             ));
         }
-        settings::positive("relaxed_circumference_m", self.relaxed_circumference_m)?;
+        if let Some(circumference) = self.relaxed_circumference_m {
+            settings::positive_at_most("relaxed_circumference_m", circumference, MAX_STOCKING_M)?;
+        }
         if let Some(length) = self.relaxed_length_m {
-            settings::positive("relaxed_length_m", length)?;
+            settings::positive_at_most("relaxed_length_m", length, MAX_STOCKING_M)?;
         }
         if self.heel == TubeHeel::Pocket && self.bottom == Some(TubeBottom::Ankle) {
             return Err(Invalid::new(

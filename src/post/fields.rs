@@ -1,23 +1,31 @@
-//! Per-point fields of a fitted knit, and their transfer to the leg's vertices.
+//! Per-point fields of a fitted knit, in the real stocking's units whatever the grid
+//! ([`Fabric`]: each grid cell stands for a block of real stitches), and their transfer to the
+//! leg's vertices.
 //!
-//! * **Stitch density** at a yarn point is the stitches of the faces around it over their area,
-//!   in stitches per cm² ([`Knit::faces`]: a grid cell is one stitch, a heel-pocket cell the
-//!   stitches its short rows add; the toe seam's faces are sewn, not knitted, and count neither
-//!   way). A face's area is the norm of its vector area (for a quad, half the norm of the cross
-//!   product of its diagonals; exact when planar). A point on no knitted face gets 0.
-//! * **Tension** at a yarn point is the mean signed force `c1 (|x_b − x_a| − l)` of its springs
-//!   (positive in tension), in the solver's force units (unit mass, per time unit squared, metres).
-//! * **Stretch** at a yarn point, along the course and along the wale: the summed length of its
-//!   springs in that direction over their summed rest length (1 at rest, 1.5 stretched by half;
-//!   the `_STRETCH_COURSE` / `_STRETCH_WALE` attributes).
-//! * **Coverage** at a yarn point, 0–1: the fraction of skin hidden by yarn seen along the
-//!   normal (`_COVERAGE`). The knit is read as two families of opaque strips of yarn width `2r`:
-//!   course yarns, one per course, so spaced by the local wale spacing `s_w` (the length of the
-//!   point's wale springs), and wale yarn (the loops' legs), spaced by the local course spacing
-//!   `s_c`. The holes are the rectangles between strips, so
-//!   `coverage = 1 − (1 − min(1, 2 r_course / s_w)) · (1 − min(1, 2 r_wale / s_c))`,
-//!   with `r_course` the radius of the point's course yarn and `r_wale` that of its wale springs.
+//! * **Stitch density** at a yarn point: real stitches per cm² of fabric, the textile measure
+//!   (courses per cm × wales per cm): the relaxed stitch's `1 / (a b)` over the stretch both
+//!   ways. Per cm² of fabric, not of skin: where the fabric wrinkles, how finely a grid
+//!   resolves the folds would otherwise set it. The heel pocket's short rows lengthen its wales'
+//!   fabric, so they count as more stitches there.
+//! * **Stretch** at a yarn point, along the course and along the wale: the fitted fabric's length
+//!   over its relaxed length there (1 relaxed, 1.5 stretched by half), measured over
+//!   [`MEASURE_SPAN_M`] either way (see [`stretch`]).
+//! * **Coverage**, 0–1: the fraction of skin hidden by yarn seen along the normal. The knit is
+//!   read as two families of opaque strips of the yarn's diameter `d`: each course's loop heads
+//!   and sinker loops, one strip per course, spaced by the real wale spacing `b · s_w`; and the
+//!   loops' legs, two strips per wale, spaced by the real course spacing `a · s_c` (`a × b` the
+//!   relaxed stitch, `s` the stretch). The holes are the rectangles between strips:
+//!   `coverage = 1 − (1 − min(1, d_course / (b s_w))) · (1 − min(1, 2 d_leg / (a s_c)))`.
 //!   Overlap where strips cross is counted once; yarn flattening and loop curvature are ignored.
+//! * **Tension** around and along, newtons per metre of fitted fabric: the membrane of
+//!   [`Fabric::membrane_n_per_m`] times the mean stiffness of that direction's yarns, times the
+//!   strain `s − 1`, over the other direction's stretch. Fabric does not carry compression: a
+//!   point whose springs are shorter than knitted (slack) has none.
+//! * **Pressure** on the skin, mmHg, by Laplace's law for a membrane: `P = T_c κ_c + T_w κ_w`,
+//!   with `κ` the fitted fabric's normal curvature along the course and the wale (the skin's,
+//!   where the fabric lies on it), taken over [`MEASURE_SPAN_M`] of relaxed fabric so that no
+//!   grid's spacing sets it; around a leg it is the course tension over the radius. Where the
+//!   fabric bridges a hollow (negative curvature) it presses nothing: 0. Only a tube has it.
 //! * **On the leg**, a vertex takes the kernel-weighted mean of the yarn points within a bandwidth
 //!   (a biweight kernel, compactly supported, so far-away yarn has no say): smooth where the fit is
 //!   smooth, and 0 where no yarn is near (uncovered skin).
@@ -27,35 +35,30 @@ use std::collections::HashMap;
 use nalgebra::Point3;
 
 use crate::base::{Direction, PerYarn, Vec3};
-use crate::knit::{Knit, PointId};
+use crate::knit::fabric::PA_PER_MMHG;
+use crate::knit::{Fabric, Knit, PointId};
 use crate::leg::Leg;
 use crate::sim::ForceTerms;
 
 /// Square metres per square centimetre.
 const M2_PER_CM2: f64 = 1e-4;
+/// Length of relaxed fabric, metres, over which stretch and curvature are measured each way
+/// from a point: about one cell of the coarsest grid a fit is run at (100 courses along a whole
+/// stocking), so that every grid and the real stitches see the same fabric; an arc through the
+/// ends and the point keeps a ring's curve (a fitted ankle is some 35 mm around its centre).
+pub const MEASURE_SPAN_M: f64 = 0.008;
 
-/// Stitches per cm² at every point of `knit` (see module docs).
-pub fn stitch_density(knit: &Knit) -> Vec<f64> {
-    let x = &knit.particles.x;
-    let mut area_sum = vec![0.0; knit.len()];
-    let mut stitch_sum = vec![0.0; knit.len()];
-    for face in knit.faces().iter().filter(|f| f.stitches > 0.0) {
-        let corners: Vec<Vec3> = face.corners.iter().map(|p| x[p.index()]).collect();
-        let area = polygon_area(&corners);
-        for p in &face.corners {
-            area_sum[p.index()] += area;
-            stitch_sum[p.index()] += face.stitches;
-        }
-    }
-    area_sum
+/// Real stitches per cm² of fabric at every point of `knit` (see module docs).
+pub fn stitch_density(knit: &Knit, fabric: &Fabric) -> Vec<f64> {
+    let (course, wale) = stretch(knit);
+    let relaxed = fabric.relaxed_stitches_per_m2() * M2_PER_CM2;
+    course
         .iter()
-        .zip(&stitch_sum)
-        .map(|(&area, &stitches)| {
-            // Written as one over the area per stitch, so a grid (one stitch a cell) gives the
-            // bytes it always has.
-            let per_stitch = area / stitches;
-            if stitches > 0.0 && per_stitch > 0.0 {
-                M2_PER_CM2 / per_stitch
+        .zip(&wale)
+        .map(|(&sc, &sw)| {
+            let area = sc * sw;
+            if area > 0.0 {
+                relaxed / area
             } else {
                 0.0
             }
@@ -63,91 +66,256 @@ pub fn stitch_density(knit: &Knit) -> Vec<f64> {
         .collect()
 }
 
-/// The norm of a polygon's vector area, `½ |Σ p_i × p_{i+1}|` (its area when planar), taken
-/// about the first corner; for a quad, half the norm of its diagonals' cross product.
-fn polygon_area(corners: &[Vec3]) -> f64 {
-    match corners {
-        [a, b, c, d] => (c - a).cross(&(d - b)).norm() / 2.0,
-        [first, rest @ ..] => {
-            rest.windows(2)
-                .map(|pair| (pair[0] - first).cross(&(pair[1] - first)))
-                .sum::<Vec3>()
-                .norm()
-                / 2.0
+/// Stretch along the course and along the wale at every point: `(course, wale)` (see module
+/// docs): the arc through the points [`MEASURE_SPAN_M`] of relaxed fabric either way and the
+/// point itself, over its rest length, so that a grid of the real stitches, whose alternate
+/// courses zigzag by a loop's height, measures the fabric's stretch and not its loops'. Along
+/// the wale the span follows the wale's chain through the heel pocket's short rows; around, a
+/// short row's point has only its own springs. A point with no neighbour in a direction gets 1
+/// there.
+pub fn stretch(knit: &Knit) -> (Vec<f64>, Vec<f64>) {
+    let stencil = Stencil::of(knit);
+    let x = &knit.particles.x;
+    let [rest_course, rest_wale] = knit.grid_rest_m();
+    let ratio = |lo: PointId, here: usize, hi: PointId, rest: f64| {
+        if rest > 0.0 && lo != hi {
+            arc_length(x[lo.index()], x[here], x[hi.index()]) / rest
+        } else {
+            1.0
         }
-        [] => 0.0,
+    };
+    let course = (0..knit.len())
+        .map(|i| {
+            let p = PointId(i as u32);
+            if i >= knit.grid_len() {
+                return local_spacing(knit, p).stretch(0);
+            }
+            let (w, c) = knit.grid_coords(p);
+            let (lo, hi, steps) = stencil.span(knit, w, c, Direction::Course);
+            ratio(lo, i, hi, rest_course * steps as f64)
+        })
+        .collect();
+    let mut wale = vec![1.0; knit.len()];
+    let reach = stencil.reach[Direction::Wale.index()];
+    for w in 0..knit.wales {
+        let chain = knit.wale_chain(w);
+        for (j, p) in chain.iter().enumerate() {
+            let (lo, hi) = (j.saturating_sub(reach), (j + reach).min(chain.len() - 1));
+            wale[p.index()] = ratio(
+                chain[lo],
+                p.index(),
+                chain[hi],
+                rest_wale * (hi - lo) as f64,
+            );
+        }
+    }
+    (course, wale)
+}
+
+/// Length of the circular arc from `a` through `b` to `c` (the chord where they lie on a line):
+/// the fabric's length between two points of a curved ring, which its chord would shorten.
+fn arc_length(a: Vec3, b: Vec3, c: Vec3) -> f64 {
+    let chord = (c - a).norm();
+    let (ab, bc) = ((b - a).norm(), (c - b).norm());
+    if ab <= 0.0 || bc <= 0.0 || chord <= 0.0 {
+        return chord.max(ab + bc);
+    }
+    // Curvature of the circle through the three points: 4 · area / (product of the sides).
+    let curvature = 2.0 * (b - a).cross(&(c - a)).norm() / (ab * bc * chord);
+    let half_angle_sine = (0.5 * chord * curvature).min(1.0);
+    if half_angle_sine < 1e-6 {
+        chord
+    } else {
+        chord * half_angle_sine.asin() / half_angle_sine
     }
 }
 
-/// Mean signed spring force of every point's springs (see module docs).
-pub fn tension(knit: &Knit, terms: &ForceTerms) -> Vec<f64> {
-    let x = &knit.particles.x;
-    (0..knit.len())
-        .map(|i| {
-            let incident = knit.incident(PointId(i as u32));
-            let sum: f64 = incident
-                .iter()
-                .map(|inc| {
-                    let s = &knit.springs[inc.spring as usize];
-                    let c1 = terms.c1(knit, inc.spring);
-                    c1 * ((x[s.b.index()] - x[s.a.index()]).norm() - s.rest)
-                })
-                .sum();
-            sum / incident.len().max(1) as f64
+/// How far either way of a grid point its fabric is measured: [`MEASURE_SPAN_M`] of relaxed
+/// fabric in grid steps, even, so that a grid of the real stitches meets the same yarns of an
+/// alternating pattern at both ends as at the point; at least one step.
+struct Stencil {
+    reach: [usize; 2],
+}
+
+impl Stencil {
+    fn of(knit: &Knit) -> Stencil {
+        let reach = knit.grid_rest_m().map(|rest| {
+            let steps = if rest > 0.0 {
+                (MEASURE_SPAN_M / rest / 2.0).round() * 2.0
+            } else {
+                1.0
+            };
+            (steps as usize).max(1)
+        });
+        Stencil { reach }
+    }
+
+    /// The grid points before and after `(w, c)` along `direction`, within reach, and how many
+    /// steps apart they are: round a tube's courses, stopping at a patch's edges and at the
+    /// first and last course.
+    fn span(
+        &self,
+        knit: &Knit,
+        w: usize,
+        c: usize,
+        direction: Direction,
+    ) -> (PointId, PointId, usize) {
+        let reach = self.reach[direction.index()];
+        match direction {
+            Direction::Course if knit.closed_courses && knit.wales >= 3 => {
+                let k = reach.min((knit.wales - 1) / 2).max(1);
+                let wales = knit.wales;
+                (
+                    knit.point((w + wales - k) % wales, c),
+                    knit.point((w + k) % wales, c),
+                    2 * k,
+                )
+            }
+            Direction::Course => {
+                let (lo, hi) = (w.saturating_sub(reach), (w + reach).min(knit.wales - 1));
+                (knit.point(lo, c), knit.point(hi, c), hi - lo)
+            }
+            Direction::Wale => {
+                let (lo, hi) = (c.saturating_sub(reach), (c + reach).min(knit.courses - 1));
+                (knit.point(w, lo), knit.point(w, hi), hi - lo)
+            }
+        }
+    }
+}
+
+/// Coverage at every point (see module docs), from the real yarns' diameters and stitch. The
+/// strips' width is the mean diameter of the yarns along that direction (an alternating
+/// pattern's courses are half nylon, half support), so it reads the fabric, not a grid course.
+pub fn coverage(knit: &Knit, fabric: &Fabric) -> Vec<f64> {
+    let (stretch_course, stretch_wale) = stretch(knit);
+    let [course_shares, wale_shares] = knit.yarn_shares();
+    let mean_diameter = |shares: PerYarn<f64>| -> f64 {
+        shares
+            .iter()
+            .zip(&fabric.yarn_diameter_m)
+            .map(|(f, d)| f * d)
+            .sum()
+    };
+    let (d_course, d_leg) = (mean_diameter(course_shares), mean_diameter(wale_shares));
+    let [a, b] = fabric.stitch_m;
+    // Strips of `width` every `gap` metres hide `width / gap` of the skin across them.
+    let hidden = |width: f64, gap: f64| {
+        if gap > 0.0 {
+            (width / gap).min(1.0)
+        } else {
+            1.0
+        }
+    };
+    // Course strips are spaced by the wale spacing, and the legs the other way round.
+    stretch_course
+        .iter()
+        .zip(&stretch_wale)
+        .map(|(&s_course, &s_wale)| {
+            let by_courses = hidden(d_course, b * s_wale);
+            let by_legs = hidden(2.0 * d_leg, a * s_course);
+            1.0 - (1.0 - by_courses) * (1.0 - by_legs)
         })
         .collect()
 }
 
-/// Stretch along the course and along the wale at every point: `(course, wale)` (see module
-/// docs). A point with no spring in a direction gets 1 there.
-pub fn stretch(knit: &Knit) -> (Vec<f64>, Vec<f64>) {
-    (0..knit.len())
-        .map(|i| {
-            let spacing = local_spacing(knit, PointId(i as u32));
-            let ratio = |d: usize| {
-                if spacing.rest[d] > 0.0 {
-                    spacing.length[d] / spacing.rest[d]
-                } else {
-                    1.0
-                }
-            };
-            (ratio(0), ratio(1))
-        })
-        .unzip()
+/// Tension around (along the courses) and along (the wales) at every point, newtons per metre
+/// of fitted fabric (see module docs).
+pub fn tension(knit: &Knit, fabric: &Fabric, terms: &ForceTerms) -> [Vec<f64>; 2] {
+    let membrane = fabric.membrane_n_per_m();
+    // The fabric's membrane, whatever yarn a point lies on: the grid's yarns blended.
+    let shares = knit.yarn_shares();
+    let stiffness =
+        [Direction::Course, Direction::Wale].map(|d| terms.blended(shares[d.index()], d));
+    let (course, wale) = stretch(knit);
+    let of = |d: usize, along: &[f64], across: &[f64]| -> Vec<f64> {
+        along
+            .iter()
+            .zip(across)
+            .map(|(&s, &other)| stiffness[d] * membrane[d] * (s - 1.0).max(0.0) / other)
+            .collect()
+    };
+    [of(0, &course, &wale), of(1, &wale, &course)]
 }
 
-/// Coverage at every point (see module docs); `radius_m` is the yarn radius per
-/// [`YarnKind::index`](crate::base::YarnKind::index), metres.
-pub fn coverage(knit: &Knit, radius_m: PerYarn<f64>) -> Vec<f64> {
-    (0..knit.len())
-        .map(|i| {
-            let spacing = local_spacing(knit, PointId(i as u32));
-            let hidden = |radius: f64, count: u32, length: f64| {
-                if count == 0 || length <= 0.0 {
+/// Pressure on the skin at every point of a tube, mmHg (see module docs); all 0 for a knit whose
+/// courses do not close (a patch).
+pub fn pressure(knit: &Knit, tension: &[Vec<f64>; 2]) -> Vec<f64> {
+    let mut out = vec![0.0; knit.len()];
+    if !knit.closed_courses || knit.wales < 3 || knit.courses < 3 {
+        return out;
+    }
+    let stencil = Stencil::of(knit);
+    let x = |p: PointId| knit.particles.x[p.index()];
+    let (wales, courses) = (knit.wales, knit.courses);
+    // The surface's normal, t_course × t_wale, points out of the tube on one side of the grid's
+    // numbering and in on the other: one sign for the whole knit, from the rings' centres.
+    let mut outward = 0.0;
+    let mut normals = vec![Vec3::zeros(); knit.grid_len()];
+    for c in 0..courses {
+        let centre = (0..wales).map(|w| x(knit.point(w, c))).sum::<Vec3>() / wales as f64;
+        for w in 0..wales {
+            let (prev, next, _) = stencil.span(knit, w, c, Direction::Course);
+            let (down, up, _) = stencil.span(knit, w, c, Direction::Wale);
+            let n = (x(next) - x(prev)).cross(&(x(up) - x(down)));
+            outward += n.dot(&(x(knit.point(w, c)) - centre)).signum();
+            normals[knit.point(w, c).index()] = n.try_normalize(1e-30).unwrap_or_default();
+        }
+    }
+    let sign = if outward < 0.0 { -1.0 } else { 1.0 };
+    for c in 0..courses {
+        for w in 0..wales {
+            let here = knit.point(w, c);
+            let i = here.index();
+            let n_out = sign * normals[i];
+            let curvature = |d: Direction| {
+                let (lo, hi, _) = stencil.span(knit, w, c, d);
+                // At the first and last course the stencil is one-sided: no curvature there.
+                if lo == here || hi == here {
                     0.0
                 } else {
-                    (2.0 * radius * count as f64 / length).min(1.0)
+                    convexity([x(lo), x(here), x(hi)], &n_out)
                 }
             };
-            let r_course = radius_m[knit.course_yarn[i].index() as usize];
-            let r_wale = spacing
-                .wale_yarn
-                .map_or(0.0, |k| radius_m[k.index() as usize]);
-            // Course yarns are spaced by the wale springs' length, and the other way round.
-            let by_courses = hidden(r_course, spacing.count[1], spacing.length[1]);
-            let by_wales = hidden(r_wale, spacing.count[0], spacing.length[0]);
-            1.0 - (1.0 - by_courses) * (1.0 - by_wales)
-        })
-        .collect()
+            let pa = tension[0][i] * curvature(Direction::Course)
+                + tension[1][i] * curvature(Direction::Wale);
+            out[i] = pa.max(0.0) / PA_PER_MMHG;
+        }
+    }
+    // A short row's point takes the grid point below it on its wale.
+    for i in knit.grid_len()..knit.len() {
+        let [w, c] = knit.fabric_coords(PointId(i as u32));
+        out[i] = out[knit.point(w as usize, c.floor() as usize).index()];
+    }
+    out
+}
+
+/// Normal curvature of the polyline `prev, here, next` against the outward normal, 1/m: the
+/// turn of its tangent over its length, positive where it bends away from the normal (convex).
+fn convexity([prev, here, next]: [Vec3; 3], n_out: &Vec3) -> f64 {
+    let (a, b) = (here - prev, next - here);
+    let (la, lb) = (a.norm(), b.norm());
+    if la <= 0.0 || lb <= 0.0 {
+        return 0.0;
+    }
+    let turn = b / lb - a / la;
+    -2.0 * turn.dot(n_out) / (la + lb)
 }
 
 /// The springs at one point, summed per direction (index 0 course, 1 wale).
 struct LocalSpacing {
     length: [f64; 2],
     rest: [f64; 2],
-    count: [u32; 2],
-    /// The yarn of the point's wale springs (the first one met).
-    wale_yarn: Option<crate::base::YarnKind>,
+}
+
+impl LocalSpacing {
+    /// Length over rest length along direction `d`; 1 with no spring that way.
+    fn stretch(&self, d: usize) -> f64 {
+        if self.rest[d] > 0.0 {
+            self.length[d] / self.rest[d]
+        } else {
+            1.0
+        }
+    }
 }
 
 fn local_spacing(knit: &Knit, p: PointId) -> LocalSpacing {
@@ -155,21 +323,12 @@ fn local_spacing(knit: &Knit, p: PointId) -> LocalSpacing {
     let mut out = LocalSpacing {
         length: [0.0; 2],
         rest: [0.0; 2],
-        count: [0; 2],
-        wale_yarn: None,
     };
     for inc in knit.incident(p) {
         let s = &knit.springs[inc.spring as usize];
-        let d = match s.direction {
-            Direction::Course => 0,
-            Direction::Wale => {
-                out.wale_yarn.get_or_insert(s.yarn);
-                1
-            }
-        };
+        let d = s.direction.index();
         out.length[d] += (x[s.b.index()] - x[s.a.index()]).norm();
         out.rest[d] += s.rest;
-        out.count[d] += 1;
     }
     out
 }
@@ -177,35 +336,47 @@ fn local_spacing(knit: &Knit, p: PointId) -> LocalSpacing {
 /// The fields a fitted knit hands to a shader, one value per point (yarn point or leg vertex).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct KnitFields {
-    /// Stitches per cm².
+    /// Real stitches per cm².
     pub stitch_density: Vec<f64>,
     /// Spacing along the course over its rest spacing.
     pub stretch_course: Vec<f64>,
     /// Spacing along the wale over its rest spacing.
     pub stretch_wale: Vec<f64>,
-    /// Fraction of skin hidden by yarn, 0–1.
+    /// Fraction of skin hidden by the real yarn, 0–1.
     pub coverage: Vec<f64>,
+    /// Tension around the leg (along the courses), newtons per metre of fabric.
+    pub tension: Vec<f64>,
+    /// Pressure on the skin, mmHg.
+    pub pressure: Vec<f64>,
 }
 
 impl KnitFields {
-    /// Every field at every point of `knit`; `radius_m` per yarn kind, metres.
-    pub fn measure(knit: &Knit, radius_m: PerYarn<f64>) -> KnitFields {
+    /// Every field at every point of `knit`, for the real stocking `fabric` with the stiffness
+    /// of `terms`.
+    pub fn measure(knit: &Knit, fabric: &Fabric, terms: &ForceTerms) -> KnitFields {
         let (stretch_course, stretch_wale) = stretch(knit);
+        let tension = tension(knit, fabric, terms);
+        let pressure = pressure(knit, &tension);
+        let [around, _] = tension;
         KnitFields {
-            stitch_density: stitch_density(knit),
+            stitch_density: stitch_density(knit, fabric),
             stretch_course,
             stretch_wale,
-            coverage: coverage(knit, radius_m),
+            coverage: coverage(knit, fabric),
+            tension: around,
+            pressure,
         }
     }
 
     /// The fields with their attribute names (`_STITCH_DENSITY` … in glTF), in a fixed order.
-    pub fn named(&self) -> [(&'static str, &[f64]); 4] {
+    pub fn named(&self) -> [(&'static str, &[f64]); 6] {
         [
             ("stitch_density", &self.stitch_density),
             ("stretch_course", &self.stretch_course),
             ("stretch_wale", &self.stretch_wale),
             ("coverage", &self.coverage),
+            ("tension", &self.tension),
+            ("pressure", &self.pressure),
         ]
     }
 
@@ -217,15 +388,17 @@ impl KnitFields {
         bandwidth: f64,
     ) -> KnitFields {
         let fields = self.named().map(|(_, values)| values);
-        let [stitch_density, stretch_course, stretch_wale, coverage] =
+        let [stitch_density, stretch_course, stretch_wale, coverage, tension, pressure] =
             transfer_to_leg(yarn_points, &fields, leg_vertices, bandwidth)
                 .try_into()
-                .expect("four fields in, four out");
+                .expect("six fields in, six out");
         KnitFields {
             stitch_density,
             stretch_course,
             stretch_wale,
             coverage,
+            tension,
+            pressure,
         }
     }
 }
@@ -308,12 +481,19 @@ impl PointGrid {
 }
 
 /// Per-point stitch fields of `knit` and their transfer to the leg's vertices.
-pub fn measure_fields(knit: &Knit, leg: &Leg, radius_m: PerYarn<f64>) -> (KnitFields, KnitFields) {
-    let per_point = KnitFields::measure(knit, radius_m);
-    // Wide enough to span a nylon and a support course whichever way the knit runs, so the
-    // alternation of the yarns does not print through as speckle.
-    let bandwidth =
-        3.0 * mean_spacing(knit, Direction::Course).max(mean_spacing(knit, Direction::Wale));
+pub fn measure_fields(
+    knit: &Knit,
+    leg: &Leg,
+    fabric: &Fabric,
+    terms: &ForceTerms,
+) -> (KnitFields, KnitFields) {
+    let per_point = KnitFields::measure(knit, fabric, terms);
+    // Wide enough to hold several grid points whichever way the knit runs, and never narrower
+    // than the fabric the fields were measured over, so every grid hands the leg the same
+    // fields.
+    let bandwidth = (3.0
+        * mean_spacing(knit, Direction::Course).max(mean_spacing(knit, Direction::Wale)))
+    .max(2.0 * MEASURE_SPAN_M);
     let on_leg = per_point.transfer_to_leg(&knit.particles.x, &leg.positions, bandwidth);
     (per_point, on_leg)
 }
@@ -333,107 +513,240 @@ fn mean_spacing(knit: &Knit, direction: Direction) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::knit::fabric::yarn_diameter_m;
     use crate::knit::{Pattern, Tile};
 
+    /// A stocking of `stitch_m` stitches in 20-den nylon and 40-den support yarn.
+    fn fabric(stitch_m: [f64; 2]) -> Fabric {
+        Fabric {
+            needles: 400,
+            stitch_m,
+            yarn_diameter_m: [yarn_diameter_m(20.0), yarn_diameter_m(40.0), 0.0],
+            loop_stiffness_n_per_m: 5.0,
+        }
+    }
+
+    /// A flat `n × n` grid at `spacing` metres, stretched by `sx` along the course and `sy`
+    /// along the wale.
+    fn flat(pattern: Pattern, n: usize, spacing: f64, sx: f64, sy: f64) -> Knit {
+        Knit::grid(n, n, false, &Tile::of(pattern), spacing, spacing, |w, c| {
+            Vec3::new(w as f64 * spacing * sx, c as f64 * spacing * sy, 0.0)
+        })
+    }
+
     #[test]
-    fn flat_grid_at_1mm_spacing_has_100_stitches_per_cm2() {
-        let knit = Knit::grid(
-            5,
-            5,
-            false,
-            &Tile::of(Pattern::Plain),
-            0.001,
-            0.001,
-            |w, c| Vec3::new(w as f64 * 0.001, c as f64 * 0.001, 0.0),
-        );
-        for d in stitch_density(&knit) {
-            assert!((d - 100.0).abs() < 1e-9, "{d}");
+    fn density_counts_the_real_stitches_whatever_the_grid() {
+        // 1 mm stitches: 100 per cm² relaxed, on a grid of the stitches or of 2 mm cells (four
+        // stitches each); stretched ×2 one way, half as many.
+        let real = fabric([0.001, 0.001]);
+        for spacing in [0.001, 0.002] {
+            for d in stitch_density(&flat(Pattern::Plain, 5, spacing, 1.0, 1.0), &real) {
+                assert!((d - 100.0).abs() < 1e-9, "{spacing}: {d}");
+            }
+            for d in stitch_density(&flat(Pattern::Plain, 5, spacing, 2.0, 1.0), &real) {
+                assert!((d - 50.0).abs() < 1e-9, "{spacing}: {d}");
+            }
         }
     }
 
     #[test]
-    fn a_heel_pockets_short_rows_add_stitches_and_the_toe_seam_none() {
-        // A flat 4×3 grid, 2 mm across a wale and 1 mm along it, closed by a toe seam, with
-        // short rows over wales 1 and 2 (one each way) laid on the wales between courses 0 and 1.
+    fn a_heel_pockets_short_rows_add_stitches_to_their_wales() {
+        // A flat 4×3 grid of the real stitch, 2 mm across a wale and 1 mm along it, with one
+        // short row each way over wales 1 and 2, laid between courses 0 and 1: those wales hold
+        // four stitches' length of fabric where the others hold two, so twice the stitches.
         let (a, b) = (0.002, 0.001);
         let tile = Tile::of(Pattern::Plain);
         let at = |w: usize, c: f64| Vec3::new(w as f64 * a, c * b, 0.0);
         let knit = Knit::grid(4, 3, false, &tile, a, b, |w, c| at(w, c as f64))
             .with_toe_seam(b)
             .with_short_rows(0, vec![0, 1, 1, 0], &tile, a, b, at);
-        let density = stitch_density(&knit);
-        let cell = a * b / M2_PER_CM2;
-        let expect = |p: PointId, stitches_per_cell: f64| {
-            let d = density[p.index()];
+        let density = stitch_density(&knit, &fabric([a, b]));
+        let relaxed = M2_PER_CM2 / (a * b);
+        for c in 0..3 {
+            let plain = density[knit.point(0, c).index()];
             assert!(
-                (d - stitches_per_cell / cell).abs() < 1e-9,
-                "{p:?}: {d} vs {}",
-                stitches_per_cell / cell
+                (plain - relaxed).abs() < 1e-9 * relaxed,
+                "{plain} vs {relaxed}"
             );
-        };
-        // The toe seam's faces (across the flat last course) count for nothing.
-        for w in 0..4 {
-            expect(knit.point(w, 2), 1.0);
+            let pocket = density[knit.point(1, c).index()];
+            assert!(
+                (pocket - 2.0 * relaxed).abs() < 1e-9 * relaxed,
+                "{pocket} vs 2 × {relaxed}"
+            );
         }
-        // The cells beside the pocket hold two stitches (one side three, the other one): wale 0's
-        // first point has only that one; above it, one plain cell joins.
-        expect(knit.point(0, 0), 2.0);
-        expect(knit.point(0, 1), 3.0 / 2.0);
-        // Between the two short-rowed wales, three faces of one stitch a third of a cell each:
-        // wale 1's grid point meets the two-stitch cell and one of them (3 stitches over 4/3 of
-        // a cell), its first short-row point the two-stitch cell and two (4 over 5/3).
-        expect(knit.point(1, 0), 3.0 / (1.0 + 1.0 / 3.0));
         let first_short = PointId(knit.grid_len() as u32);
-        assert_eq!(knit.fabric_coords(first_short), [1.0, 1.0 / 3.0]);
-        expect(first_short, 4.0 / (1.0 + 2.0 / 3.0));
-    }
-
-    /// A flat 6×6 grid at `spacing` metres, stretched by `sx` along the course and `sy` along
-    /// the wale.
-    fn flat(pattern: Pattern, spacing: f64, sx: f64, sy: f64) -> Knit {
-        Knit::grid(6, 6, false, &Tile::of(pattern), spacing, spacing, |w, c| {
-            Vec3::new(w as f64 * spacing * sx, c as f64 * spacing * sy, 0.0)
-        })
+        assert!((density[first_short.index()] - 2.0 * relaxed).abs() < 1e-9 * relaxed);
     }
 
     #[test]
     fn stretch_is_one_at_rest_and_follows_each_direction() {
-        let (course, wale) = stretch(&flat(Pattern::Plain, 0.0005, 1.0, 1.0));
+        let (course, wale) = stretch(&flat(Pattern::Plain, 6, 0.0005, 1.0, 1.0));
         assert!(course.iter().chain(&wale).all(|&s| (s - 1.0).abs() < 1e-12));
-        let (course, wale) = stretch(&flat(Pattern::Plain, 0.0005, 1.5, 1.2));
+        let (course, wale) = stretch(&flat(Pattern::Plain, 6, 0.0005, 1.5, 1.2));
         assert!(course.iter().all(|&s| (s - 1.5).abs() < 1e-12));
         assert!(wale.iter().all(|&s| (s - 1.2).abs() < 1e-12));
     }
 
     #[test]
-    fn coverage_of_an_unstretched_patch_is_the_hand_calculation() {
-        // Plain knit, nylon yarn of radius 0.03 mm, 0.5 mm apart both ways: strips of 0.06 mm
-        // every 0.5 mm, so 12% of each direction is hidden and the holes are 0.88 × 0.88.
-        let knit = flat(Pattern::Plain, 0.0005, 1.0, 1.0);
-        let expected = 1.0 - 0.88 * 0.88;
-        for c in coverage(&knit, [0.00003, 0.00004, 0.00003]) {
-            assert!((c - expected).abs() < 1e-12, "{c} vs {expected}");
-        }
-        // Stretched ×2 along the course: wale strips twice as far apart.
-        let knit = flat(Pattern::Plain, 0.0005, 2.0, 1.0);
-        let expected = 1.0 - 0.88 * 0.94;
-        for c in coverage(&knit, [0.00003, 0.00004, 0.00003]) {
-            assert!((c - expected).abs() < 1e-12, "{c} vs {expected}");
-        }
-        // Yarn wider than the gap hides everything.
-        assert!(coverage(&knit, [0.001; 3]).iter().all(|&c| c == 1.0));
+    fn stretch_reads_the_fabric_not_a_zigzag_of_alternate_courses() {
+        // Every other course pushed sideways by half a stitch, as the real stitches' nylon
+        // courses zigzag between the support courses: its springs are longer, the fabric is not.
+        let s = 0.0005;
+        let knit = Knit::grid(
+            40,
+            40,
+            false,
+            &Tile::of(Pattern::Alternating),
+            s,
+            s,
+            |w, c| {
+                let zig = if c % 2 == 1 && w % 2 == 1 {
+                    0.5 * s
+                } else {
+                    0.0
+                };
+                Vec3::new(w as f64 * s, c as f64 * s + zig, 0.0)
+            },
+        );
+        let (course, _) = stretch(&knit);
+        let middle = knit.point(20, 21).index();
+        assert!((course[middle] - 1.0).abs() < 1e-12, "{}", course[middle]);
     }
 
     #[test]
-    fn coverage_uses_each_courses_own_yarn() {
-        let knit = flat(Pattern::Alternating, 0.0005, 1.0, 1.0);
-        let cov = coverage(&knit, [0.00003, 0.00004, 0.00003]);
-        let values: std::collections::BTreeSet<u64> =
-            cov.iter().map(|c| (c * 1e9).round() as u64).collect();
-        assert!(
-            values.len() > 1,
-            "nylon and support courses differ: {values:?}"
+    fn stretch_around_a_ring_is_its_arc_not_its_chords() {
+        // 60 points on a ring of 3 cm: each spring's rest is the arc it spans, so stretch 1.
+        let (n, r) = (60, 0.03);
+        let step = std::f64::consts::TAU * r / n as f64;
+        let knit = Knit::grid(
+            n,
+            3,
+            true,
+            &Tile::of(Pattern::Plain),
+            step,
+            0.001,
+            |w, c| {
+                let t = std::f64::consts::TAU * w as f64 / n as f64;
+                Vec3::new(r * t.cos(), c as f64 * 0.001, r * t.sin())
+            },
         );
+        let (course, _) = stretch(&knit);
+        assert!(
+            course.iter().all(|&s| (s - 1.0).abs() < 1e-9),
+            "{:?}",
+            &course[..3]
+        );
+    }
+
+    #[test]
+    fn coverage_of_a_relaxed_stitch_is_the_hand_calculation() {
+        // Plain nylon of 20 den (49.9 µm) in 0.5 mm × 0.74 mm stitches: course strips hide
+        // d / 0.74 mm of the skin, the two legs of each loop 2 d / 0.5 mm.
+        let real = fabric([0.0005, 0.00074]);
+        let d = yarn_diameter_m(20.0);
+        let hand =
+            |sx: f64, sy: f64| 1.0 - (1.0 - d / (0.00074 * sy)) * (1.0 - 2.0 * d / (0.0005 * sx));
+        // On a grid of the real stitch and on a coarser one alike.
+        for spacing in [0.0005, 0.002] {
+            let knit = Knit::grid(
+                6,
+                6,
+                false,
+                &Tile::of(Pattern::Plain),
+                spacing,
+                spacing * 1.48,
+                |w, c| Vec3::new(w as f64 * spacing * 2.0, c as f64 * spacing * 1.48, 0.0),
+            );
+            for c in coverage(&knit, &real) {
+                assert!(
+                    (c - hand(2.0, 1.0)).abs() < 1e-12,
+                    "{c} vs {}",
+                    hand(2.0, 1.0)
+                );
+            }
+        }
+        // Yarn wider than the gap hides everything.
+        let rope = Fabric {
+            yarn_diameter_m: [0.002; 3],
+            ..real
+        };
+        let knit = flat(Pattern::Plain, 6, 0.0005, 1.0, 1.0);
+        assert!(coverage(&knit, &rope).iter().all(|&c| c == 1.0));
+    }
+
+    #[test]
+    fn coverage_reads_both_yarns_of_an_alternating_knit_at_every_point() {
+        // Half the courses and half the legs are 40 den: the strips are their mean width.
+        let real = fabric([0.0005, 0.0005]);
+        let knit = flat(Pattern::Alternating, 6, 0.0005, 1.0, 1.0);
+        let d = 0.5 * (yarn_diameter_m(20.0) + yarn_diameter_m(40.0));
+        let expected = 1.0 - (1.0 - d / 0.0005) * (1.0 - 2.0 * d / 0.0005);
+        for c in coverage(&knit, &real) {
+            assert!((c - expected).abs() < 1e-12, "{c} vs {expected}");
+        }
+    }
+
+    /// A tube of `wales` × `courses` on a cylinder of `radius`, its rings stretched by
+    /// `stretch` over their rest length, its wales at rest.
+    fn cylinder(wales: usize, courses: usize, radius: f64, stretch: f64) -> Knit {
+        let around = std::f64::consts::TAU * radius / wales as f64;
+        let along = 0.002;
+        Knit::grid(
+            wales,
+            courses,
+            true,
+            &Tile::of(Pattern::Plain),
+            around / stretch,
+            along,
+            |w, c| {
+                let t = std::f64::consts::TAU * w as f64 / wales as f64;
+                Vec3::new(radius * t.cos(), c as f64 * along, radius * t.sin())
+            },
+        )
+    }
+
+    #[test]
+    fn pressure_on_a_cylinder_is_laplaces_tension_over_radius() {
+        // A ring stretched by half around a 4 cm leg: T = k a / b · 0.5, P = T / r.
+        let (radius, real) = (0.04, fabric([0.0005, 0.0005]));
+        let terms = ForceTerms {
+            stiffness: [1.0; 3],
+            connection_factor: None,
+        };
+        for wales in [60, 240] {
+            let knit = cylinder(wales, 30, radius, 1.5);
+            let [around, along] = tension(&knit, &real, &terms);
+            let t = real.membrane_n_per_m()[0] * 0.5;
+            for (i, &ti) in around.iter().enumerate() {
+                assert!((ti - t).abs() < 1e-6 * t, "{wales}: point {i}: {ti} vs {t}");
+            }
+            assert!(
+                along.iter().all(|&t| t.abs() < 1e-9),
+                "no tension along a relaxed wale"
+            );
+            let p = pressure(&knit, &[around, along]);
+            let expected = t / radius / PA_PER_MMHG;
+            // Away from the end courses, whose curvature along is not measured.
+            for c in 5..25 {
+                let got = p[knit.point(7, c).index()];
+                assert!(
+                    (got - expected).abs() < 1e-3 * expected,
+                    "{wales}: {got} vs {expected}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_slack_tube_presses_nothing_and_carries_no_tension() {
+        let knit = cylinder(60, 10, 0.04, 0.8);
+        let terms = ForceTerms {
+            stiffness: [1.0; 3],
+            connection_factor: None,
+        };
+        let t = tension(&knit, &fabric([0.0005, 0.0005]), &terms);
+        assert!(t[0].iter().all(|&v| v == 0.0));
+        assert!(pressure(&knit, &t).iter().all(|&v| v == 0.0));
     }
 
     #[test]

@@ -286,7 +286,9 @@ mod tests {
     }
 
     fn surface(knit: &Knit) -> SurfaceMesh {
-        let fields = KnitFields::measure(knit, [0.00003, 0.00004, 0.00003]);
+        let scene = crate::scene::Scene::default();
+        let terms = crate::plan::Plan::fit(&scene).forces;
+        let fields = KnitFields::measure(knit, &scene.fabric(), &terms);
         stocking_surface(knit, &fields, &knit.yarn_geometry("stocking", [0.0; 3]))
     }
 

@@ -54,7 +54,7 @@ impl<'a> PreviewInput<'a> {
         PreviewInput {
             leg,
             yarns,
-            radius_m: YarnKind::ALL.map(|k| materials.get(k).radius_m),
+            radius_m: YarnKind::ALL.map(|k| materials.get(k).radius_m()),
             yarn_colour: YarnKind::ALL.map(|k| materials.get(k).colour),
         }
     }

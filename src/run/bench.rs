@@ -19,7 +19,6 @@ use std::path::{Path, PathBuf};
 
 use super::fit::{solve_fit, FitInputs, SolvedFit};
 use super::{NoProgress, Progress};
-use crate::base::YarnKind;
 use crate::draw::bench_plot::{self, Curve};
 use crate::error::Result;
 use crate::export;
@@ -342,8 +341,8 @@ impl Reference {
 
 /// The stitch density on the leg's vertices, stitches per cm².
 fn leg_density(fit: &SolvedFit, scene: &Scene) -> Vec<f64> {
-    let radius_m = YarnKind::ALL.map(|k| scene.yarns.get(k).radius_m);
-    measure_fields(&fit.knit, &fit.leg, radius_m)
+    let terms = Plan::fit(scene).forces;
+    measure_fields(&fit.knit, &fit.leg, &scene.fabric(), &terms)
         .1
         .stitch_density
 }

@@ -34,8 +34,9 @@ use crate::post::stitches::{
 use crate::post::surfaces::{leg_surface, stocking_surface};
 use crate::preview::{PreviewInput, PreviewStats};
 use crate::report::{
-    Bounds, ContactDetails, DensityRange, FitDetails, LandmarkDetails, LegDetails, MemoryDetails,
-    Metrics, PerDirection, SolverDetails, StageClock, TubeDetails,
+    Bounds, ContactDetails, DensityRange, FieldRange, FitDetails, KnitDetails, LandmarkDetails,
+    LegDetails, MemoryDetails, Metrics, PerDirection, SolverDetails, StageClock, TubeDetails,
+    YarnValues,
 };
 use crate::scene::{LoadedScene, Scene, LEG_AXIS};
 use crate::sim::contact::{ContactCounters, LegContact};
@@ -92,15 +93,15 @@ pub fn run_fit(
         &mut run.clock,
         progress,
     )?;
-    let radius_m = YarnKind::ALL.map(|k| scene.yarns.get(k).radius_m);
+    let fabric = scene.fabric();
     let (knit_fields, leg_fields) = if plan.has(Stage::LegAttributes) {
         run.stage(Stage::LegAttributes, || {
-            measure_fields(&fit.knit, &fit.leg, radius_m)
+            measure_fields(&fit.knit, &fit.leg, &fabric, &plan.forces)
         })
     } else {
         (KnitFields::default(), KnitFields::default())
     };
-    let tension = fields::tension(&fit.knit, &plan.forces);
+    let [tension, _] = fields::tension(&fit.knit, &fabric, &plan.forces);
     let mut yarns = fit.knit.yarn_geometry("yarns", [0.0; 3]);
     yarns.point_attributes.insert(
         "tension".into(),
@@ -175,6 +176,16 @@ fn fit_details(
         .copied()
         .filter(|&d| d > 0.0)
         .collect();
+    let on_covered = |field: &[f64]| -> Vec<f64> {
+        field
+            .iter()
+            .zip(&leg_fields.stitch_density)
+            .filter(|(_, &d)| d > 0.0)
+            .map(|(&v, _)| v)
+            .collect()
+    };
+    let fabric = scene.fabric();
+    let [around, along] = fabric.stitches_per_cell(spec.rest_lengths());
     let (min, max) = leg.bounds();
     FitDetails {
         leg: LegDetails {
@@ -237,6 +248,25 @@ fn fit_details(
             }
             None => Vec::new(),
         },
+        knit: KnitDetails {
+            needles: fabric.needles,
+            courses: spec.relaxed_length_m / fabric.stitch_m[1],
+            stitch_m: PerDirection {
+                course: fabric.stitch_m[0],
+                wale: fabric.stitch_m[1],
+            },
+            yarn_diameter_um: YarnValues {
+                nylon: 1e6 * fabric.yarn_diameter_m[YarnKind::Nylon.index() as usize],
+                support: 1e6 * fabric.yarn_diameter_m[YarnKind::Support.index() as usize],
+            },
+            loop_stiffness_n_per_m: fabric.loop_stiffness_n_per_m,
+            stitches_per_cell: PerDirection {
+                course: around,
+                wale: along,
+            },
+        },
+        coverage: FieldRange::of(&on_covered(&leg_fields.coverage)),
+        pressure_mmhg: FieldRange::of(&on_covered(&leg_fields.pressure)),
         stitch_density_per_cm2: DensityRange {
             leg_vertices_covered: covered.len(),
             leg_vertices: leg.positions.len(),
@@ -327,13 +357,14 @@ pub fn solve_fit(
         Ok((collider, boxed_toes))
     })?;
     let relaxed_length = relaxed_length(scene, centreline.length(), scene_name)?;
+    let fabric = scene.fabric();
     let spec = TubeSpec {
         wales: scene.tube.wales,
         courses: scene.tube.courses,
         pattern: scene.knit.pattern,
-        relaxed_circumference_m: scene.tube.relaxed_circumference_m,
+        relaxed_circumference_m: fabric.relaxed_circumference_m(),
         relaxed_length_m: relaxed_length,
-        stitch_m: [scene.knit.course_spacing_m, scene.knit.wale_spacing_m],
+        stitch_m: fabric.stitch_m,
     };
     let offset = scene.contact.offset(&scene.yarns);
     let mut levels = TubeLevels {
@@ -846,7 +877,7 @@ fn stalled(
         place += &format!(", worst {:.0} cm above the sole, at {name}", 100.0 * height);
         at_foot = *name == "the foot";
     }
-    let circumference = scene.tube.relaxed_circumference_m;
+    let circumference = scene.fabric().relaxed_circumference_m();
     let advice = match (landmarks, axis.source) {
         (Some(l), _) if circumference < 0.5 * l.ankle.girth_m => format!(
             "The stocking is far too small for this leg: relaxed {circumference} m around, \

@@ -111,7 +111,7 @@ fn encode(
                 .map(|(geometry, held)| Panel { geometry, held })
                 .collect();
             let style = PictureStyle {
-                yarn_radius_m: yarns.each(|y| y.radius_m),
+                yarn_radius_m: yarns.each(|y| y.radius_m()),
                 yarn_colour: yarns.each(|y| y.colour),
                 ..PictureStyle::default()
             };

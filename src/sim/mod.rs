@@ -40,9 +40,25 @@ impl ForceTerms {
         self.c1_of(knit, s.yarn, s.direction)
     }
 
-    /// c1 of a spring of `yarn` along `direction` in the knit.
+    /// c1 of a spring of `yarn` along `direction` in the knit: its yarn's, or where the knit's
+    /// cells stand for blocks of stitches, the blend's ([`ForceTerms::blended`]).
     pub(crate) fn c1_of(&self, knit: &Knit, yarn: YarnKind, direction: Direction) -> f64 {
-        self.stiffness[yarn.index() as usize] * knit.stiffness_scale[direction.index()]
+        let stiffness = match &knit.yarn_blend {
+            Some(shares) => self.blended(shares[direction.index()], direction),
+            None => self.stiffness[yarn.index() as usize],
+        };
+        stiffness * knit.stiffness_scale[direction.index()]
+    }
+
+    /// The stiffness of yarns mixed in `shares` along `direction`: courses lie side by side, so
+    /// along the course their stiffness adds (the mean); a wale's loop legs follow one another,
+    /// alternating yarns, so along the wale their compliance adds (the harmonic mean).
+    pub fn blended(&self, shares: PerYarn<f64>, direction: Direction) -> f64 {
+        let pairs = shares.iter().zip(&self.stiffness).filter(|(&f, _)| f > 0.0);
+        match direction {
+            Direction::Course => pairs.map(|(f, k)| f * k).sum(),
+            Direction::Wale => 1.0 / pairs.map(|(f, k)| f / k).sum::<f64>(),
+        }
     }
 }
 

@@ -126,7 +126,7 @@ impl SolverSettings {
 impl ContactSettings {
     /// The contact offset in metres.
     pub fn offset(&self, yarns: &Yarns) -> f64 {
-        self.offset_m.unwrap_or(yarns.nylon.radius_m)
+        self.offset_m.unwrap_or(yarns.nylon.radius_m())
     }
 
     /// Checks every value; the error names the field under `contact`.

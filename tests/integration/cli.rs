@@ -385,7 +385,7 @@ fn negative_stiffness_is_refused() {
         &["patch", "s.json"],
         &[(
             "s.json",
-            r#"{"yarns": {"nylon": {"stiffness": -1, "radius_m": 3e-5}}}"#,
+            r#"{"yarns": {"nylon": {"stiffness": -1, "denier": 20}}}"#,
         )],
         "s.json: yarns.nylon.stiffness: must be a positive number, got -1",
     );

@@ -258,7 +258,7 @@ fn reference_fit() -> &'static Figures {
 /// too coarse for a foot; the stocking to the toe: `foot.rs`).
 fn stiffness(ratio: f64, circumference_m: f64) -> Value {
     json!({
-        "yarns": { "support": { "stiffness": ratio, "radius_m": 0.00004 } },
+        "yarns": { "support": { "stiffness": ratio, "denier": 40 } },
         "tube": { "relaxed_circumference_m": circumference_m, "bottom": "ankle" },
     })
 }
@@ -329,6 +329,8 @@ fn fit_time_step_limit(ratio: f64, circumference_m: f64) -> f64 {
     use knitfit::sim::stability_limit;
     let mut scene = knitfit::Scene::load(None).unwrap();
     scene.yarns.support.stiffness = ratio;
+    scene.tube.relaxed_circumference_m = Some(circumference_m);
+    let fabric = scene.fabric();
     // As the fit loads it: up found from the anatomy.
     let leg = load_leg(&procedural_leg(), Units::Metres, UpChoice::Auto).unwrap();
     let axis = crate::support::fixtures::landmark_axis(&leg);
@@ -336,9 +338,9 @@ fn fit_time_step_limit(ratio: f64, circumference_m: f64) -> f64 {
         wales: 24,
         courses: 24,
         pattern: scene.knit.pattern,
-        relaxed_circumference_m: circumference_m,
+        relaxed_circumference_m: fabric.relaxed_circumference_m(),
         relaxed_length_m: knitfit::knit::RELAXED_LENGTH_FRACTION * axis.length(),
-        stitch_m: [scene.knit.course_spacing_m, scene.knit.wale_spacing_m],
+        stitch_m: fabric.stitch_m,
     };
     let knit = build_tube(&spec, &axis, &leg.positions, &leg.triangles);
     stability_limit(&knit, &Plan::fit(&scene).forces)
@@ -707,9 +709,9 @@ fn a_tube_started_partly_inside_the_leg_ends_outside_with_its_rings_in_order() {
         wales,
         courses,
         pattern: scene.knit.pattern,
-        relaxed_circumference_m: scene.tube.relaxed_circumference_m,
+        relaxed_circumference_m: scene.fabric().relaxed_circumference_m(),
         relaxed_length_m: knitfit::knit::RELAXED_LENGTH_FRACTION * axis.length(),
-        stitch_m: [scene.knit.course_spacing_m, scene.knit.wale_spacing_m],
+        stitch_m: scene.fabric().stitch_m,
     };
     let mut knit = build_tube(&spec, &axis, &leg.positions, &leg.triangles);
     // Pull the middle third of the rings halfway to the axis: deep inside calf and knee.
@@ -1076,7 +1078,7 @@ fn stiff_and_narrow_stockings_to_the_toe_fit_or_are_refused_as_bunched() {
     // The stiff and narrow cases above, on a stocking that runs over the heel to the toe.
     let toe = |ratio: f64, circumference_m: f64| {
         json!({
-            "yarns": { "support": { "stiffness": ratio, "radius_m": 0.00004 } },
+            "yarns": { "support": { "stiffness": ratio, "denier": 40 } },
             "tube": { "relaxed_circumference_m": circumference_m },
         })
     };

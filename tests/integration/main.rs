@@ -21,3 +21,4 @@ mod render;
 mod skin;
 mod solvers;
 mod support;
+mod units;

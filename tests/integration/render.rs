@@ -17,8 +17,8 @@ use crate::support::{
 /// Yarn 0.2/0.25 mm in radius: thicker than the bundled scene's, so that a coarse 40×40 fit
 /// (fast) still covers a measurable share of the skin.
 const THICK_YARN_SCENE: &str = r#"{
-  "yarns": { "nylon":   { "stiffness": 1.0,  "radius_m": 0.0002 },
-             "support": { "stiffness": 10.0, "radius_m": 0.00025 } },
+  "yarns": { "nylon":   { "stiffness": 1.0,  "denier": 1289 },
+             "support": { "stiffness": 10.0, "denier": 2015 } },
   "effects": ["yarn_connection", "alternating_yarns", "contact", "penetration_fix"],
   "outputs": ["glb"]
 }"#;

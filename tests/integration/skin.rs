@@ -207,6 +207,7 @@ struct LegVertex {
     density: f64,
     stretch_course: f64,
     coverage: f64,
+    pressure: f64,
 }
 
 fn leg_fields(out: &Path) -> Vec<LegVertex> {
@@ -217,6 +218,7 @@ fn leg_fields(out: &Path) -> Vec<LegVertex> {
             density: float(v, "stitch_density"),
             stretch_course: float(v, "stretch_course"),
             coverage: float(v, "coverage"),
+            pressure: float(v, "pressure"),
         })
         .collect()
 }
@@ -294,8 +296,9 @@ fn leg_attributes_are_smooth_across_the_mesh() {
     let mesh = load_leg(&leg, Units::Metres, UpChoice::Axis(UpAxis::PosY)).unwrap();
     let mut ratios = Vec::new();
     type Field = fn(&LegVertex) -> f64;
-    let fields_of: [(&str, Field); 3] = [
+    let fields_of: [(&str, Field); 4] = [
         ("coverage", |v| v.coverage),
+        ("pressure", |v| v.pressure),
         ("stitch_density", |v| v.density),
         ("stretch_course", |v| v.stretch_course),
     ];
@@ -354,6 +357,8 @@ fn the_leg_attributes_in_the_glb_are_those_of_the_ply() {
         ("STRETCH_COURSE", "stretch_course"),
         ("STRETCH_WALE", "stretch_wale"),
         ("COVERAGE", "coverage"),
+        ("TENSION", "tension"),
+        ("PRESSURE", "pressure"),
     ] {
         let accessor = prim
             .attributes()

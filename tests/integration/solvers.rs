@@ -52,8 +52,10 @@ fn solve_scene(leg: &std::path::Path, scene: Scene) -> (SolvedFit, Scene) {
 }
 
 fn leg_density(fit: &SolvedFit, scene: &Scene) -> Vec<f64> {
-    let radius = scene.yarns.each(|y| y.radius_m);
-    measure_fields(&fit.knit, &fit.leg, radius).1.stitch_density
+    let terms = Plan::fit(scene).forces;
+    measure_fields(&fit.knit, &fit.leg, &scene.fabric(), &terms)
+        .1
+        .stitch_density
 }
 
 #[test]

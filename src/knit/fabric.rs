@@ -1,0 +1,146 @@
+//! The real stocking a fit stands for: its needles, its relaxed stitch, its yarns' diameters and
+//! the stiffness of one knitted loop. The simulation grid is a numerical choice; this is what
+//! turns its cells back into stitches, so every output is in physical units at any grid size.
+//!
+//! * **Stitches per cell.** A grid cell of rest size `l_c × l_w` (the tube's relaxed
+//!   circumference over its wales, its relaxed length over its courses) stands for
+//!   `l_c / a` real stitches around and `l_w / b` along, `a × b` being the relaxed stitch
+//!   (`knit.course_spacing_m`, `knit.wale_spacing_m`). The grid's springs are homogenized so that
+//!   it is the stitch's membrane at any size ([`crate::knit::Knit::with_stitch_shape`]), so the
+//!   fitted shape, and with it every field, converges as the grid is refined.
+//! * **Yarn diameter** from its denier (grams per 9 km) as a solid nylon filament bundle of
+//!   density [`NYLON_DENSITY_KG_M3`]: `d = √(4 · denier / (9000 m · ρ · π))`, about 35 µm at
+//!   10 den, 50 µm at 20, 70 µm at 40.
+//! * **Loop stiffness.** A knitted loop stretches by bending its legs, not by stretching its yarn
+//!   (the elastica loop of Postle & Munden, J. Textile Inst. 58, 1967); we take each leg as a
+//!   cantilever one course long, so one nylon stitch resists `k = 3 E I / b³` newtons per metre
+//!   of extension, `I = π d⁴ / 64`, `E` = [`NYLON_MODULUS_PA`]. This is an order-of-magnitude
+//!   model (the paper's springs have no units): it puts a 20-den stocking's pressure in the few
+//!   mmHg that sheer hosiery is measured at. A yarn's `stiffness` scales it (the support yarn's
+//!   10, the paper's c1 ratio).
+//! * **Membrane tension.** Around the leg, one stitch's loop spans `a` and a metre of fabric
+//!   along the leg holds `1 / b` courses, so a course strain `ε` pulls with `c̄1 · k · (a / b) · ε`
+//!   newtons per metre of relaxed fabric (`c̄1` the mean stiffness of the course yarns), divided
+//!   by the wale stretch per metre of fitted fabric; along the leg, `a` and `b` trade places.
+
+use crate::base::{PerYarn, YarnKind};
+
+use super::settings::{KnitSettings, TubeSettings, Yarns};
+
+/// Density of nylon 6,6 (and nylon 6), kg/m³: 1.14 g/cm³.
+pub const NYLON_DENSITY_KG_M3: f64 = 1140.0;
+/// Young's modulus of drawn nylon 6,6 filament, pascals: about 3 GPa (an initial modulus of
+/// some 2.5–3.5 N/tex at 1.14 g/cm³; Morton & Hearle, *Physical Properties of Textile Fibres*).
+pub const NYLON_MODULUS_PA: f64 = 3.0e9;
+/// Pascals per millimetre of mercury, the unit hosiery pressure is quoted in.
+pub const PA_PER_MMHG: f64 = 133.322;
+/// Metres of yarn that weigh its denier in grams.
+const DENIER_LENGTH_M: f64 = 9000.0;
+
+/// Diameter of a nylon yarn of `denier` (grams per 9 km), metres.
+pub fn yarn_diameter_m(denier: f64) -> f64 {
+    let mass_per_metre = denier * 1e-3 / DENIER_LENGTH_M;
+    (4.0 * mass_per_metre / (NYLON_DENSITY_KG_M3 * std::f64::consts::PI)).sqrt()
+}
+
+/// The real stocking: stitch, yarns, loop stiffness (see module docs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fabric {
+    /// Needles of the knitting machine: real stitches (wales) around the stocking.
+    pub needles: usize,
+    /// The relaxed stitch: distance between wales along a course, and between courses along a
+    /// wale, metres.
+    pub stitch_m: [f64; 2],
+    /// Diameter of each yarn kind, metres, in [`YarnKind::index`] order.
+    pub yarn_diameter_m: PerYarn<f64>,
+    /// Stiffness of one nylon stitch (a yarn `stiffness` of 1), newtons per metre of extension.
+    pub loop_stiffness_n_per_m: f64,
+}
+
+impl Fabric {
+    /// The stocking the scene describes. The course spacing is `tube.relaxed_circumference_m`
+    /// over the needles where a circumference is given, else `knit.course_spacing_m`.
+    pub fn of(knit: &KnitSettings, yarns: &Yarns, tube: &TubeSettings) -> Fabric {
+        let course = match tube.relaxed_circumference_m {
+            Some(c) => c / knit.needles as f64,
+            None => knit.course_spacing_m,
+        };
+        let wale = knit.wale_spacing_m;
+        let d = yarn_diameter_m(yarns.nylon.denier);
+        let second_moment = std::f64::consts::PI * d.powi(4) / 64.0;
+        Fabric {
+            needles: knit.needles,
+            stitch_m: [course, wale],
+            yarn_diameter_m: YarnKind::ALL.map(|k| yarn_diameter_m(yarns.get(k).denier)),
+            loop_stiffness_n_per_m: 3.0 * NYLON_MODULUS_PA * second_moment / wale.powi(3),
+        }
+    }
+
+    /// Circumference of the stocking lying relaxed: the needles times the course spacing, metres.
+    pub fn relaxed_circumference_m(&self) -> f64 {
+        self.needles as f64 * self.stitch_m[0]
+    }
+
+    /// Yarn radius of each kind, metres.
+    pub fn yarn_radius_m(&self) -> PerYarn<f64> {
+        self.yarn_diameter_m.map(|d| d / 2.0)
+    }
+
+    /// Real stitches a grid cell of rest size `rest_m` (course spring, wale spring) stands for,
+    /// around and along.
+    pub fn stitches_per_cell(&self, rest_m: [f64; 2]) -> [f64; 2] {
+        [rest_m[0] / self.stitch_m[0], rest_m[1] / self.stitch_m[1]]
+    }
+
+    /// Real stitches per square metre of relaxed fabric.
+    pub fn relaxed_stitches_per_m2(&self) -> f64 {
+        1.0 / (self.stitch_m[0] * self.stitch_m[1])
+    }
+
+    /// Tension per metre of relaxed fabric per unit strain of a yarn stiffness of 1, along the
+    /// course and along the wale, N/m.
+    pub fn membrane_n_per_m(&self) -> [f64; 2] {
+        let [a, b] = self.stitch_m;
+        let k = self.loop_stiffness_n_per_m;
+        [k * a / b, k * b / a]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn denier_gives_the_diameters_hosiery_is_quoted_at() {
+        // 35 µm at 10 den, 50 µm at 20, 70 µm at 40 (solid nylon, 1.14 g/cm³).
+        for (denier, micrometres) in [(10.0, 35.3), (20.0, 49.9), (40.0, 70.5)] {
+            let d = yarn_diameter_m(denier) * 1e6;
+            assert!((d - micrometres).abs() < 0.1, "{denier} den: {d} µm");
+        }
+    }
+
+    #[test]
+    fn a_cell_of_the_real_stitch_is_one_stitch_and_a_coarser_one_more() {
+        let fabric = Fabric::of(
+            &KnitSettings::default(),
+            &Yarns::default(),
+            &TubeSettings::default(),
+        );
+        assert_eq!(fabric.stitches_per_cell(fabric.stitch_m), [1.0, 1.0]);
+        let [around, along] =
+            fabric.stitches_per_cell([fabric.relaxed_circumference_m() / 150.0, 0.006]);
+        assert!((around - 400.0 / 150.0).abs() < 1e-12);
+        assert!((along - 0.006 / 0.00074).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_given_circumference_sets_the_course_spacing() {
+        let tube = TubeSettings {
+            relaxed_circumference_m: Some(0.16),
+            ..TubeSettings::default()
+        };
+        let fabric = Fabric::of(&KnitSettings::default(), &Yarns::default(), &tube);
+        assert!((fabric.stitch_m[0] - 0.0004).abs() < 1e-15);
+        assert!((fabric.relaxed_circumference_m() - 0.16).abs() < 1e-12);
+    }
+}
