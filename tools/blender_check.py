@@ -27,7 +27,14 @@ for each import:
   ``_STITCH_DENSITY`` etc. become POINT-domain FLOAT attributes. ``COLOR_0`` becomes the
   CORNER/BYTE_COLOR attribute ``Color`` (and a ``DefaultMaterial`` showing it), ``NORMAL`` the
   custom normals, ``TEXCOORD_0`` the UV map ``UVMap``; the yarns' two ``LINES`` primitives
-  become loose edges (no faces) with the materials ``nylon`` and ``support``.
+  become loose edges (no faces) with the materials ``nylon`` and ``support``. The stocking's
+  material ``stocking`` (``alphaMode`` ``BLEND``, double-sided) becomes a node material with
+  ``surface_render_method`` ``BLENDED`` and no backface culling, a Color Attribute node's Color
+  into the Principled BSDF's Base Color (through a Multiply by the file's base colour) and its
+  Alpha straight into Alpha (``io_scene_gltf2/blender/imp/pbrMetallicRoughness.py``,
+  ``base_color``; with ``OPAQUE`` the Alpha is left unlinked at 1). The script checks that wiring,
+  and that the colour attribute is white with ``_COVERAGE`` (clamped to 0-1) as alpha, within the
+  8-bit step of a BYTE_COLOR.
 * ``leg.ply`` and ``stocking.ply`` through ``bpy.ops.wm.ply_import`` with
   ``forward_axis='NEGATIVE_Z', up_axis='Y'`` (the PLY is +Y up like glTF; the importer puts
   that rotation into the object's matrix, not the vertices; with the default axes the leg lies
@@ -416,6 +423,107 @@ def check_object(checks: Checks, label: str, obj_name: str, fm: FileMesh, requir
         print(f"    not compared: {', '.join(fm.other_attributes)}")
 
 
+def upstream(socket, seen=None) -> list:
+    """Every node that feeds `socket`, through any chain of links (nearest first)."""
+    seen = [] if seen is None else seen
+    for link in socket.links:
+        node = link.from_node
+        if node not in seen:
+            seen.append(node)
+            for inp in node.inputs:
+                upstream(inp, seen)
+    return seen
+
+
+def feeds(socket, node_type: str, output: str) -> bool:
+    """Whether output `output` of a node of type `node_type` reaches `socket` through links."""
+    def reaches(sock) -> bool:
+        for link in sock.links:
+            if link.from_node.bl_idname == node_type and link.from_socket.name == output:
+                return True
+            if any(reaches(i) for i in link.from_node.inputs):
+                return True
+        return False
+    return reaches(socket)
+
+
+def check_stocking_material(checks: Checks, path: str) -> None:
+    """The stocking surface's material as Blender imported it: blended, double-sided, the file's
+    base colour, and the colour attribute's alpha (the file's COLOR_0 alpha, the coverage) wired
+    into the Principled BSDF's Alpha; the alpha values against ``_COVERAGE`` clamped to 0-1."""
+    doc, _ = read_glb(path)
+    node = next((n for n in doc["nodes"] if n.get("name") == "stocking" and "mesh" in n), None)
+    prim = doc["meshes"][node["mesh"]]["primitives"][0] if node else {}
+    if not checks.check("glb.stocking.file_material", "material" in prim,
+                        "the file's stocking primitive has no material"):
+        return
+    gmat = doc["materials"][prim["material"]]
+    factor = gmat.get("pbrMetallicRoughness", {}).get("baseColorFactor", [1, 1, 1, 1])
+    obj = find_object("stocking")
+    mats = [m for m in (obj.data.materials if obj else []) if m]
+    print(f"  stocking material (file {gmat.get('name')!r}, alphaMode "
+          f"{gmat.get('alphaMode', 'OPAQUE')}, doubleSided {gmat.get('doubleSided', False)}, "
+          f"baseColorFactor {factor}): Blender {[m.name for m in mats]}")
+    if not checks.check("glb.stocking.material", len(mats) == 1 and mats[0].use_nodes,
+                        f"materials {[m.name for m in mats]}, wanted one node material"):
+        return
+    mat = mats[0]
+    print(f"    surface_render_method {mat.surface_render_method!r}, use_backface_culling "
+          f"{mat.use_backface_culling}")
+    checks.check("glb.stocking.material_blended", mat.surface_render_method == "BLENDED",
+                 f"surface_render_method {mat.surface_render_method!r}")
+    checks.check("glb.stocking.material_double_sided",
+                 mat.use_backface_culling == (gmat.get("doubleSided") is not True),
+                 f"use_backface_culling {mat.use_backface_culling}")
+    bsdf = next((n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled"),
+                None)
+    if not checks.check("glb.stocking.principled", bsdf is not None, "no Principled BSDF"):
+        return
+    alpha_in, colour_in = bsdf.inputs["Alpha"], bsdf.inputs["Base Color"]
+    chain = [n.bl_idname for n in upstream(alpha_in)]
+    print(f"    Principled Alpha <- {' <- '.join(chain) or 'unlinked, ' + str(alpha_in.default_value)}")
+    checks.check("glb.stocking.alpha_from_colour_attribute",
+                 feeds(alpha_in, "ShaderNodeVertexColor", "Alpha"),
+                 f"the Alpha input is not fed by a Color Attribute's Alpha ({chain})")
+    checks.check("glb.stocking.colour_from_colour_attribute",
+                 feeds(colour_in, "ShaderNodeVertexColor", "Color"),
+                 "the Base Color input is not fed by a Color Attribute's Color")
+    # The factor's colour sits on a Multiply mix, or on the socket when it is white.
+    defaults = [list(i.default_value)[:3] for n in upstream(colour_in) if n.bl_idname == "ShaderNodeMix"
+                for i in n.inputs if i.type == "RGBA" and not i.is_linked]
+    defaults.append(list(colour_in.default_value)[:3])
+    checks.check("glb.stocking.base_colour",
+                 any(np.allclose(d, factor[:3], atol=1e-6) for d in defaults),
+                 f"no unlinked colour {factor[:3]} on the base colour chain ({defaults})")
+    checks.check("glb.stocking.alpha_factor", factor[3] == 1 or feeds(alpha_in, "ShaderNodeMath",
+                                                                       "Value"),
+                 f"baseColorFactor alpha {factor[3]} is not applied")
+
+    mesh = obj.data
+    colour = mesh.color_attributes.get("Color")
+    coverage = mesh.attributes.get("_COVERAGE")
+    if not checks.check("glb.stocking.colour_attribute", colour is not None and coverage is not None,
+                        f"colour attributes {[a.name for a in mesh.color_attributes]}, "
+                        f"_COVERAGE {'present' if coverage is not None else 'absent'}"):
+        return
+    rgba = np.empty(len(colour.data) * 4, dtype=np.float32)
+    colour.data.foreach_get("color", rgba)
+    rgba = rgba.reshape(-1, 4)
+    cov = np.clip(blender_values(coverage), 0.0, 1.0)
+    if colour.domain == "CORNER":
+        loops = np.empty(len(mesh.loops), dtype=np.int64)
+        mesh.loops.foreach_get("vertex_index", loops)
+        cov = cov[loops]
+    # A BYTE_COLOR alpha is stored in 8 bits (rounded: half a step at most; a step allowed).
+    worst = float(np.abs(rgba[:, 3] - cov).max()) if len(cov) else 0.0
+    white = float(np.abs(rgba[:, :3] - 1.0).max()) if len(cov) else 0.0
+    print(f"    colour attribute {colour.name!r} {colour.domain}/{colour.data_type}: alpha vs "
+          f"clamped _COVERAGE max |diff| {worst:.3g} over {len(cov)}, RGB max |1 - c| {white:.3g}")
+    checks.check("glb.stocking.alpha_is_coverage", worst <= 1 / 255 + 1e-6,
+                 f"max |alpha - clamp(_COVERAGE)| = {worst:.3g}")
+    checks.check("glb.stocking.colour_is_white", white <= 1e-6, f"max |1 - RGB| = {white:.3g}")
+
+
 def run_import(checks: Checks, label: str, fn) -> bool:
     """Runs an import operator, its console output (C++ and Python loggers write to the file
     descriptors directly) captured and printed indented."""
@@ -492,6 +600,8 @@ def main(argv: list[str]) -> int:
                 if node in meshes:
                     check_object(checks, f"glb.{node}", node, meshes[node], required[node],
                                  world=False, loose_edges=node == "yarns", samples=args.samples)
+            if "stocking" in meshes:
+                check_stocking_material(checks, path)
 
     # --- leg.ply, stocking.ply
     for fname, obj_name, required, edges in (

@@ -21,6 +21,10 @@ pub struct SurfaceMesh {
     pub texcoords: Option<Vec<[f32; 2]>>,
     /// Linear-RGB vertex colours 0–1 (`COLOR_0`), if any.
     pub colours: Option<Vec<[f32; 3]>>,
+    /// Per-vertex opacity 0–1, the alpha of the vertex colours (`COLOR_0` as RGBA; PLY
+    /// `alpha`), if any; only with `colours`. Drawn only by a material that blends (glTF
+    /// `alphaMode` `BLEND`): the stocking surface's.
+    pub opacity: Option<Vec<f32>>,
     /// Per-vertex attributes, one value per position.
     pub point_attributes: BTreeMap<String, Vec<f32>>,
 }
@@ -36,6 +40,7 @@ impl SurfaceMesh {
             normals,
             texcoords: None,
             colours: None,
+            opacity: None,
             point_attributes: BTreeMap::new(),
         }
     }

@@ -15,7 +15,9 @@ use crate::error::{Error, Result};
 const YARN_VERTEX_PROPERTIES: [&str; 4] = ["x", "y", "z", "part"];
 
 /// Vertex properties [`write_mesh_ply`] writes itself.
-const MESH_VERTEX_PROPERTIES: [&str; 9] = ["x", "y", "z", "nx", "ny", "nz", "red", "green", "blue"];
+const MESH_VERTEX_PROPERTIES: [&str; 10] = [
+    "x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "alpha",
+];
 
 /// Encodes `parts` as one binary little-endian PLY file.
 ///
@@ -282,8 +284,9 @@ fn refuse_clashing_names<V>(
 }
 
 /// Encodes a triangle surface as a binary little-endian PLY file: `vertex` (x, y, z in metres,
-/// nx, ny, nz, every point attribute, and red/green/blue as sRGB uchar when the mesh has
-/// colours) and `face` (vertex_indices).
+/// nx, ny, nz, every point attribute, red/green/blue as sRGB uchar when the mesh has colours,
+/// and alpha as linear uchar (opacity × 255, rounded) when it has an opacity) and `face`
+/// (vertex_indices).
 ///
 /// Fails with [`Error::Encode`] if the mesh is inconsistent (as for [`write_ply`]), an
 /// attribute takes the name of a vertex property, or a comment holds a line break.
@@ -322,6 +325,11 @@ pub fn write_mesh_ply(mesh: &SurfaceMesh, comments: &[String]) -> Result<Vec<u8>
                 Column::UChar(channel.collect()),
             );
         }
+    }
+    if let Some(opacity) = &mesh.opacity {
+        // Checked 0–1 above; alpha is a fraction, not a light level, so it is not sRGB-encoded.
+        let alpha = opacity.iter().map(|&a| (a * 255.0).round() as u8);
+        vertex.add("alpha", Column::UChar(alpha.collect()));
     }
     let triangles = mesh
         .triangles
@@ -373,9 +381,10 @@ pub(super) fn check_yarn_geometry(part: &YarnGeometry) -> std::result::Result<()
     Ok(())
 }
 
-/// Checks what every writer relies on in a surface: one normal (and texture coordinate and
-/// colour, where present) per vertex, triangles between existing vertices, positions finite in
-/// single precision, and attributes as in [`check_yarn_geometry`].
+/// Checks what every writer relies on in a surface: one normal (and texture coordinate, colour
+/// and opacity, where present) per vertex, an opacity only with colours and within 0–1,
+/// triangles between existing vertices, positions finite in single precision, and attributes as
+/// in [`check_yarn_geometry`].
 pub(super) fn check_surface_mesh(mesh: &SurfaceMesh) -> std::result::Result<(), String> {
     let n = mesh.positions.len();
     let fail = |what: String| Err(format!("mesh {:?}: {what}", mesh.name));
@@ -383,11 +392,23 @@ pub(super) fn check_surface_mesh(mesh: &SurfaceMesh) -> std::result::Result<(), 
         ("normals", Some(mesh.normals.len())),
         ("texture coordinates", mesh.texcoords.as_ref().map(Vec::len)),
         ("colours", mesh.colours.as_ref().map(Vec::len)),
+        ("opacities", mesh.opacity.as_ref().map(Vec::len)),
     ];
     for (what, len) in lengths {
         if let Some(len) = len.filter(|&len| len != n) {
             return fail(format!("{len} {what} for {n} vertices"));
         }
+    }
+    if mesh.opacity.is_some() && mesh.colours.is_none() {
+        return fail("an opacity without colours (it is their alpha)".into());
+    }
+    if let Some(a) = mesh
+        .opacity
+        .iter()
+        .flatten()
+        .find(|a| !(0.0..=1.0).contains(*a))
+    {
+        return fail(format!("opacity {a} is outside 0–1"));
     }
     if let Err(what) = check_attributes(&mesh.point_attributes, n) {
         return fail(what);
@@ -587,6 +608,41 @@ mod tests {
             ply.payload["face"][0]["vertex_indices"],
             Property::ListInt(vec![0, 1, 2])
         );
+    }
+
+    #[test]
+    fn surface_opacity_is_a_linear_alpha_after_the_colours() {
+        let mut mesh = SurfaceMesh::new("stocking", vec![[0.0; 3]; 3], vec![[0, 1, 2]]);
+        mesh.colours = Some(vec![[1.0; 3]; 3]);
+        mesh.opacity = Some(vec![0.0, 0.25, 1.0]);
+        let ply = parse(&write_mesh_ply(&mesh, &[]).unwrap());
+        assert_eq!(
+            property_names(&ply, "vertex")[6..],
+            ["red", "green", "blue", "alpha"]
+        );
+        let alpha: Vec<_> = ply.payload["vertex"]
+            .iter()
+            .map(|v| v["alpha"].clone())
+            .collect();
+        assert_eq!(
+            alpha,
+            [0, 64, 255].map(Property::UChar),
+            "0.25 × 255 = 63.75 rounds to 64, not sRGB-encoded"
+        );
+    }
+
+    #[test]
+    fn opacity_without_colours_or_outside_0_to_1_is_an_error() {
+        let mut mesh = SurfaceMesh::new("stocking", vec![[0.0; 3]; 3], vec![[0, 1, 2]]);
+        mesh.opacity = Some(vec![0.5; 3]);
+        let err = write_mesh_ply(&mesh, &[]).unwrap_err();
+        assert!(err.to_string().contains("without colours"), "{err}");
+        mesh.colours = Some(vec![[1.0; 3]; 3]);
+        for bad in [1.5, -0.1, f32::NAN] {
+            mesh.opacity = Some(vec![0.5, bad, 0.5]);
+            let err = write_mesh_ply(&mesh, &[]).unwrap_err();
+            assert!(err.to_string().contains("outside 0–1"), "{err}");
+        }
     }
 
     #[test]

@@ -1,7 +1,8 @@
 //! The fitted knit and the leg as the triangle surfaces the writers and the preview take: the
 //! leg with its per-vertex fields and a density heat map, and the stocking as a surface over the
 //! knit's faces whose texture coordinates run along the knit (u around, v along) without a jump
-//! where the courses close.
+//! where the courses close, white vertex colours and its coverage as their opacity, so a
+//! blending material of the yarn's colour (`stocking.glb`'s) draws it as sheer as the knit is.
 
 use std::collections::BTreeMap;
 
@@ -49,8 +50,10 @@ pub fn leg_surface(leg: &Leg, fields: &KnitFields) -> SurfaceMesh {
 /// and the points of the first wale repeated where a face wraps round to it, so texture
 /// coordinates run 0–1 without a jump (u = wale / wales, v = 1 − course / (courses − 1), from
 /// [`Knit::fabric_coords`]); per vertex, the yarn point's attributes and its fields (density,
-/// stretch, coverage: what a sheer shader on this surface needs). Only the knit's own points are
-/// used: `yarns` may hold points the penetration fix inserted after them.
+/// stretch, coverage: what a sheer shader on this surface needs). With the coverage, the vertex
+/// colours are white and their opacity is the coverage clamped to 0–1 (a rendering aid: the
+/// `coverage` attribute stays as it is); without it (no fields measured), no colours. Only the
+/// knit's own points are used: `yarns` may hold points the penetration fix inserted after them.
 pub fn stocking_surface(
     knit: &Knit,
     knit_fields: &KnitFields,
@@ -146,6 +149,10 @@ pub fn stocking_surface(
         mesh.normals[last] = n.into();
     }
     mesh.texcoords = Some(vertices.texcoords);
+    if let Some(coverage) = attributes.get("coverage") {
+        mesh.colours = Some(vec![[1.0; 3]; coverage.len()]);
+        mesh.opacity = Some(coverage.iter().map(|c| c.clamp(0.0, 1.0)).collect());
+    }
     mesh.point_attributes = attributes;
     mesh
 }
@@ -338,6 +345,33 @@ mod tests {
             .into_iter()
             .collect();
         assert_eq!(open, welt);
+    }
+
+    #[test]
+    fn a_stockings_vertex_colours_are_white_with_its_coverage_as_opacity() {
+        let knit = shaped_tube();
+        let mesh = surface(&knit);
+        let coverage = &mesh.point_attributes["coverage"];
+        assert!(coverage.iter().any(|&c| c > 0.0 && c < 1.0), "{coverage:?}");
+        assert_eq!(mesh.opacity.as_ref(), Some(coverage));
+        assert_eq!(mesh.colours, Some(vec![[1.0; 3]; mesh.positions.len()]));
+
+        // Clamped to 0–1 whatever the coverage: a yarn thicker than its spacing covers it all.
+        let fields = KnitFields {
+            coverage: vec![1.7; knit.len()],
+            ..KnitFields::measure(&knit, [0.00003; 3])
+        };
+        let mesh = stocking_surface(&knit, &fields, &knit.yarn_geometry("stocking", [0.0; 3]));
+        assert!(mesh.opacity.unwrap().iter().all(|&a| a == 1.0));
+        assert!(mesh.point_attributes["coverage"].iter().all(|&c| c == 1.7));
+
+        // Without fields, no colours.
+        let bare = stocking_surface(
+            &knit,
+            &KnitFields::default(),
+            &knit.yarn_geometry("stocking", [0.0; 3]),
+        );
+        assert_eq!((bare.colours, bare.opacity), (None, None));
     }
 
     #[test]

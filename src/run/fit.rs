@@ -1022,7 +1022,12 @@ impl FitProducts<'_> {
                     &[
                         GlbNode::Surface(&self.leg_mesh),
                         GlbNode::Yarns(self.yarns),
-                        GlbNode::Surface(&stocking),
+                        // Sheer in the nylon's colour: its coverage is the vertex colours'
+                        // alpha (docs/decisions/0052).
+                        GlbNode::Sheer {
+                            mesh: &stocking,
+                            colour: yarns.nylon.colour,
+                        },
                     ],
                     yarns.each(|y| y.colour),
                 )

@@ -198,14 +198,44 @@ fn ply_and_gltf_outputs_agree_and_read_back_with_their_counts() {
         );
     }
     let stocking = doc.nodes().nth(2).unwrap().mesh().unwrap();
-    let semantics: Vec<String> = stocking
-        .primitives()
-        .next()
-        .unwrap()
-        .attributes()
-        .map(|(s, _)| s.to_string())
-        .collect();
+    let stocking = stocking.primitives().next().unwrap();
+    let semantics: Vec<String> = stocking.attributes().map(|(s, _)| s.to_string()).collect();
     assert!(semantics.iter().any(|s| s == "TEXCOORD_0"), "{semantics:?}");
+    // Sheer in the nylon's colour: COLOR_0's alpha is the coverage (clamped to 0–1).
+    let material = stocking.material();
+    assert_eq!(material.name(), Some("stocking"));
+    assert_eq!(material.alpha_mode(), gltf::material::AlphaMode::Blend);
+    let nylon = knitfit::scene::Scene::load(None)
+        .unwrap()
+        .yarns
+        .nylon
+        .colour;
+    let [r, g, b] = nylon.map(|c| c as f32);
+    assert_eq!(
+        material.pbr_metallic_roughness().base_color_factor(),
+        [r, g, b, 1.0]
+    );
+    let reader = stocking.reader(|b| Some(&buffers[b.index()]));
+    let alpha: Vec<f32> = reader
+        .read_colors(0)
+        .unwrap()
+        .into_rgba_f32()
+        .map(|c| c[3])
+        .collect();
+    let coverage = stocking
+        .attributes()
+        .find(|(s, _)| *s == gltf::Semantic::Extras("COVERAGE".into()))
+        .unwrap()
+        .1;
+    let coverage: Vec<f32> =
+        gltf::accessor::Iter::<f32>::new(coverage, |b| Some(&buffers[b.index()]))
+            .unwrap()
+            .collect();
+    assert_eq!(alpha.len(), coverage.len());
+    for (a, c) in alpha.iter().zip(&coverage) {
+        assert_eq!(*a, c.clamp(0.0, 1.0));
+    }
+    assert!(alpha.iter().any(|&a| a > 0.0 && a < 1.0), "a sheer knit");
 }
 
 #[test]

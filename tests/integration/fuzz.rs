@@ -684,13 +684,18 @@ fn surface_mesh() -> impl Strategy<Value = SurfaceMesh> {
                 prop::array::uniform3(prop_oneof![20 => 0.0f32..1.0, 1 => wild_f32()]),
                 n,
             )),
+            proptest::option::of(proptest::collection::vec(
+                prop_oneof![20 => 0.0f32..1.0, 1 => wild_f32()],
+                n,
+            )),
             any::<bool>(),
         )
             .prop_map(
-                |(positions, triangles, point_attributes, colours, drop_normal)| {
+                |(positions, triangles, point_attributes, colours, opacity, drop_normal)| {
                     let mut mesh = SurfaceMesh::new("leg", positions, triangles);
                     mesh.point_attributes = point_attributes;
                     mesh.colours = colours;
+                    mesh.opacity = opacity;
                     if drop_normal {
                         mesh.normals.pop();
                     }

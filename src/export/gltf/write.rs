@@ -5,6 +5,15 @@
 //! vertex accessors: `POSITION` and every point attribute as a custom `_UPPERCASE` float attribute
 //! (the validator requires custom attributes to start with `_`; Blender imports them as point
 //! attributes). Positions are metres, Y up.
+//!
+//! A surface is one `TRIANGLES` primitive. The leg has no material (viewers draw it opaque, in
+//! its `COLOR_0` heat map). The stocking surface is [`GlbNode::Sheer`]: a material of the yarn's
+//! colour with `alphaMode` `BLEND`, and its opacity (the knit's coverage) as the alpha of an RGBA
+//! `COLOR_0` whose RGB is white. glTF multiplies `COLOR_0` into the base colour, alpha included,
+//! so core glTF alone draws it sheer: Blender's importer (4.5) wires the colour attribute's alpha
+//! into the Principled BSDF's Alpha and renders the material `BLENDED`; three.js's `GLTFLoader`
+//! turns on vertex colours, four-component ones multiply the alpha, and `BLEND` makes the
+//! material transparent. Why this way: docs/decisions/0052.
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -19,8 +28,18 @@ use crate::export::ply::{check_surface_mesh, check_yarn_geometry};
 
 /// One root node of a GLB file.
 pub enum GlbNode<'a> {
-    /// A triangle surface (the leg, the stocking surface).
+    /// A triangle surface without a material (the leg).
     Surface(&'a SurfaceMesh),
+    /// A see-through triangle surface (the stocking): as [`GlbNode::Surface`], with a material
+    /// named after the mesh: base colour `colour` (linear RGB) with alpha 1, `alphaMode`
+    /// `BLEND`, double-sided, metallic 0, roughness 0.6. Its opacity, the alpha of `COLOR_0`,
+    /// is what makes it sheer; a mesh without one is drawn opaque in that colour.
+    Sheer {
+        /// The surface.
+        mesh: &'a SurfaceMesh,
+        /// Base colour, linear RGB 0–1.
+        colour: [f64; 3],
+    },
     /// Yarn polylines.
     Yarns(&'a YarnGeometry),
 }
@@ -44,15 +63,21 @@ pub fn write_glb(parts: &[YarnGeometry], yarn_colours: PerYarn<[f64; 3]>) -> Res
 
 /// Encodes surfaces and yarns as one GLB, a root node each, in the given order. Yarns are
 /// written as by [`write_glb`]; a surface is one `TRIANGLES` primitive with `POSITION`,
-/// `NORMAL`, `TEXCOORD_0` and `COLOR_0` where present, and its point attributes, no material
-/// and no translation (a surface without triangles is a node without a mesh).
+/// `NORMAL`, `TEXCOORD_0` and `COLOR_0` where present (f32 `VEC3`, or `VEC4` with the opacity as
+/// alpha), and its point attributes, no translation, and no material but a
+/// [`GlbNode::Sheer`]'s (a surface without triangles is a node without a mesh, and then a
+/// sheer one has no material either).
 ///
-/// Fails with [`Error::Encode`] if a node's geometry is inconsistent.
+/// Fails with [`Error::Encode`] if a node's geometry is inconsistent, or a sheer colour is not
+/// within 0–1.
 pub fn write_nodes_glb(nodes: &[GlbNode], yarn_colours: PerYarn<[f64; 3]>) -> Result<Vec<u8>> {
     for node in nodes {
         match node {
             GlbNode::Yarns(part) => check_yarn_geometry(part),
             GlbNode::Surface(mesh) => check_surface_mesh(mesh),
+            GlbNode::Sheer { mesh, colour } => {
+                check_surface_mesh(mesh).and_then(|()| check_colour(&mesh.name, colour))
+            }
         }
         .map_err(|message| Error::Encode {
             what: "glTF".into(),
@@ -64,7 +89,7 @@ pub fn write_nodes_glb(nodes: &[GlbNode], yarn_colours: PerYarn<[f64; 3]>) -> Re
     let materials = YarnKind::ALL.map(|kind| {
         let used = nodes.iter().any(|n| match n {
             GlbNode::Yarns(p) => p.segments.iter().any(|s| s.yarn == kind),
-            GlbNode::Surface(_) => false,
+            GlbNode::Surface(_) | GlbNode::Sheer { .. } => false,
         });
         used.then(|| {
             let [r, g, b] = yarn_colours[kind.index() as usize].map(|c| c as f32);
@@ -75,7 +100,14 @@ pub fn write_nodes_glb(nodes: &[GlbNode], yarn_colours: PerYarn<[f64; 3]>) -> Re
         .iter()
         .map(|node| match node {
             GlbNode::Yarns(part) => doc.yarn_node(part, &materials),
-            GlbNode::Surface(mesh) => doc.surface_node(mesh),
+            GlbNode::Surface(mesh) => doc.surface_node(mesh, None),
+            GlbNode::Sheer { mesh, colour } => {
+                let material = (!mesh.triangles.is_empty()).then(|| {
+                    let [r, g, b] = colour.map(|c| c as f32);
+                    doc.sheer_material(&mesh.name, [r, g, b])
+                });
+                doc.surface_node(mesh, material)
+            }
         })
         .collect();
     let scene = doc.root.push(json::Scene {
@@ -86,6 +118,17 @@ pub fn write_nodes_glb(nodes: &[GlbNode], yarn_colours: PerYarn<[f64; 3]>) -> Re
     });
     doc.root.scene = Some(scene);
     doc.finish()
+}
+
+/// A sheer surface's colour: linear RGB, each channel within 0–1 (a NaN is not).
+fn check_colour(mesh: &str, colour: &[f64; 3]) -> std::result::Result<(), String> {
+    if colour.iter().all(|c| (0.0..=1.0).contains(c)) {
+        Ok(())
+    } else {
+        Err(format!(
+            "mesh {mesh:?}: colour {colour:?} is not linear RGB within 0–1"
+        ))
+    }
 }
 
 /// Custom attributes as glTF wants them: `_UPPERCASE` float scalars.
@@ -171,6 +214,17 @@ impl GlbBuilder {
         })
     }
 
+    /// [`GlbBuilder::material`] blended (`alphaMode` `BLEND`) and double-sided: a thin fabric
+    /// whose opacity comes from `COLOR_0`'s alpha, seen from both sides (inside the welt, the far
+    /// side of the tube where the leg does not hide it).
+    pub fn sheer_material(&mut self, name: &str, rgb: [f32; 3]) -> Index<json::Material> {
+        let index = self.material(name, rgb);
+        let material = &mut self.root.materials[index.value()];
+        material.alpha_mode = Valid(json::material::AlphaMode::Blend);
+        material.double_sided = true;
+        index
+    }
+
     /// A node of yarn polylines: `LINES`, one primitive per yarn kind, shared vertex accessors.
     fn yarn_node(
         &mut self,
@@ -217,8 +271,12 @@ impl GlbBuilder {
     }
 
     /// A node of one `TRIANGLES` primitive with normals, optional texture coordinates and
-    /// colours, and the custom attributes.
-    fn surface_node(&mut self, mesh: &SurfaceMesh) -> Index<json::Node> {
+    /// colours (RGBA with the opacity), the custom attributes, and `material`.
+    fn surface_node(
+        &mut self,
+        mesh: &SurfaceMesh,
+        material: Option<Index<json::Material>>,
+    ) -> Index<json::Node> {
         use json::mesh::Semantic;
         if mesh.triangles.is_empty() {
             return self.node(&mesh.name, Vec::new(), None);
@@ -229,8 +287,21 @@ impl GlbBuilder {
         if let Some(uv) = &mesh.texcoords {
             attributes.insert(Valid(Semantic::TexCoords(0)), self.vectors(uv));
         }
-        if let Some(colours) = &mesh.colours {
-            attributes.insert(Valid(Semantic::Colors(0)), self.vectors(colours));
+        let colours = match (&mesh.colours, &mesh.opacity) {
+            (Some(rgb), None) => Some(self.vectors(rgb)),
+            (Some(rgb), Some(alpha)) => {
+                let rgba: Vec<[f32; 4]> = rgb
+                    .iter()
+                    .zip(alpha)
+                    .map(|(&[r, g, b], &a)| [r, g, b, a])
+                    .collect();
+                Some(self.vectors(&rgba))
+            }
+            // `check_surface_mesh` refuses an opacity without colours.
+            (None, _) => None,
+        };
+        if let Some(colours) = colours {
+            attributes.insert(Valid(Semantic::Colors(0)), colours);
         }
         let indices: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
         let primitive = json::mesh::Primitive {
@@ -238,7 +309,7 @@ impl GlbBuilder {
             extensions: None,
             extras: Default::default(),
             indices: Some(self.indices(&indices)),
-            material: None,
+            material,
             mode: Valid(json::mesh::Mode::Triangles),
             targets: None,
         };
@@ -269,7 +340,7 @@ impl GlbBuilder {
         })
     }
 
-    /// A float `VEC2`/`VEC3` accessor (normals, colours, texture coordinates): no bounds.
+    /// A float `VEC2`/`VEC3`/`VEC4` accessor (normals, colours, texture coordinates): no bounds.
     pub fn vectors<const N: usize>(&mut self, values: &[[f32; N]]) -> Index<json::Accessor> {
         let bytes: Vec<u8> = values
             .iter()
@@ -468,6 +539,107 @@ mod tests {
         let pbr = support.pbr_metallic_roughness();
         assert_eq!(pbr.base_color_factor(), [0.2, 0.4, 0.6, 1.0]);
         assert_eq!((pbr.metallic_factor(), pbr.roughness_factor()), (0.0, 0.6));
+    }
+
+    /// A triangle with white vertex colours and `coverage` as their opacity, as the stocking
+    /// surface has them.
+    fn sheer_triangle(coverage: [f32; 3]) -> SurfaceMesh {
+        let mut mesh = SurfaceMesh::new(
+            "stocking",
+            vec![[0.0, 0.0, 0.0], [0.01, 0.0, 0.0], [0.0, 0.01, 0.0]],
+            vec![[0, 1, 2]],
+        );
+        mesh.colours = Some(vec![[1.0; 3]; 3]);
+        mesh.opacity = Some(coverage.to_vec());
+        mesh.point_attributes
+            .insert("coverage".into(), coverage.to_vec());
+        mesh
+    }
+
+    #[test]
+    fn the_stocking_surface_is_blended_in_the_yarn_colour_with_coverage_as_alpha() {
+        let mut leg = sheer_triangle([0.0; 3]);
+        leg.name = "leg".into();
+        leg.opacity = None;
+        leg.colours = Some(vec![[0.5, 0.25, 0.0]; 3]);
+        let stocking = sheer_triangle([0.2, 0.35, 1.0]);
+        let nodes = [
+            GlbNode::Surface(&leg),
+            GlbNode::Sheer {
+                mesh: &stocking,
+                colour: [0.16, 0.11, 0.09],
+            },
+        ];
+        let bytes = write_nodes_glb(&nodes, COLOURS).unwrap();
+        let (doc, buffers, _) = gltf::import_slice(&bytes).unwrap();
+        let prim = |node: usize| {
+            let node = doc.nodes().nth(node).unwrap();
+            node.mesh().unwrap().primitives().next().unwrap()
+        };
+
+        let sheer = prim(1);
+        let material = sheer.material();
+        assert_eq!(material.name(), Some("stocking"));
+        assert_eq!(material.alpha_mode(), gltf::material::AlphaMode::Blend);
+        assert!(material.double_sided());
+        let pbr = material.pbr_metallic_roughness();
+        assert_eq!(pbr.base_color_factor(), [0.16, 0.11, 0.09, 1.0]);
+        assert_eq!((pbr.metallic_factor(), pbr.roughness_factor()), (0.0, 0.6));
+        let reader = sheer.reader(|b| Some(&buffers[b.index()]));
+        let Some(gltf::mesh::util::ReadColors::RgbaF32(colours)) = reader.read_colors(0) else {
+            panic!("COLOR_0 is RGBA float");
+        };
+        let colours: Vec<[f32; 4]> = colours.collect();
+        assert_eq!(
+            colours,
+            [[1.0, 1.0, 1.0, 0.2], [1.0, 1.0, 1.0, 0.35], [1.0; 4]],
+            "white, so base colour × COLOR_0 is the yarn's colour; alpha the coverage"
+        );
+        assert_eq!(
+            floats::<f32>(attribute(&sheer, "COVERAGE"), &buffers),
+            [0.2, 0.35, 1.0],
+            "_COVERAGE stays"
+        );
+
+        // The leg keeps its look: no material, RGB colours.
+        let leg = prim(0);
+        assert!(leg.material().index().is_none());
+        let reader = leg.reader(|b| Some(&buffers[b.index()]));
+        assert!(matches!(
+            reader.read_colors(0),
+            Some(gltf::mesh::util::ReadColors::RgbF32(_))
+        ));
+        assert_eq!(doc.materials().count(), 1);
+    }
+
+    #[test]
+    fn a_sheer_surface_without_triangles_has_no_material() {
+        let mut bare = sheer_triangle([0.5; 3]);
+        bare.triangles.clear();
+        let nodes = [GlbNode::Sheer {
+            mesh: &bare,
+            colour: [0.5; 3],
+        }];
+        let (doc, _, _) = gltf::import_slice(write_nodes_glb(&nodes, COLOURS).unwrap()).unwrap();
+        assert!(doc.nodes().next().unwrap().mesh().is_none());
+        assert_eq!(
+            doc.materials().count(),
+            0,
+            "an unused material is a validator notice"
+        );
+    }
+
+    #[test]
+    fn a_sheer_colour_outside_0_to_1_is_an_error() {
+        let mesh = sheer_triangle([0.5; 3]);
+        for colour in [[1.5, 0.0, 0.0], [f64::NAN, 0.0, 0.0]] {
+            let nodes = [GlbNode::Sheer {
+                mesh: &mesh,
+                colour,
+            }];
+            let err = write_nodes_glb(&nodes, COLOURS).unwrap_err();
+            assert!(err.to_string().contains("within 0–1"), "{err}");
+        }
     }
 
     #[test]
