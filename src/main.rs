@@ -101,7 +101,7 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
             ),
         };
         say!(
-            "knit: {} needles × {:.0} courses of {}/{} den yarn, each grid cell {:.1} × {:.1} \
+            "knit: {:.0} needles × {:.0} courses of {}/{} den yarn, each grid cell {:.1} × {:.1} \
              stitches{on_leg}",
             k.needles,
             k.courses,

@@ -415,8 +415,9 @@ impl FieldRange {
 /// The real stocking a fit's grid stands for (`knit::Fabric`).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct KnitDetails {
-    /// Needles: real stitches around.
-    pub needles: usize,
+    /// Needles: real stitches around (`knit.needles`, or the given relaxed circumference over
+    /// the stitch's width).
+    pub needles: f64,
     /// Real courses along the relaxed stocking.
     pub courses: f64,
     /// The relaxed stitch, metres: between wales along a course, between courses along a wale.

@@ -135,7 +135,7 @@ impl Scene {
         self.patch.validate().map_err(|e| e.within("patch"))?;
         self.render.validate().map_err(|e| e.within("render"))?;
         self.tube.validate().map_err(|e| e.within("tube"))?;
-        if self.tube.wales > self.knit.needles {
+        if self.tube.relaxed_circumference_m.is_none() && self.tube.wales > self.knit.needles {
             // A grid point stands for one or more real stitches, never for less than one.
             return Err(Invalid::new(
                 "knit.needles",

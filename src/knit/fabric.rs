@@ -46,8 +46,8 @@ pub fn yarn_diameter_m(denier: f64) -> f64 {
 /// The real stocking: stitch, yarns, loop stiffness (see module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Fabric {
-    /// Needles of the knitting machine: real stitches (wales) around the stocking.
-    pub needles: usize,
+    /// Real stitches (wales) around the stocking: the machine's needles.
+    pub needles: f64,
     /// The relaxed stitch: distance between wales along a course, and between courses along a
     /// wale, metres.
     pub stitch_m: [f64; 2],
@@ -58,18 +58,18 @@ pub struct Fabric {
 }
 
 impl Fabric {
-    /// The stocking the scene describes. The course spacing is `tube.relaxed_circumference_m`
-    /// over the needles where a circumference is given, else `knit.course_spacing_m`.
+    /// The stocking the scene describes. Its stitches around are `knit.needles`, or where
+    /// `tube.relaxed_circumference_m` is given, that circumference over the stitch's width.
     pub fn of(knit: &KnitSettings, yarns: &Yarns, tube: &TubeSettings) -> Fabric {
-        let course = match tube.relaxed_circumference_m {
-            Some(c) => c / knit.needles as f64,
-            None => knit.course_spacing_m,
+        let [course, wale] = [knit.course_spacing_m, knit.wale_spacing_m];
+        let needles = match tube.relaxed_circumference_m {
+            Some(c) => c / course,
+            None => knit.needles as f64,
         };
-        let wale = knit.wale_spacing_m;
         let d = yarn_diameter_m(yarns.nylon.denier);
         let second_moment = std::f64::consts::PI * d.powi(4) / 64.0;
         Fabric {
-            needles: knit.needles,
+            needles,
             stitch_m: [course, wale],
             yarn_diameter_m: YarnKind::ALL.map(|k| yarn_diameter_m(yarns.get(k).denier)),
             loop_stiffness_n_per_m: 3.0 * NYLON_MODULUS_PA * second_moment / wale.powi(3),
@@ -78,7 +78,7 @@ impl Fabric {
 
     /// Circumference of the stocking lying relaxed: the needles times the course spacing, metres.
     pub fn relaxed_circumference_m(&self) -> f64 {
-        self.needles as f64 * self.stitch_m[0]
+        self.needles * self.stitch_m[0]
     }
 
     /// Yarn radius of each kind, metres.
@@ -134,13 +134,14 @@ mod tests {
     }
 
     #[test]
-    fn a_given_circumference_sets_the_course_spacing() {
+    fn a_given_circumference_sets_the_stitches_around() {
         let tube = TubeSettings {
             relaxed_circumference_m: Some(0.16),
             ..TubeSettings::default()
         };
         let fabric = Fabric::of(&KnitSettings::default(), &Yarns::default(), &tube);
-        assert!((fabric.stitch_m[0] - 0.0004).abs() < 1e-15);
+        assert_eq!(fabric.stitch_m, [0.0005, 0.00074]);
+        assert!((fabric.needles - 320.0).abs() < 1e-9);
         assert!((fabric.relaxed_circumference_m() - 0.16).abs() < 1e-12);
     }
 }

@@ -18,10 +18,11 @@ pub struct KnitSettings {
     pub pattern: Pattern,
     /// Needles of the knitting machine: real stitches (wales) around the stocking, fixed down
     /// the leg (default: 400, a sheer stocking's machine). At least the grid's `tube.wales`.
+    /// Unused where `tube.relaxed_circumference_m` is given: the stitches around are then that
+    /// over `course_spacing_m`.
     pub needles: usize,
     /// The relaxed stitch's width: the distance between neighbouring wales along a course, in
-    /// metres (default: 0.0005, i.e. 20 wales per cm, typical of a sheer stocking). Used unless
-    /// `tube.relaxed_circumference_m` is given, which sets it to that over `needles`.
+    /// metres (default: 0.0005, i.e. 20 wales per cm, typical of a sheer stocking).
     pub course_spacing_m: f64,
     /// The relaxed stitch's height: the distance between neighbouring courses along a wale, in
     /// metres (default: 0.00074). With the width it sets the fabric's stitch shape, which a fit
@@ -300,7 +301,7 @@ pub const MAX_TUBE_POINTS: usize = (u32::MAX / 4) as usize;
 
 /// Most needles accepted: hosiery machines have a few hundred; beyond this a "stocking" is a
 /// mistake in the scene, and its stitch count would overflow what a run can hold.
-pub const MAX_NEEDLES: usize = 10_000;
+pub const MAX_NEEDLES: usize = 100_000;
 /// Largest relaxed stitch accepted, metres: a knitted stitch is well under a centimetre.
 pub const MAX_STITCH_M: f64 = 0.02;
 /// Heaviest yarn accepted, denier (10,000 den is a nylon cord over 1 mm across).

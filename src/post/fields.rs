@@ -519,7 +519,7 @@ mod tests {
     /// A stocking of `stitch_m` stitches in 20-den nylon and 40-den support yarn.
     fn fabric(stitch_m: [f64; 2]) -> Fabric {
         Fabric {
-            needles: 400,
+            needles: 400.0,
             stitch_m,
             yarn_diameter_m: [yarn_diameter_m(20.0), yarn_diameter_m(40.0), 0.0],
             loop_stiffness_n_per_m: 5.0,

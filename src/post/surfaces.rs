@@ -292,10 +292,24 @@ mod tests {
         )
     }
 
+    /// The fields of `knit` as a 20-den stocking's, of the paper's two yarns.
+    fn surface_fields(knit: &Knit) -> KnitFields {
+        let d = crate::knit::fabric::yarn_diameter_m;
+        let fabric = crate::knit::Fabric {
+            needles: 400.0,
+            stitch_m: [0.0005, 0.00074],
+            yarn_diameter_m: [d(20.0), d(40.0), d(20.0)],
+            loop_stiffness_n_per_m: 6.8,
+        };
+        let terms = crate::sim::ForceTerms {
+            stiffness: [1.0, 10.0, 1.0],
+            connection_factor: Some(0.2),
+        };
+        KnitFields::measure(knit, &fabric, &terms)
+    }
+
     fn surface(knit: &Knit) -> SurfaceMesh {
-        let scene = crate::scene::Scene::default();
-        let terms = crate::plan::Plan::fit(&scene).forces;
-        let fields = KnitFields::measure(knit, &scene.fabric(), &terms);
+        let fields = surface_fields(knit);
         stocking_surface(knit, &fields, &knit.yarn_geometry("stocking", [0.0; 3]))
     }
 
@@ -359,7 +373,7 @@ mod tests {
         // Clamped to 0–1 whatever the coverage: a yarn thicker than its spacing covers it all.
         let fields = KnitFields {
             coverage: vec![1.7; knit.len()],
-            ..KnitFields::measure(&knit, [0.00003; 3])
+            ..surface_fields(&knit)
         };
         let mesh = stocking_surface(&knit, &fields, &knit.yarn_geometry("stocking", [0.0; 3]));
         assert!(mesh.opacity.unwrap().iter().all(|&a| a == 1.0));

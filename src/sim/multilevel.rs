@@ -43,6 +43,12 @@ pub const COARSE_TOLERANCE_FACTOR: f64 = 2.0;
 /// cannot hold on the leg, residuals of 1e-2 and more) it stops the fit there.
 pub const HAND_ON_RESIDUAL_FACTOR: f64 = 5.0;
 
+/// A coarser level stopped as futile below this residual hands its state on whatever the
+/// tolerance asked: the default tolerance's threshold (5 × its coarse levels' 2e-3), kept for
+/// the tight tolerances of a reference fit, whose coarse grids' ring corners chatter at a knee
+/// just as they do at the default.
+pub const HAND_ON_RESIDUAL_FLOOR: f64 = 1e-2;
+
 /// How the caller makes the knit and constraints of each level: the solver knows grids, the
 /// caller knows what is knitted and what it touches.
 pub trait Levels {
@@ -170,8 +176,8 @@ pub fn relax_multilevel(
         } else {
             tolerance * COARSE_TOLERANCE_FACTOR
         };
-        let stalled = level.stall.is_some()
-            && (finest || level.residual >= HAND_ON_RESIDUAL_FACTOR * level_tolerance);
+        let hand_on_below = (HAND_ON_RESIDUAL_FACTOR * level_tolerance).max(HAND_ON_RESIDUAL_FLOOR);
+        let stalled = level.stall.is_some() && (finest || level.residual >= hand_on_below);
         stats.levels.push(level);
         if !finest && !stalled {
             levels.accept(&knit)?;

@@ -20,7 +20,7 @@ use crate::support::{
 };
 
 /// The tube of every fit here: small, as the figures compared do not need more.
-const RESOLUTION: &str = "40x40";
+const RESOLUTION: &str = "60x60";
 
 // ---------------------------------------------------------------------------------------------
 // Fitting and reading a fit.

@@ -13,6 +13,10 @@ const HUGE_GLTF: &str = r#"{"asset": {"version": "2.0"}, "scene": 0, "scenes": [
                  "min": [0, 0, 0], "max": [1, 1, 1]}]}"#;
 
 /// Asserts a one-line refusal with exit code 2 that contains every `expect`, and no file written.
+/// A knitting machine of 30,000 needles, so that a 30000-wale grid stands for its stitches.
+const FINE_MACHINE: &str = r#"{"knit": {"needles": 30000},
+  "effects": ["yarn_connection", "alternating_yarns", "contact", "penetration_fix"]}"#;
+
 fn assert_refused(dir: &std::path::Path, out: &std::process::Output, expect: &[&str]) {
     let err = stderr(out);
     assert_eq!(out.status.code(), Some(2), "{err}");
@@ -25,9 +29,20 @@ fn assert_refused(dir: &std::path::Path, out: &std::process::Output, expect: &[&
 
 #[test]
 fn a_huge_resolution_is_refused_before_any_work_with_its_estimate_and_the_override() {
-    // 9·10^8 points need terabytes: more than any machine this runs on has available.
+    // 9·10^8 points need terabytes: more than any machine this runs on has available (on a
+    // machine of as many needles, so that the grid is not refused for being finer than them).
     let dir = tempfile::tempdir().unwrap();
-    let out = knitfit(dir.path(), &["fit", "--resolution", "30000x30000"]);
+    write(dir.path(), "fine.json", FINE_MACHINE);
+    let leg = crate::support::procedural_leg();
+    let args = [
+        "fit",
+        "fine.json",
+        "--leg",
+        leg.to_str().unwrap(),
+        "--resolution",
+        "30000x30000",
+    ];
+    let out = knitfit(dir.path(), &args);
     assert_refused(
         dir.path(),
         &out,
@@ -107,11 +122,19 @@ fn the_override_runs_a_fit_that_a_low_limit_refuses() {
 #[test]
 fn plan_shows_the_estimate_and_whether_the_run_would_be_refused() {
     let dir = tempfile::tempdir().unwrap();
+    let scenes = tempfile::tempdir().unwrap();
+    let scene = write(scenes.path(), "fine.json", FINE_MACHINE);
+    let leg = crate::support::procedural_leg();
     let plan = |extra: &[&str]| {
-        let out = knitfit(
-            dir.path(),
-            &[&["plan", "--resolution", "30000x30000"][..], extra].concat(),
-        );
+        let args = [
+            "plan",
+            scene.to_str().unwrap(),
+            "--leg",
+            leg.to_str().unwrap(),
+            "--resolution",
+            "30000x30000",
+        ];
+        let out = knitfit(dir.path(), &[&args[..], extra].concat());
         assert!(out.status.success(), "{}", stderr(&out));
         stdout(&out)
     };

@@ -38,7 +38,7 @@ fn the_legs_fields_are_the_same_on_a_coarse_grid_and_at_the_real_stitch_count() 
     let (coarse_dir, coarse) = fit(&leg, "100x100", &[]);
     // The real count: a point per needle around, a course per knitted course along.
     let knit = &coarse["details"]["knit"];
-    assert_eq!(knit["needles"], 400);
+    assert_eq!(knit["needles"], 400.0);
     let courses = knit["courses"].as_f64().unwrap().round() as usize + 1;
     let (real_dir, real) = fit(&leg, &format!("400x{courses}"), &[]);
     let per_cell = &real["details"]["knit"]["stitches_per_cell"];
