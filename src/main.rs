@@ -111,6 +111,7 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
             k.stitches_per_cell.wale
         );
         print_written(&args.out_dir(), &outcome.written);
+        print_next(&args.out_dir(), &outcome.written);
     }
     // Damping shapes only the paper solver's steps; the multilevel solver has none to tune.
     let hint = match scene.solver.method {
@@ -122,6 +123,23 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
         }
     };
     Ok(finish(m.converged, scene, hint))
+}
+
+/// What to open next, from what a fit wrote.
+fn print_next(out: &std::path::Path, written: &[std::path::PathBuf]) {
+    let wrote = |name: &str| written.iter().any(|p| p.ends_with(name));
+    let out = out.display();
+    if wrote("stocking.glb") {
+        say!(
+            "next: open {out}/stocking.glb in Blender (File > Import > glTF 2.0) or any glTF \
+             viewer: the leg, the sheer stocking over it and its yarns"
+        );
+    }
+    if wrote("preview.png") {
+        say!("      {out}/preview.png is the yarn-level still");
+    } else if wrote("stocking.glb") {
+        say!("      knitfit render {out} draws the yarn-level still (preview.png) from it");
+    }
 }
 
 fn patch(args: PatchArgs, quiet: bool) -> Result<ExitCode, Error> {

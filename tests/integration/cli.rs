@@ -22,6 +22,15 @@ fn no_arguments_fits_the_bundled_sample_and_says_where_outputs_went() {
     let text = stdout(&out);
     assert!(text.contains("wrote to out/"), "{text}");
     assert!(text.contains("converged"), "{text}");
+    // It says what to open next, and how to get the yarn-level still it did not render.
+    assert!(
+        text.contains("next: open out/stocking.glb in Blender"),
+        "{text}"
+    );
+    assert!(
+        text.contains("knitfit render out draws the yarn-level still"),
+        "{text}"
+    );
     // The second line says where the stocking went: the bundled leg has no foot and is cut.
     let extent = text.lines().nth(1).unwrap();
     assert!(
