@@ -1,5 +1,6 @@
 //! The preview's pinhole camera: a perspective camera given by the scene, or auto-framed so the
-//! leg's bounding box fills the picture from one of four sides.
+//! stocking's bounding box (its yarn's; the leg's for a leg without yarn) fills the picture from one
+//! of four sides.
 //!
 //! Framing: the eight corners of the box are expressed in the view's frame (right, up, towards
 //! the viewer); the eye is put on the view axis through the box's centre, back far enough that

@@ -190,6 +190,21 @@ impl<'a> PreparedScene<'a> {
                 }
             }
         }
+        // The camera frames the stocking, not the whole file (a body): the yarn's points where
+        // it has any within the leg's box, else the leg.
+        let mut yarn_lo = [f64::INFINITY; 3];
+        let mut yarn_hi = [f64::NEG_INFINITY; 3];
+        for p in &input.yarns.positions {
+            if (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k]) {
+                for k in 0..3 {
+                    yarn_lo[k] = yarn_lo[k].min(p[k]);
+                    yarn_hi[k] = yarn_hi[k].max(p[k]);
+                }
+            }
+        }
+        if (0..3).all(|k| yarn_lo[k] <= yarn_hi[k]) {
+            (lo, hi) = (yarn_lo, yarn_hi);
+        }
         let mesh = TriMesh::new(vertices, triangles.clone()).map_err(|e| Error::Encode {
             what: what.into(),
             message: format!("the leg has no triangle to render: {e}"),
