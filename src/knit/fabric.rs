@@ -81,11 +81,6 @@ impl Fabric {
         self.needles * self.stitch_m[0]
     }
 
-    /// Yarn radius of each kind, metres.
-    pub fn yarn_radius_m(&self) -> PerYarn<f64> {
-        self.yarn_diameter_m.map(|d| d / 2.0)
-    }
-
     /// Real stitches a grid cell of rest size `rest_m` (course spring, wale spring) stands for,
     /// around and along.
     pub fn stitches_per_cell(&self, rest_m: [f64; 2]) -> [f64; 2] {

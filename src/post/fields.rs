@@ -18,9 +18,9 @@
 //!   `coverage = 1 − (1 − min(1, d_course / (b s_w))) · (1 − min(1, 2 d_leg / (a s_c)))`.
 //!   Overlap where strips cross is counted once; yarn flattening and loop curvature are ignored.
 //! * **Tension** around and along, newtons per metre of fitted fabric: the membrane of
-//!   [`Fabric::membrane_n_per_m`] times the mean stiffness of that direction's yarns, times the
-//!   strain `s − 1`, over the other direction's stretch. Fabric does not carry compression: a
-//!   point whose springs are shorter than knitted (slack) has none.
+//!   [`Fabric::membrane_n_per_m`] times that direction's blended yarn stiffness
+//!   ([`ForceTerms::blended`]), times the strain `s − 1`, over the other direction's stretch.
+//!   Fabric does not carry compression: where it is shorter than knitted (slack) it has none.
 //! * **Pressure** on the skin, mmHg, by Laplace's law for a membrane: `P = T_c κ_c + T_w κ_w`,
 //!   with `κ` the fitted fabric's normal curvature along the course and the wale (the skin's,
 //!   where the fabric lies on it), taken over [`MEASURE_SPAN_M`] of relaxed fabric so that no
@@ -48,13 +48,16 @@ const M2_PER_CM2: f64 = 1e-4;
 /// ends and the point keeps a ring's curve (a fitted ankle is some 35 mm around its centre).
 pub const MEASURE_SPAN_M: f64 = 0.008;
 
-/// Real stitches per cm² of fabric at every point of `knit` (see module docs).
-pub fn stitch_density(knit: &Knit, fabric: &Fabric) -> Vec<f64> {
-    let (course, wale) = stretch(knit);
+/// Stretch around and along at every point (`(course, wale)`, see [`stretch`]): what density,
+/// coverage and tension are computed from.
+pub type Stretch = (Vec<f64>, Vec<f64>);
+
+/// Real stitches per cm² of fabric at every point, from its `stretch` (see module docs).
+pub fn stitch_density(fabric: &Fabric, (course, wale): &Stretch) -> Vec<f64> {
     let relaxed = fabric.relaxed_stitches_per_m2() * M2_PER_CM2;
     course
         .iter()
-        .zip(&wale)
+        .zip(wale)
         .map(|(&sc, &sw)| {
             let area = sc * sw;
             if area > 0.0 {
@@ -73,7 +76,7 @@ pub fn stitch_density(knit: &Knit, fabric: &Fabric) -> Vec<f64> {
 /// the wale the span follows the wale's chain through the heel pocket's short rows; around, a
 /// short row's point has only its own springs. A point with no neighbour in a direction gets 1
 /// there.
-pub fn stretch(knit: &Knit) -> (Vec<f64>, Vec<f64>) {
+pub fn stretch(knit: &Knit) -> Stretch {
     let stencil = Stencil::of(knit);
     let x = &knit.particles.x;
     let [rest_course, rest_wale] = knit.grid_rest_m();
@@ -186,8 +189,11 @@ impl Stencil {
 /// Coverage at every point (see module docs), from the real yarns' diameters and stitch. The
 /// strips' width is the mean diameter of the yarns along that direction (an alternating
 /// pattern's courses are half nylon, half support), so it reads the fabric, not a grid course.
-pub fn coverage(knit: &Knit, fabric: &Fabric) -> Vec<f64> {
-    let (stretch_course, stretch_wale) = stretch(knit);
+pub fn coverage(
+    knit: &Knit,
+    fabric: &Fabric,
+    (stretch_course, stretch_wale): &Stretch,
+) -> Vec<f64> {
     let [course_shares, wale_shares] = knit.yarn_shares();
     let mean_diameter = |shares: PerYarn<f64>| -> f64 {
         shares
@@ -209,7 +215,7 @@ pub fn coverage(knit: &Knit, fabric: &Fabric) -> Vec<f64> {
     // Course strips are spaced by the wale spacing, and the legs the other way round.
     stretch_course
         .iter()
-        .zip(&stretch_wale)
+        .zip(stretch_wale)
         .map(|(&s_course, &s_wale)| {
             let by_courses = hidden(d_course, b * s_wale);
             let by_legs = hidden(2.0 * d_leg, a * s_course);
@@ -219,14 +225,18 @@ pub fn coverage(knit: &Knit, fabric: &Fabric) -> Vec<f64> {
 }
 
 /// Tension around (along the courses) and along (the wales) at every point, newtons per metre
-/// of fitted fabric (see module docs).
-pub fn tension(knit: &Knit, fabric: &Fabric, terms: &ForceTerms) -> [Vec<f64>; 2] {
+/// of fitted fabric, from its `stretch` (see module docs).
+pub fn tension(
+    knit: &Knit,
+    fabric: &Fabric,
+    terms: &ForceTerms,
+    (course, wale): &Stretch,
+) -> [Vec<f64>; 2] {
     let membrane = fabric.membrane_n_per_m();
     // The fabric's membrane, whatever yarn a point lies on: the grid's yarns blended.
     let shares = knit.yarn_shares();
     let stiffness =
         [Direction::Course, Direction::Wale].map(|d| terms.blended(shares[d.index()], d));
-    let (course, wale) = stretch(knit);
     let of = |d: usize, along: &[f64], across: &[f64]| -> Vec<f64> {
         along
             .iter()
@@ -234,7 +244,7 @@ pub fn tension(knit: &Knit, fabric: &Fabric, terms: &ForceTerms) -> [Vec<f64>; 2
             .map(|(&s, &other)| stiffness[d] * membrane[d] * (s - 1.0).max(0.0) / other)
             .collect()
     };
-    [of(0, &course, &wale), of(1, &wale, &course)]
+    [of(0, course, wale), of(1, wale, course)]
 }
 
 /// Pressure on the skin at every point of a tube, mmHg (see module docs); all 0 for a knit whose
@@ -354,15 +364,18 @@ impl KnitFields {
     /// Every field at every point of `knit`, for the real stocking `fabric` with the stiffness
     /// of `terms`.
     pub fn measure(knit: &Knit, fabric: &Fabric, terms: &ForceTerms) -> KnitFields {
-        let (stretch_course, stretch_wale) = stretch(knit);
-        let tension = tension(knit, fabric, terms);
+        let stretch = stretch(knit);
+        let tension = tension(knit, fabric, terms, &stretch);
         let pressure = pressure(knit, &tension);
         let [around, _] = tension;
+        let stitch_density = stitch_density(fabric, &stretch);
+        let coverage = coverage(knit, fabric, &stretch);
+        let (stretch_course, stretch_wale) = stretch;
         KnitFields {
-            stitch_density: stitch_density(knit, fabric),
+            stitch_density,
             stretch_course,
             stretch_wale,
-            coverage: coverage(knit, fabric),
+            coverage,
             tension: around,
             pressure,
         }
@@ -540,10 +553,10 @@ mod tests {
         // stitches each); stretched ×2 one way, half as many.
         let real = fabric([0.001, 0.001]);
         for spacing in [0.001, 0.002] {
-            for d in stitch_density(&flat(Pattern::Plain, 5, spacing, 1.0, 1.0), &real) {
+            for d in stitch_density(&real, &stretch(&flat(Pattern::Plain, 5, spacing, 1.0, 1.0))) {
                 assert!((d - 100.0).abs() < 1e-9, "{spacing}: {d}");
             }
-            for d in stitch_density(&flat(Pattern::Plain, 5, spacing, 2.0, 1.0), &real) {
+            for d in stitch_density(&real, &stretch(&flat(Pattern::Plain, 5, spacing, 2.0, 1.0))) {
                 assert!((d - 50.0).abs() < 1e-9, "{spacing}: {d}");
             }
         }
@@ -560,7 +573,7 @@ mod tests {
         let knit = Knit::grid(4, 3, false, &tile, a, b, |w, c| at(w, c as f64))
             .with_toe_seam(b)
             .with_short_rows(0, vec![0, 1, 1, 0], &tile, a, b, at);
-        let density = stitch_density(&knit, &fabric([a, b]));
+        let density = stitch_density(&fabric([a, b]), &stretch(&knit));
         let relaxed = M2_PER_CM2 / (a * b);
         for c in 0..3 {
             let plain = density[knit.point(0, c).index()];
@@ -657,7 +670,7 @@ mod tests {
                 spacing * 1.48,
                 |w, c| Vec3::new(w as f64 * spacing * 2.0, c as f64 * spacing * 1.48, 0.0),
             );
-            for c in coverage(&knit, &real) {
+            for c in coverage(&knit, &real, &stretch(&knit)) {
                 assert!(
                     (c - hand(2.0, 1.0)).abs() < 1e-12,
                     "{c} vs {}",
@@ -671,7 +684,9 @@ mod tests {
             ..real
         };
         let knit = flat(Pattern::Plain, 6, 0.0005, 1.0, 1.0);
-        assert!(coverage(&knit, &rope).iter().all(|&c| c == 1.0));
+        assert!(coverage(&knit, &rope, &stretch(&knit))
+            .iter()
+            .all(|&c| c == 1.0));
     }
 
     #[test]
@@ -681,7 +696,7 @@ mod tests {
         let knit = flat(Pattern::Alternating, 6, 0.0005, 1.0, 1.0);
         let d = 0.5 * (yarn_diameter_m(20.0) + yarn_diameter_m(40.0));
         let expected = 1.0 - (1.0 - d / 0.0005) * (1.0 - 2.0 * d / 0.0005);
-        for c in coverage(&knit, &real) {
+        for c in coverage(&knit, &real, &stretch(&knit)) {
             assert!((c - expected).abs() < 1e-12, "{c} vs {expected}");
         }
     }
@@ -715,7 +730,7 @@ mod tests {
         };
         for wales in [60, 240] {
             let knit = cylinder(wales, 30, radius, 1.5);
-            let [around, along] = tension(&knit, &real, &terms);
+            let [around, along] = tension(&knit, &real, &terms, &stretch(&knit));
             let t = real.membrane_n_per_m()[0] * 0.5;
             for (i, &ti) in around.iter().enumerate() {
                 assert!((ti - t).abs() < 1e-6 * t, "{wales}: point {i}: {ti} vs {t}");
@@ -744,7 +759,7 @@ mod tests {
             stiffness: [1.0; 3],
             connection_factor: None,
         };
-        let t = tension(&knit, &fabric([0.0005, 0.0005]), &terms);
+        let t = tension(&knit, &fabric([0.0005, 0.0005]), &terms, &stretch(&knit));
         assert!(t[0].iter().all(|&v| v == 0.0));
         assert!(pressure(&knit, &t).iter().all(|&v| v == 0.0));
     }

@@ -101,7 +101,8 @@ pub fn run_fit(
     } else {
         (KnitFields::default(), KnitFields::default())
     };
-    let [tension, _] = fields::tension(&fit.knit, &fabric, &plan.forces);
+    let stretch = fields::stretch(&fit.knit);
+    let [tension, _] = fields::tension(&fit.knit, &fabric, &plan.forces, &stretch);
     let mut yarns = fit.knit.yarn_geometry("yarns", [0.0; 3]);
     yarns.point_attributes.insert(
         "tension".into(),
