@@ -305,18 +305,42 @@ impl MemoryCheck {
         } else {
             "lower --resolution (tube.wales, tube.courses)"
         };
-        Err(Error::TooLarge {
-            what: format!(
+        Err(self.too_large(
+            format!(
                 "a fit of {}×{} points on {leg_name} ({} triangles)",
                 e.tube[0], e.tube[1], e.leg_triangles
             ),
-            estimate: human_bytes(e.total_bytes),
+            how_to_override,
+        ))
+    }
+
+    /// [`MemoryCheck::enforce`] for the real stitches a fit lays once its stocking's length is
+    /// known (`outputs` `stitches` or `loops`): the estimate's tube is the real stitch count.
+    pub fn enforce_real_stitches(&self, leg_name: &str) -> Result<()> {
+        if self.allow_large || self.fits() {
+            return Ok(());
+        }
+        let e = &self.estimate;
+        Err(self.too_large(
+            format!(
+                "the real stitches of this stocking, {}×{}, on {leg_name}",
+                e.tube[0], e.tube[1]
+            ),
+            "ask for fewer knit.needles or a larger stitch (knit.wale_spacing_m), or leave \
+             \"stitches\" and \"loops\" out of outputs",
+        ))
+    }
+
+    fn too_large(&self, what: String, how_to_override: &str) -> Error {
+        Error::TooLarge {
+            what,
+            estimate: human_bytes(self.estimate.total_bytes),
             available: human_bytes(self.limit.bytes),
             limit_source: self.limit.source.describe().into(),
             how_to_override: format!(
                 "{how_to_override}, or pass --allow-large (limits.allow_large) to run anyway"
             ),
-        })
+        }
     }
 }
 

@@ -110,6 +110,19 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
             k.stitches_per_cell.course,
             k.stitches_per_cell.wale
         );
+        if let Some(real) = &d.yarns.real_stitches {
+            say!(
+                "yarns: every real stitch{}, {} × {}: {} points, {} segments",
+                match d.yarns.written {
+                    knitfit::export::YarnsWritten::Loops => " as a loop",
+                    _ => "'s crossings",
+                },
+                real.wales,
+                real.courses,
+                d.yarns.points,
+                d.yarns.segments
+            );
+        }
         print_written(&args.out_dir(), &outcome.written);
         print_next(&args.out_dir(), &outcome.written);
     }

@@ -8,7 +8,7 @@ use std::fmt;
 use serde::Serialize;
 
 use crate::base::YarnKind;
-use crate::export::Output;
+use crate::export::{Output, YarnsWritten};
 use crate::knit::{Stretch, TubeBottom, TubeTop};
 use crate::preview::RenderMode;
 use crate::scene::{Effect, Scene};
@@ -60,6 +60,10 @@ pub enum Stage {
     CheckPenetration,
     /// Stitch density, stretch and coverage per leg vertex.
     LegAttributes,
+    /// Build the knit at the real stitch count and lay it on the skin in the fitted grid.
+    LayStitches,
+    /// Every real stitch as a loop polyline.
+    KnitLoops,
     /// Reroute yarn segments that cut through the leg over the skin (paper §6.3).
     PenetrationFix,
     /// Build a fresh patch for one stretch of the patch experiment.
@@ -91,6 +95,8 @@ impl fmt::Display for Stage {
             Stage::ExactContactPass => f.write_str("exact contact pass"),
             Stage::CheckPenetration => f.write_str("check penetration"),
             Stage::LegAttributes => f.write_str("leg attributes"),
+            Stage::LayStitches => f.write_str("lay stitches"),
+            Stage::KnitLoops => f.write_str("knit loops"),
             Stage::PenetrationFix => f.write_str("penetration fix"),
             Stage::KnitPatch(stretch) => write!(f, "knit {stretch}"),
             Stage::RelaxPatch(stretch) => write!(f, "relax {stretch}"),
@@ -466,6 +472,33 @@ impl Plan {
                 Stage::LegAttributes.to_string(),
                 "no output holds the leg (glb, ply, picture or a density preview)",
             );
+        }
+        match scene.yarns_written() {
+            YarnsWritten::Grid => {}
+            written => {
+                let words = if written == YarnsWritten::Loops {
+                    "loops"
+                } else {
+                    "stitches"
+                };
+                plan.add(
+                    Stage::LayStitches,
+                    format!(
+                        "outputs lists \"{words}\": the knit at its real count ({} needles \
+                         around, a course per {} m), placed in the fitted grid and laid on the \
+                         skin",
+                        scene.fabric().needles.round(),
+                        scene.knit.wale_spacing_m
+                    ),
+                );
+                if written == YarnsWritten::Loops {
+                    plan.add(
+                        Stage::KnitLoops,
+                        "outputs lists \"loops\": every real stitch as a loop polyline (Choi & \
+                         Lo 2003)",
+                    );
+                }
+            }
         }
         if plan.effects.contains(&Effect::PenetrationFix) {
             plan.add(

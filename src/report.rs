@@ -8,6 +8,7 @@ use std::time::Instant;
 use nalgebra::{Point3, Vector3};
 use serde::Serialize;
 
+use crate::export::YarnsWritten;
 use crate::knit::{Pattern, Stretch, TubeBottom, TubeHeel};
 use crate::leg::landmarks::Ring;
 use crate::leg::{
@@ -15,6 +16,7 @@ use crate::leg::{
 };
 use crate::limits::MemoryCheck;
 use crate::plan::{Plan, PlannedStage, Stage};
+use crate::post::lattice::LaidStitches;
 use crate::post::penetration::PenetrationStats;
 use crate::post::regions::RegionStretch;
 use crate::post::stitches::SlackDetails;
@@ -113,6 +115,8 @@ pub struct FitDetails {
     pub memory: MemoryDetails,
     /// The real stocking the grid stands for.
     pub knit: KnitDetails,
+    /// The yarns `stocking.ply` and `stocking.glb` hold.
+    pub yarns: YarnsDetails,
     /// Stitch density over the leg's vertices that yarn covers.
     pub stitch_density_per_cm2: DensityRange,
     /// Coverage (0–1) over the covered leg vertices.
@@ -410,6 +414,19 @@ impl FieldRange {
             max: sorted.last().copied().unwrap_or(0.0),
         }
     }
+}
+
+/// The yarns a fit's files hold (`outputs`: the grid's, `stitches` or `loops`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct YarnsDetails {
+    /// `grid`, `stitches` or `loops`.
+    pub written: YarnsWritten,
+    /// Yarn points written (after the penetration fix).
+    pub points: usize,
+    /// Yarn segments written.
+    pub segments: usize,
+    /// The real-count knit the stitches or loops come from; `null` for the grid's yarns.
+    pub real_stitches: Option<LaidStitches>,
 }
 
 /// The real stocking a fit's grid stands for (`knit::Fabric`).

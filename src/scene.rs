@@ -15,7 +15,7 @@ use serde_json::Value;
 
 use crate::base::settings::Invalid;
 use crate::error::{Error, Result};
-use crate::export::{default_outputs, Output};
+use crate::export::{default_outputs, Output, YarnsWritten};
 use crate::knit::settings::{KnitSettings, PatchSettings, TubeSettings, Yarns};
 use crate::knit::{Fabric, Pattern};
 use crate::leg::settings::LegSettings;
@@ -115,6 +115,18 @@ impl Scene {
         self.effects.contains(&effect)
     }
 
+    /// Which yarns `stocking.ply` and `stocking.glb` hold (`outputs` may name `stitches` or
+    /// `loops`; the grid's otherwise).
+    pub fn yarns_written(&self) -> YarnsWritten {
+        if self.wants(Output::Loops) {
+            YarnsWritten::Loops
+        } else if self.wants(Output::Stitches) {
+            YarnsWritten::Stitches
+        } else {
+            YarnsWritten::Grid
+        }
+    }
+
     /// True when the scene asks for `output`.
     pub fn wants(&self, output: Output) -> bool {
         self.outputs.contains(&output)
@@ -146,6 +158,28 @@ impl Scene {
                 ),
             )
             .with(&["tube.wales"]));
+        }
+        if self.wants(Output::Stitches) && self.wants(Output::Loops) {
+            return Err(Invalid::new(
+                "outputs",
+                "lists both \"stitches\" and \"loops\"; the yarn files hold one kind of yarn: \
+                 name one (or neither, for the simulation grid's yarns)",
+            ));
+        }
+        let yarns = self.yarns_written();
+        if yarns != YarnsWritten::Grid && !self.wants(Output::Ply) && !self.wants(Output::Glb) {
+            return Err(Invalid::new(
+                "outputs",
+                format!(
+                    "\"{}\" says which yarns stocking.ply and stocking.glb hold, but outputs \
+                     lists neither \"ply\" nor \"glb\": add one",
+                    if yarns == YarnsWritten::Loops {
+                        "loops"
+                    } else {
+                        "stitches"
+                    }
+                ),
+            ));
         }
         self.contact.validate().map_err(|e| e.within("contact"))?;
         self.leg.validate().map_err(|e| e.within("leg"))?;

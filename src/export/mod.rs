@@ -26,10 +26,29 @@ pub enum Output {
     /// PNG: the ray-traced yarn-level still of the fitted stocking on the leg (`preview.png`,
     /// `knitfit fit` only; settings in `render`).
     Preview,
+    /// The yarns in `stocking.ply` and `stocking.glb` are every real stitch's crossing points
+    /// (`knit.needles` around, one course per `knit.wale_spacing_m` of relaxed length), laid on
+    /// the skin by interpolating the fitted grid, instead of the grid's own points.
+    Stitches,
+    /// The yarns in `stocking.ply` and `stocking.glb` are every real stitch as a knitted loop
+    /// sampled as a polyline (Choi & Lo's loop, `post::loops`).
+    Loops,
 }
 
 pub(crate) fn default_outputs() -> Vec<Output> {
     vec![Output::Ply, Output::Glb, Output::Picture]
+}
+
+/// Which yarns the yarn files hold: the simulation grid's, or the real stitches'.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum YarnsWritten {
+    /// The fitted grid's points and springs (a grid point stands for a block of stitches).
+    Grid,
+    /// Every real stitch's crossing point, joined along courses and wales.
+    Stitches,
+    /// Every real stitch as a loop polyline.
+    Loops,
 }
 
 impl Output {
@@ -40,6 +59,8 @@ impl Output {
             Output::Glb => "glb",
             Output::Picture => "picture",
             Output::Preview => "preview",
+            Output::Stitches => "stitches",
+            Output::Loops => "loops",
         }
     }
 }

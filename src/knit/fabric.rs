@@ -81,6 +81,13 @@ impl Fabric {
         self.needles * self.stitch_m[0]
     }
 
+    /// The real stitch count of a stocking `relaxed_length_m` long: its wales around (the
+    /// needles, at least 3) and its courses (one per relaxed wale spacing, both ends included).
+    pub fn real_count(&self, relaxed_length_m: f64) -> [usize; 2] {
+        let courses = (relaxed_length_m / self.stitch_m[1]).round() as usize + 1;
+        [(self.needles.round() as usize).max(3), courses.max(2)]
+    }
+
     /// Real stitches a grid cell of rest size `rest_m` (course spring, wale spring) stands for,
     /// around and along.
     pub fn stitches_per_cell(&self, rest_m: [f64; 2]) -> [f64; 2] {

@@ -3,6 +3,7 @@
 //! the surfaces the files show.
 
 pub mod fields;
+pub mod lattice;
 pub mod loops;
 pub mod penetration;
 pub mod regions;

@@ -14,10 +14,12 @@ use crate::draw::density_map::{self, DensityPictureStyle};
 use crate::error::{Error, Result};
 use crate::export;
 use crate::export::gltf::GlbNode;
+use crate::export::{Output, YarnsWritten};
 use crate::knit::path::{path_to_toe, TubePath};
 use crate::knit::tube::{
     build_stocking, build_tube, end_rings, part_at, tube_axis, Centreline, TubeSpec,
 };
+use crate::knit::Fabric;
 use crate::knit::{Knit, TubeBottom, TubeHeel, RELAXED_LENGTH_FRACTION};
 use crate::leg::{
     decode_leg, find_landmarks, leaves_mesh, read_leg_file, Axis, AxisSource, Collider, Landmarks,
@@ -26,6 +28,8 @@ use crate::leg::{
 use crate::limits::{peak_memory, FitSize, MemoryCheck};
 use crate::plan::{fit_files, File, FitFile, Plan, Stage, PREVIEW_FILE};
 use crate::post::fields::{self, measure_fields, KnitFields};
+use crate::post::lattice::{lay_on_skin, lay_stitches, LaidStitches};
+use crate::post::loops::loops;
 use crate::post::penetration::{fix_penetrations, PenetrationStats};
 use crate::post::regions::{regions, stretch_by_region};
 use crate::post::stitches::{
@@ -36,13 +40,13 @@ use crate::preview::{PreviewInput, PreviewStats};
 use crate::report::{
     Bounds, ContactDetails, DensityRange, FieldRange, FitDetails, KnitDetails, LandmarkDetails,
     LegDetails, MemoryDetails, Metrics, PerDirection, SolverDetails, StageClock, TubeDetails,
-    YarnValues,
+    YarnValues, YarnsDetails,
 };
 use crate::scene::{LoadedScene, Scene, LEG_AXIS};
 use crate::sim::contact::{ContactCounters, LegContact};
 use crate::sim::{
-    relax_constrained, relax_multilevel, Constraints, LevelStats, Levels, MultilevelStats,
-    RelaxStats, SolverMethod,
+    relax_constrained, relax_multilevel, Constraints, ForceTerms, LevelStats, Levels,
+    MultilevelStats, RelaxStats, SolverMethod,
 };
 
 /// Where the leg comes from and who chose the axis.
@@ -101,17 +105,26 @@ pub fn run_fit(
     } else {
         (KnitFields::default(), KnitFields::default())
     };
-    let stretch = fields::stretch(&fit.knit);
-    let [tension, _] = fields::tension(&fit.knit, &fabric, &plan.forces, &stretch);
-    let mut yarns = fit.knit.yarn_geometry("yarns", [0.0; 3]);
-    yarns.point_attributes.insert(
-        "tension".into(),
-        tension.iter().map(|&t| t as f32).collect(),
-    );
     let slack = slack(&fit.knit);
-    yarns
-        .point_attributes
-        .insert("slack".into(), slack.iter().map(|&v| v as f32).collect());
+    // The yarns the files hold: the grid's, or the real stitches' (as crossings or as loops).
+    let mut laid = None;
+    let mut yarns = match scene.yarns_written() {
+        YarnsWritten::Grid => knit_yarns(&fit.knit, &fabric, &plan.forces),
+        written => {
+            let (real, stats) =
+                run.stage(Stage::LayStitches, || real_stitches(scene, &plan, &fit))?;
+            laid = Some(stats);
+            if written == YarnsWritten::Loops {
+                run.stage(Stage::KnitLoops, || {
+                    let mut loops = loops(&real, &fabric);
+                    lay_on_skin(&mut loops.positions, &fit.collider, fit.offset);
+                    loops
+                })
+            } else {
+                knit_yarns(&real, &fabric, &plan.forces)
+            }
+        }
+    };
     let slack = slack_details(&fit.knit, &slack, &fit.centreline, |s| {
         fit.path
             .as_ref()
@@ -157,8 +170,67 @@ pub fn run_fit(
         max_penetration_m: Some(fit.max_penetration_m),
         leg_triangles: Some(fit.leg.triangles.len()),
     };
-    let details = fit_details(scene, &fit, &leg_fields, slack, penetration_fix, preview);
+    let yarns = YarnsDetails {
+        written: scene.yarns_written(),
+        points: yarns.positions.len(),
+        segments: yarns.segments.len(),
+        real_stitches: laid,
+    };
+    let details = fit_details(
+        scene,
+        &fit,
+        &leg_fields,
+        slack,
+        penetration_fix,
+        preview,
+        yarns,
+    );
     run.finish(&loaded.name, metrics, details)
+}
+
+/// A knit's points and springs as yarns, with each point's `tension` (N/m around) and `slack`.
+fn knit_yarns(knit: &Knit, fabric: &Fabric, forces: &ForceTerms) -> YarnGeometry {
+    let stretch = fields::stretch(knit);
+    let [tension, _] = fields::tension(knit, fabric, forces, &stretch);
+    let mut yarns = knit.yarn_geometry("yarns", [0.0; 3]);
+    let as_f32 = |v: &[f64]| v.iter().map(|&x| x as f32).collect();
+    yarns
+        .point_attributes
+        .insert("tension".into(), as_f32(&tension));
+    yarns
+        .point_attributes
+        .insert("slack".into(), as_f32(&slack(knit)));
+    yarns
+}
+
+/// The knit at the real stitch count, built like the fitted grid (path, toe seam, heel pocket)
+/// and laid in it on the skin ([`lay_stitches`]).
+fn real_stitches(scene: &Scene, plan: &Plan, fit: &SolvedFit) -> Result<(Knit, LaidStitches)> {
+    let [wales, courses] = scene.fabric().real_count(fit.spec.relaxed_length_m);
+    // The stocking's length, and so the real count, is known only now: checked as a fit of
+    // that size would be (an upper bound: no solver runs on it).
+    let outputs: Vec<_> = plan.files.iter().map(|file| file.output).collect();
+    let size = FitSize {
+        tube: [wales, courses],
+        ..fit_size(scene, &outputs, fit.leg.triangles.len())
+    };
+    MemoryCheck::fit(&size, &scene.limits)
+        .enforce_real_stitches(&fit.leg.path.display().to_string())?;
+    let spec = TubeSpec {
+        wales,
+        courses,
+        ..fit.spec
+    };
+    let mut real = match &fit.path {
+        Some(path) => build_stocking(&spec, path, scene.tube.heel),
+        None => build_tube(&spec, &fit.axis, &fit.leg.positions, &fit.leg.triangles),
+    };
+    let lock_axis = match &fit.path {
+        Some(path) => path.stations[0].t,
+        None => fit.axis.direction(),
+    };
+    let laid = lay_stitches(&fit.knit, &mut real, &fit.collider, fit.offset, lock_axis);
+    Ok((real, laid))
 }
 
 /// The report's details of a finished fit.
@@ -169,6 +241,7 @@ fn fit_details(
     slack: SlackDetails,
     penetration_fix: Option<PenetrationStats>,
     preview: Option<PreviewStats>,
+    yarns: YarnsDetails,
 ) -> FitDetails {
     let (leg, spec, knit) = (&fit.leg, &fit.spec, &fit.knit);
     let covered: Vec<f64> = leg_fields
@@ -241,6 +314,7 @@ fn fit_details(
             check: fit.memory.clone(),
             peak_resident_bytes: peak_memory(),
         },
+        yarns,
         stretch_by_region: match &fit.landmarks {
             Some(landmarks) => {
                 let regions = regions(knit, &fit.centreline, fit.path.as_ref(), landmarks);
@@ -613,13 +687,17 @@ fn stocking_path(scene: &Scene, leg: &Leg, landmarks: &Landmarks) -> Result<Tube
 /// The fit's memory check: its tube, leg and files against the scene's limits.
 pub fn memory_check(scene: &Scene, plan: &Plan, leg_triangles: usize) -> MemoryCheck {
     let outputs: Vec<_> = plan.files.iter().map(|file| file.output).collect();
-    let size = FitSize {
+    MemoryCheck::fit(&fit_size(scene, &outputs, leg_triangles), &scene.limits)
+}
+
+/// The size of `scene`'s fit for the memory estimate, writing `outputs`.
+fn fit_size<'a>(scene: &Scene, outputs: &'a [Output], leg_triangles: usize) -> FitSize<'a> {
+    FitSize {
         tube: [scene.tube.wales, scene.tube.courses],
         leg_triangles,
-        outputs: &outputs,
+        outputs,
         preview_pixels: u64::from(scene.render.width) * u64::from(scene.render.height),
-    };
-    MemoryCheck::fit(&size, &scene.limits)
+    }
 }
 
 /// Fewest wales or courses on the coarsest grid of a stocking to the toe: 24 courses over a

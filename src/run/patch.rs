@@ -7,8 +7,8 @@ use std::path::Path;
 use super::{Outcome, Progress, Run, StepProgress};
 use crate::base::YarnGeometry;
 use crate::draw::patch_picture::{self, Panel, PictureStyle};
-use crate::error::Result;
-use crate::export;
+use crate::error::{Error, Result};
+use crate::export::{self, YarnsWritten};
 use crate::knit::patch::{build_patch, PatchSpec};
 use crate::knit::{Knit, Stretch, StretchAxis};
 use crate::plan::{patch_files, File, PatchFile, Plan, Stage};
@@ -35,6 +35,16 @@ pub fn run_patch(
     progress: &mut dyn Progress,
 ) -> Result<Outcome<PatchDetails>> {
     let scene = &loaded.scene;
+    if scene.yarns_written() != YarnsWritten::Grid {
+        // A patch's grid is its stitches: there is no coarser grid to lay real ones in.
+        return Err(Error::InvalidScene {
+            path: loaded.name.clone(),
+            field: "outputs".into(),
+            message: "\"stitches\" and \"loops\" lay a fit's real stitches on the leg; a \
+                      patch's points are its stitches already: leave them out for knitfit patch"
+                .into(),
+        });
+    }
     let plan = Plan::patch(scene);
     let mut run = Run::new(&plan, out_dir, loaded.inputs());
     run.prepare()?;

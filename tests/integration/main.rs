@@ -17,6 +17,7 @@ mod physics;
 mod plan;
 mod process_fuzz;
 mod properties;
+mod real_stitches;
 mod render;
 mod skin;
 mod solvers;

@@ -120,29 +120,50 @@ fn a_heavier_yarn_covers_more_of_the_same_fit() {
 #[test]
 fn an_impossible_real_stocking_is_refused_by_field_with_nothing_written() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&str, &[&str], &str); 3] = [
+    let cases: [(&str, &str, &[&str], &str); 6] = [
         (
+            "fit",
             r#"{"yarns": {"nylon": {"stiffness": 1, "denier": 0}}}"#,
             &[],
             "yarns.nylon.denier: must be a positive number, got 0",
         ),
         (
+            "fit",
             r#"{"knit": {"needles": 120}}"#,
             &[],
             "knit.needles: 120 needles are fewer than the grid's 150 wales",
         ),
         (
+            "fit",
             "{}",
             &["--resolution", "500x500"],
             "--resolution: 400 needles are fewer than the grid's 500 wales",
         ),
+        (
+            "patch",
+            r#"{"outputs": ["ply", "loops"]}"#,
+            &[],
+            "outputs: \"stitches\" and \"loops\" lay a fit's real stitches on the leg",
+        ),
+        (
+            "fit",
+            r#"{"outputs": ["ply", "stitches", "loops"]}"#,
+            &[],
+            "outputs: lists both \"stitches\" and \"loops\"",
+        ),
+        (
+            "fit",
+            r#"{"outputs": ["picture", "loops"]}"#,
+            &[],
+            "outputs: \"loops\" says which yarns stocking.ply and stocking.glb hold",
+        ),
     ];
-    for (i, (scene, flags, message)) in cases.iter().enumerate() {
+    for (i, (command, scene, flags, message)) in cases.iter().enumerate() {
         let path = dir.path().join(format!("scene{i}.json"));
         std::fs::write(&path, scene).unwrap();
         let out_dir = dir.path().join(format!("out{i}"));
         let mut args = vec![
-            "fit",
+            command,
             path.to_str().unwrap(),
             "--out",
             out_dir.to_str().unwrap(),
