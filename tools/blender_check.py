@@ -13,9 +13,14 @@ Run (after e.g. ``knitfit fit --resolution 40x40 --out /tmp/bl_out``)::
 
 ``--expect-attributes`` names the per-vertex fields the leg must carry, in either spelling
 (``_STITCH_DENSITY`` or ``stitch_density``); default: stitch_density stretch_course stretch_wale
-coverage. Every other custom attribute found in the files is compared as well, but its absence
-is not an error. Exit status: 0 all checks passed; 1 some check failed (each is printed as
-``FAIL <name>: why`` and listed at the end); 2 bad arguments, a missing file or no bpy.
+coverage. The yarns (``yarns`` in the GLB, ``stocking.ply``) must carry course, wale and
+yarn_kind, and tension too unless report.json's ``details.yarns.written`` is ``loops`` (a loop
+polyline's points carry no tension, class or slack); the stocking surface must carry course, wale,
+yarn_kind and tension. Where report.json is there, the yarn files' points and segments must be its
+``details.yarns.points`` and ``segments``. Every other custom attribute found in the files is
+compared as well, but its absence is not an error. Exit status: 0 all checks passed; 1 some
+check failed (each is printed as ``FAIL <name>: why`` and listed at the end); 2 bad arguments,
+a missing file or no bpy.
 
 What it does, starting from an empty Blender file (``read_factory_settings(use_empty=True)``)
 for each import:
@@ -54,7 +59,8 @@ keeps every vertex in file order. The script therefore does not rely on order: i
 Blender vertex count from the file (sum over primitives of the distinct indices used) and maps
 vertices by position. Positions are compared in Blender's frame: file (x, y, z) is
 (x, -z, y) there (glTF: the importer converts the vertex data, compared in mesh space; PLY: the
-object matrix above, compared in world space); both conversions are exact in float32.
+object matrix above, compared in world space, its float32 cos(pi/2) = 7.5e-8 entries taken as
+0); both conversions are then exact in float32.
 
 Importer quirk (Blender 4.5 glTF importer, read in its source and reproduced): it keeps the
 custom attributes in a Python ``set``, so their order in Blender's attribute list changes from
@@ -70,6 +76,14 @@ exist and hold the file's value, up to float32 tolerance (1e-6 relative, at leas
 Where several file vertices share a position (a seam), the Blender value must match one of
 them. Yarn edges are checked completely: the multiset of edges, as pairs of endpoint positions,
 must be the file's.
+
+Scale. A whole stocking at the real count (``outputs`` ``loops``: 3.4 million yarn points and
+segments, ``stocking.glb`` 110 MB) checks in about 14 s and 1.7 GB on two slow cores (Blender's
+own imports: under 1 s each; most of the rest sorts 6.7 million positions for the edges). The
+sampled vertices are found through the positions sorted by x (a binary search, not a pass over
+every vertex per sample). The edges are compared as sorted integer keys of their endpoints'
+position ids, exactly equal positions first; only where that finds a difference does each
+Blender vertex take the id of the nearest file position within 1e-6 m.
 """
 
 from __future__ import annotations
@@ -95,7 +109,12 @@ except ImportError as err:  # pragma: no cover - setup problem
     sys.exit(2)
 
 DEFAULT_LEG_ATTRIBUTES = ["stitch_density", "stretch_course", "stretch_wale", "coverage"]
-YARN_ATTRIBUTES = ["course", "wale", "yarn_kind", "tension"]
+# Every yarn point carries these; the grid's and `stitches` yarns also `tension` (and class,
+# slack), `loops` yarns do not (report.json details.yarns.written says which were written).
+YARN_ATTRIBUTES = ["course", "wale", "yarn_kind"]
+YARN_ATTRIBUTES_UNLESS_LOOPS = ["tension"]
+# The stocking surface carries tension whatever the yarns are.
+SURFACE_ATTRIBUTES = ["course", "wale", "yarn_kind", "tension"]
 GLB_NODES = ["leg", "yarns", "stocking"]
 POS_TOL = 1e-6  # metres
 REL_TOL = 1e-6  # float32 values go through unchanged; allow a few ulps
@@ -283,6 +302,12 @@ def blender_positions(obj, world: bool) -> np.ndarray:
     co = co.reshape(-1, 3).astype(np.float64)
     if world:
         m = np.array(obj.matrix_world, dtype=np.float64)
+        # The PLY importer's axis conversion is a quarter turn held in float32: its zeros are
+        # cos(pi/2) = 7.5e-8, which would move the vertices by up to 6e-8 m. Entries that close
+        # to -1, 0 or 1 are taken as exactly that, so the positions stay the file's.
+        snapped = np.round(m)
+        near = np.abs(m - snapped) <= 1e-6
+        m[near] = snapped[near]
         co = co @ m[:3, :3].T + m[:3, 3]
     return co
 
@@ -293,16 +318,92 @@ def blender_values(attr) -> np.ndarray:
     return vals.astype(np.float64)
 
 
-def edge_keys(positions: np.ndarray, edges: np.ndarray) -> np.ndarray:
-    """Edges as rows (a, b) of endpoint positions, a <= b lexicographically; rows sorted."""
-    a, b = positions[edges[:, 0]], positions[edges[:, 1]]
-    # a <= b lexicographically: decided by the first coordinate that differs.
-    diff = a != b
-    first = np.where(diff.any(axis=1), diff.argmax(axis=1), 0)
-    rows_i = np.arange(len(a))
-    a_first = a[rows_i, first] <= b[rows_i, first]
-    rows = np.where(a_first[:, None], np.concatenate([a, b], 1), np.concatenate([b, a], 1))
-    return rows[np.lexsort(rows.T[::-1])]
+def position_ids(*position_sets: np.ndarray) -> list[np.ndarray]:
+    """One integer per distinct position (exactly equal coordinates), shared across the sets."""
+    allpos = np.concatenate(position_sets)
+    order = np.lexsort(allpos.T[::-1])
+    srt = allpos[order]
+    new = np.ones(len(srt), dtype=bool)
+    new[1:] = (srt[1:] != srt[:-1]).any(axis=1)
+    ids = np.empty(len(allpos), dtype=np.int64)
+    ids[order] = np.cumsum(new) - 1
+    out, start = [], 0
+    for p in position_sets:
+        out.append(ids[start:start + len(p)])
+        start += len(p)
+    return out
+
+
+def ids_within_tolerance(bpos: np.ndarray, fpos: np.ndarray, fid: np.ndarray) -> np.ndarray:
+    """For each Blender position, the id (``fid``) of the nearest file position (largest
+    coordinate difference) within POS_TOL, or a negative id of its own where there is none.
+    Vectorised: the file positions sorted by x, each Blender position's window of candidates
+    walked one step at a time."""
+    order = np.argsort(fpos[:, 0], kind="stable")
+    xs = fpos[order, 0]
+    lo = np.searchsorted(xs, bpos[:, 0] - POS_TOL, side="left")
+    hi = np.searchsorted(xs, bpos[:, 0] + POS_TOL, side="right")
+    out = -1 - np.arange(len(bpos), dtype=np.int64)
+    best = np.full(len(bpos), np.inf)
+    todo = np.flatnonzero(lo < hi)
+    step = 0
+    while len(todo):
+        cand = order[lo[todo] + step]
+        dist = np.abs(fpos[cand] - bpos[todo]).max(axis=1)
+        better = (dist <= POS_TOL) & (dist < best[todo])
+        out[todo[better]] = fid[cand[better]]
+        best[todo[better]] = dist[better]
+        step += 1
+        todo = todo[lo[todo] + step < hi[todo]]
+    return out
+
+
+def edges_differing(bpos: np.ndarray, bedges: np.ndarray, fpos: np.ndarray,
+                    fedges: np.ndarray) -> int:
+    """How many edges, as unordered pairs of endpoint positions, Blender and the file do not
+    have in common (multisets; an edge missing on either side counts). Each position gets an
+    integer id, each edge the int64 key of its two ids, and the sorted keys are compared, so
+    millions of edges take seconds. Ids are first given to exactly equal positions (the
+    conversions are exact, so this is the usual verdict); only when that finds a difference is
+    each Blender vertex given the id of a file position within POS_TOL."""
+    bid, fid = position_ids(bpos, fpos)
+    n = int(max(bid.max(initial=-1), fid.max(initial=-1))) + 1
+
+    def keys(ids, edges):
+        a, b = ids[edges[:, 0]], ids[edges[:, 1]]
+        lo_, hi_ = np.minimum(a, b), np.maximum(a, b)
+        # An edge with an end at no file position (negative id) matches no file edge: -1.
+        return np.where(lo_ >= 0, lo_ * n + hi_, -1)
+
+    kb, kf = keys(bid, bedges), keys(fid, fedges)
+    if len(kb) == len(kf) and np.array_equal(np.sort(kb), np.sort(kf)):
+        return 0
+    fid_only = position_ids(fpos)[0]
+    n = int(fid_only.max(initial=-1)) + 1
+    kb = keys(ids_within_tolerance(bpos, fpos, fid_only), bedges)
+    kf = keys(fid_only, fedges)
+    ub, cb = np.unique(kb, return_counts=True)
+    uf, cf = np.unique(kf, return_counts=True)
+    _, ib, jf = np.intersect1d(ub, uf, assume_unique=True, return_indices=True)
+    common = int(np.minimum(cb[ib], cf[jf]).sum())
+    return max(len(kb), len(kf)) - common
+
+
+class PositionIndex:
+    """The points within POS_TOL (every coordinate) of a position: the points sorted by x, a
+    binary search on x, then the candidates' other coordinates checked. The same answer as
+    comparing against every point, without a pass over millions of points per lookup."""
+
+    def __init__(self, positions: np.ndarray) -> None:
+        self.positions = positions
+        self.order = np.argsort(positions[:, 0], kind="stable")
+        self.xs = positions[self.order, 0]
+
+    def near(self, p: np.ndarray) -> np.ndarray:
+        lo = np.searchsorted(self.xs, p[0] - POS_TOL, side="left")
+        hi = np.searchsorted(self.xs, p[0] + POS_TOL, side="right")
+        cand = self.order[lo:hi]
+        return np.sort(cand[np.abs(self.positions[cand] - p).max(axis=1) <= POS_TOL])
 
 
 def describe_attributes(mesh) -> list[str]:
@@ -351,15 +452,14 @@ def check_object(checks: Checks, label: str, obj_name: str, fm: FileMesh, requir
     if loose_edges and len(fm.edges):
         bedges = np.empty(ne * 2, dtype=np.int64)
         mesh.edges.foreach_get("vertices", bedges)
-        bk = edge_keys(bpos, bedges.reshape(-1, 2))
-        fk = edge_keys(fm.positions, fm.edges)
-        bad = (int((np.abs(bk - fk).max(axis=1) > POS_TOL).sum()) if bk.shape == fk.shape
-               else max(len(bk), len(fk)))
+        bad = edges_differing(bpos, bedges.reshape(-1, 2), fm.positions, fm.edges)
         ok = bad == 0
         print(f"    edges: {ne} loose edges, endpoint positions "
-              f"{'the same as' if ok else 'DIFFERENT from'} the file's {len(fk)} edges (all compared)")
+              f"{'the same as' if ok else 'DIFFERENT from'} the file's {len(fm.edges)} edges "
+              "(all compared)")
         checks.check(f"{label}.edge_endpoints", ok,
-                     f"{bad} of {len(fk)} edges (sorted by endpoint positions) differ from the file's")
+                     f"{bad} of {len(fm.edges)} edges (as pairs of endpoint positions) differ "
+                     "from the file's")
 
     # Deterministic sample of file vertices: evenly spaced, plus each attribute's extremes.
     n = len(fm.positions)
@@ -373,9 +473,10 @@ def check_object(checks: Checks, label: str, obj_name: str, fm: FileMesh, requir
     matches = []
     missing = []
     shared = 0
+    bindex, findex = PositionIndex(bpos), PositionIndex(fm.positions)
     for i in picks:
-        b = np.flatnonzero(np.abs(bpos - fm.positions[i]).max(axis=1) <= POS_TOL)
-        f = np.flatnonzero(np.abs(fm.positions - fm.positions[i]).max(axis=1) <= POS_TOL)
+        b = bindex.near(fm.positions[i])
+        f = findex.near(fm.positions[i])
         if len(b) == 0:
             missing.append(i)
         shared += len(f) > 1
@@ -553,6 +654,28 @@ def run_import(checks: Checks, label: str, fn) -> bool:
     return checks.check(f"{label}.import", result == {"FINISHED"}, f"operator returned {result}")
 
 
+def read_report_yarns(out_dir: str) -> dict | None:
+    """``details.yarns`` of the fit's report.json (what the yarn files hold), or None."""
+    try:
+        with open(os.path.join(out_dir, "report.json"), encoding="utf-8") as f:
+            yarns = json.load(f)["details"]["yarns"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    return yarns if isinstance(yarns, dict) else None
+
+
+def check_report_counts(checks: Checks, label: str, fm: FileMesh, report: dict | None) -> None:
+    """The yarn file's points and segments against report.json's ``details.yarns``."""
+    if report is None or "points" not in report or "segments" not in report:
+        return
+    ok = len(fm.positions) == report["points"] and len(fm.edges) == report["segments"]
+    print(f"  {label} yarns: {len(fm.positions)} points, {len(fm.edges)} segments in the file; "
+          f"report.json: {report['points']} points, {report['segments']} segments")
+    checks.check(f"{label}.report_counts", ok,
+                 f"file {len(fm.positions)} points / {len(fm.edges)} segments, report.json "
+                 f"{report['points']} / {report['segments']}")
+
+
 def main(argv: list[str]) -> int:
     parser = argparse.ArgumentParser(
         description="Import knitfit's stocking.glb, leg.ply and stocking.ply into Blender (bpy) "
@@ -573,11 +696,22 @@ def main(argv: list[str]) -> int:
         return 2
     leg_glb = [gltf_name(a) for a in args.expect_attributes]
     leg_ply = [ply_name(a) for a in args.expect_attributes]
-    yarn_glb = [gltf_name(a) for a in YARN_ATTRIBUTES]
+    report = read_report_yarns(args.out_dir)
+    written = (report or {}).get("written")
+    yarn_required = YARN_ATTRIBUTES + (YARN_ATTRIBUTES_UNLESS_LOOPS if written != "loops" else [])
+    yarn_glb = [gltf_name(a) for a in yarn_required]
+    surface_glb = [gltf_name(a) for a in SURFACE_ATTRIBUTES]
 
     print(f"knitfit Blender check of {os.path.abspath(args.out_dir)} "
           f"(Blender {bpy.app.version_string}, bpy module)")
     print(f"required leg attributes: {' '.join(leg_glb) or '(none)'}")
+    if report is None:
+        print("yarns written: unknown (no report.json details.yarns); assumed to carry "
+              f"{' '.join(yarn_glb)}")
+    else:
+        print(f"yarns written: {written!r} (report.json: {report.get('points')} points, "
+              f"{report.get('segments')} segments); required yarn attributes: "
+              f"{' '.join(yarn_glb)}")
     checks = Checks()
 
     # --- stocking.glb
@@ -592,10 +726,12 @@ def main(argv: list[str]) -> int:
     if meshes or roots:
         checks.check("glb.file_nodes", all(n in meshes for n in GLB_NODES),
                      f"file root nodes with meshes: {sorted(meshes)}; wanted {GLB_NODES}")
+        if "yarns" in meshes:
+            check_report_counts(checks, "glb.yarns", meshes["yarns"], report)
         fresh_blender()
         if run_import(checks, "glb", lambda: bpy.ops.import_scene.gltf(filepath=path)):
             print(f"  Blender objects: {', '.join(sorted(o.name for o in bpy.data.objects))}")
-            required = {"leg": leg_glb, "yarns": yarn_glb, "stocking": yarn_glb}
+            required = {"leg": leg_glb, "yarns": yarn_glb, "stocking": surface_glb}
             for node in GLB_NODES:
                 if node in meshes:
                     check_object(checks, f"glb.{node}", node, meshes[node], required[node],
@@ -606,7 +742,7 @@ def main(argv: list[str]) -> int:
     # --- leg.ply, stocking.ply
     for fname, obj_name, required, edges in (
         ("leg.ply", "leg", leg_ply, False),
-        ("stocking.ply", "stocking", YARN_ATTRIBUTES, True),
+        ("stocking.ply", "stocking", [ply_name(a) for a in yarn_required], True),
     ):
         path = paths[fname]
         print(f"\n{path}: bpy.ops.wm.ply_import (forward_axis='NEGATIVE_Z', up_axis='Y', "
@@ -617,6 +753,8 @@ def main(argv: list[str]) -> int:
         except Exception as err:  # noqa: BLE001
             checks.check(f"{label}.read", False, f"{type(err).__name__}: {err}")
             continue
+        if edges:
+            check_report_counts(checks, label, fm, report)
         fresh_blender()
         if run_import(checks, label, lambda: bpy.ops.wm.ply_import(
                 filepath=path, forward_axis="NEGATIVE_Z", up_axis="Y")):
