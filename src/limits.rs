@@ -327,7 +327,7 @@ impl MemoryCheck {
                 e.tube[0], e.tube[1]
             ),
             "ask for fewer knit.needles or a larger stitch (knit.wale_spacing_m), or leave \
-             \"stitches\" and \"loops\" out of outputs",
+             \"stitches\", \"loops\" and \"preview\" out of outputs",
         ))
     }
 

@@ -376,7 +376,9 @@ impl Plan {
         // The penetration fix reroutes yarn polylines: without a file (or a yarn picture) that
         // shows them, there is nothing for it to do.
         let yarn_preview = scene.wants(Output::Preview) && scene.render.mode == RenderMode::Yarn;
-        let polylines = scene.wants(Output::Glb) || scene.wants(Output::Ply) || yarn_preview;
+        // The preview draws the real loops unmended: a loop dipping into the skin by a few
+        // micrometres is hidden where it dips, as in the file it would be mended.
+        let polylines = scene.wants(Output::Glb) || scene.wants(Output::Ply);
         let skip_fix = !polylines && effects.contains(&Effect::PenetrationFix);
         if skip_fix {
             effects.retain(|&e| e != Effect::PenetrationFix);
@@ -385,8 +387,8 @@ impl Plan {
         if skip_fix {
             plan.leave_out(
                 Stage::PenetrationFix.to_string(),
-                "effects lists \"penetration_fix\", but no output draws a yarn polyline \
-                 (glb, ply or a yarn preview)",
+                "effects lists \"penetration_fix\", but no file holds a yarn polyline (glb or \
+                 ply)",
             );
         }
         plan.add(
@@ -473,32 +475,30 @@ impl Plan {
                 "no output holds the leg (glb, ply, picture or a density preview)",
             );
         }
-        match scene.yarns_written() {
-            YarnsWritten::Grid => {}
-            written => {
-                let words = if written == YarnsWritten::Loops {
-                    "loops"
-                } else {
-                    "stitches"
-                };
-                plan.add(
-                    Stage::LayStitches,
-                    format!(
-                        "outputs lists \"{words}\": the knit at its real count ({} needles \
-                         around, a course per {} m), placed in the fitted grid and laid on the \
-                         skin",
-                        scene.fabric().needles.round(),
-                        scene.knit.wale_spacing_m
-                    ),
-                );
-                if written == YarnsWritten::Loops {
-                    plan.add(
-                        Stage::KnitLoops,
-                        "outputs lists \"loops\": every real stitch as a loop polyline (Choi & \
-                         Lo 2003)",
-                    );
-                }
-            }
+        let written = scene.yarns_written();
+        let for_files = match written {
+            YarnsWritten::Grid => None,
+            YarnsWritten::Stitches => Some("outputs lists \"stitches\""),
+            YarnsWritten::Loops => Some("outputs lists \"loops\""),
+        };
+        let for_preview = yarn_preview.then_some("the yarn preview draws every real stitch");
+        if let Some(why) = for_files.or(for_preview) {
+            plan.add(
+                Stage::LayStitches,
+                format!(
+                    "{why}: the knit at its real count ({} needles around, a course per {} m), \
+                     placed in the fitted grid and laid on the skin",
+                    scene.fabric().needles.round(),
+                    scene.knit.wale_spacing_m
+                ),
+            );
+        }
+        let loops_for_files = (written == YarnsWritten::Loops).then_some("outputs lists \"loops\"");
+        if let Some(why) = loops_for_files.or(for_preview) {
+            plan.add(
+                Stage::KnitLoops,
+                format!("{why}: every real stitch as a loop polyline (Choi & Lo 2003)"),
+            );
         }
         if plan.effects.contains(&Effect::PenetrationFix) {
             plan.add(
@@ -687,18 +687,16 @@ mod tests {
     }
 
     #[test]
-    fn a_yarn_preview_alone_still_gets_the_penetration_fix_but_no_leg_attributes() {
+    fn a_yarn_preview_alone_draws_real_loops_without_the_fix_or_leg_attributes() {
         let mut scene = Scene::load(None).unwrap();
         scene.outputs = vec![Output::Preview];
         let plan = Plan::fit(&scene);
-        assert!(
-            plan.has(Stage::PenetrationFix),
-            "yarns drawn must follow the skin"
-        );
+        assert!(plan.has(Stage::LayStitches) && plan.has(Stage::KnitLoops));
+        assert!(!plan.has(Stage::PenetrationFix), "no yarn file to mend");
         assert!(!plan.has(Stage::LegAttributes));
         scene.render.mode = RenderMode::Density;
         let plan = Plan::fit(&scene);
-        assert!(!plan.has(Stage::PenetrationFix));
+        assert!(!plan.has(Stage::PenetrationFix) && !plan.has(Stage::LayStitches));
         assert!(
             plan.has(Stage::LegAttributes),
             "the density mode colours by them"

@@ -275,7 +275,7 @@ pub fn loops(knit: &Knit, fabric: &Fabric) -> YarnGeometry {
     point_attributes.insert("wale".to_string(), wale_attr);
     point_attributes.insert("yarn_kind".to_string(), kind_attr);
     YarnGeometry {
-        name: "loops".to_string(),
+        name: "yarns".to_string(),
         offset_m: [0.0; 3],
         positions,
         point_attributes,

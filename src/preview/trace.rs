@@ -263,7 +263,7 @@ fn yarn_layer(mesh: &TriMesh, yarns: &YarnGeometry, index: &YarnIndex) -> f64 {
         .get(distances.len() * 99 / 100)
         .copied()
         .unwrap_or(0.0);
-    (p99 + r).max(4.0 * r).min(2.0 * index.cell_size())
+    (p99 + r).max(4.0 * r).min(6.0 * index.cell_size())
 }
 
 /// One sample's outcome.
@@ -494,7 +494,7 @@ impl Context<'_> {
         let view = -dir;
         match self.settings.mode {
             RenderMode::Yarn => {
-                let stretch = (scene.layer_m / cos.max(1e-6)).min(2.0 * scene.yarns.cell_size());
+                let stretch = (scene.layer_m / cos.max(1e-6)).min(3.0 * scene.layer_m);
                 let yarn = scene
                     .yarns
                     .nearest_hit(&eye, &dir, (t_skin - stretch).max(0.0), t_skin);

@@ -13,7 +13,7 @@
 //! angle a ray crosses the layer over a longer stretch and meets more yarns, so the outline of
 //! the leg darkens by itself, as a real stocking's does (paper §9).
 //!
-//! The grid: cubic cells of side ≈ the median segment length; every segment is listed in each
+//! The grid: cubic cells of side ≈ three median segment lengths; every segment is listed in each
 //! cell its radius-inflated bounding box touches. A query walks the cells the ray's stretch
 //! through the yarn layer crosses, front to back, and stops once the nearest hit is settled. Cells are found through a hash map
 //! with a fixed multiplicative hash (no per-process seed, so behaviour is reproducible), its
@@ -74,6 +74,12 @@ pub struct YarnIndex {
 /// (cell, segment) pairs to this many per segment.
 const LARGE_CAPSULE_CELLS: u64 = 512;
 
+/// Side of a grid cell in median segment lengths. Real loops have segments a tenth of a
+/// millimetre long: cells of one segment listed each in eight cells or more, and building the
+/// grid (sorting and hashing its pairs) cost more than tracing a 1024² picture at 4 samples a
+/// pixel; at three, a capsule touches one or two cells and a cell holds a dozen capsules.
+const CELL_PER_MEDIAN_SEGMENT: f64 = 3.0;
+
 /// Cell coordinates are packed in 21 bits each; a grid wider than this many cells is coarsened.
 const MAX_CELLS_PER_AXIS: f64 = 2_000_000.0;
 
@@ -120,10 +126,15 @@ impl YarnIndex {
             }
         }
         let mut lengths: Vec<f64> = capsules.iter().map(|c| (c.b - c.a).norm()).collect();
-        lengths.sort_by(f64::total_cmp);
-        let median = lengths.get(lengths.len() / 2).copied().unwrap_or(1.0);
+        let middle = lengths.len() / 2;
+        let median = match lengths.is_empty() {
+            true => 1.0,
+            false => *lengths.select_nth_unstable_by(middle, f64::total_cmp).1,
+        };
         let extent = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
-        let mut cell = median.max(4.0 * max_radius).max(1e-9);
+        let mut cell = (CELL_PER_MEDIAN_SEGMENT * median)
+            .max(4.0 * max_radius)
+            .max(1e-9);
         if extent.is_finite() && extent / cell > MAX_CELLS_PER_AXIS {
             cell = extent / MAX_CELLS_PER_AXIS;
         }

@@ -106,24 +106,27 @@ pub fn run_fit(
         (KnitFields::default(), KnitFields::default())
     };
     let slack = slack(&fit.knit);
-    // The yarns the files hold: the grid's, or the real stitches' (as crossings or as loops).
-    let mut laid = None;
-    let mut yarns = match scene.yarns_written() {
-        YarnsWritten::Grid => knit_yarns(&fit.knit, &fabric, &plan.forces),
-        written => {
-            let (real, stats) =
-                run.stage(Stage::LayStitches, || real_stitches(scene, &plan, &fit))?;
-            laid = Some(stats);
-            if written == YarnsWritten::Loops {
-                run.stage(Stage::KnitLoops, || {
-                    let mut loops = loops(&real, &fabric);
-                    lay_on_skin(&mut loops.positions, &fit.collider, fit.offset);
-                    loops
-                })
-            } else {
-                knit_yarns(&real, &fabric, &plan.forces)
-            }
+    // The real stitches, for the yarn files (`stitches`, `loops`) or the preview, which draws
+    // every stitch as a loop so that its sheerness comes out of the knit's structure.
+    let real = match plan.has(Stage::LayStitches) {
+        true => Some(run.stage(Stage::LayStitches, || real_stitches(scene, &plan, &fit))?),
+        false => None,
+    };
+    let laid = real.as_ref().map(|(_, stats)| *stats);
+    let real_loops = match (&real, plan.has(Stage::KnitLoops)) {
+        (Some((real, _)), true) => Some(run.stage(Stage::KnitLoops, || loops(real, &fabric))),
+        _ => None,
+    };
+    // The yarns the files hold: the grid's, or the real stitches' (as crossings or as loops,
+    // laid on the skin: a loop bulges past its stitch's corners).
+    let mut yarns = match (scene.yarns_written(), &real, &real_loops) {
+        (YarnsWritten::Stitches, Some((real, _)), _) => knit_yarns(real, &fabric, &plan.forces),
+        (YarnsWritten::Loops, _, Some(loops)) => {
+            let mut loops = loops.clone();
+            lay_on_skin(&mut loops.positions, &fit.collider, fit.offset);
+            loops
         }
+        _ => knit_yarns(&fit.knit, &fabric, &plan.forces),
     };
     let slack = slack_details(&fit.knit, &slack, &fit.centreline, |s| {
         fit.path
@@ -138,10 +141,16 @@ pub fn run_fit(
         yarns = fixed;
         penetration_fix = Some(stats);
     }
+    // The stocking surface is the fitted grid's: it reads the grid's yarn attributes.
+    let grid_yarns = match scene.yarns_written() {
+        YarnsWritten::Grid => None,
+        _ => Some(knit_yarns(&fit.knit, &fabric, &plan.forces)),
+    };
     let products = FitProducts {
         scene,
         knit: &fit.knit,
         knit_fields: &knit_fields,
+        grid_yarns: grid_yarns.as_ref().unwrap_or(&yarns),
         yarns: &yarns,
         leg_mesh: leg_surface(&fit.leg, &leg_fields),
     };
@@ -154,7 +163,9 @@ pub fn run_fit(
     let mut preview = None;
     if plan.has(Stage::RenderPreview) {
         let (bytes, stats) = run.stage(Stage::RenderPreview, || {
-            let input = PreviewInput::new(&products.leg_mesh, &yarns, &scene.yarns);
+            // The real loops; a density preview draws no yarn.
+            let drawn = real_loops.as_ref().unwrap_or(&yarns);
+            let input = PreviewInput::new(&products.leg_mesh, drawn, &scene.yarns);
             crate::preview::encode_preview(input, &scene.render, PREVIEW_FILE)
         })?;
         run.keep(PREVIEW_FILE, bytes);
@@ -1085,6 +1096,8 @@ struct FitProducts<'a> {
     scene: &'a Scene,
     knit: &'a Knit,
     knit_fields: &'a KnitFields,
+    /// The grid's yarns (the same as `yarns` unless the files hold the real stitches).
+    grid_yarns: &'a YarnGeometry,
     yarns: &'a YarnGeometry,
     leg_mesh: SurfaceMesh,
 }
@@ -1095,7 +1108,7 @@ impl FitProducts<'_> {
         let comments = || vec![format!("knitfit {} fit", env!("CARGO_PKG_VERSION"))];
         match file {
             FitFile::StockingGlb => {
-                let stocking = stocking_surface(self.knit, self.knit_fields, self.yarns);
+                let stocking = stocking_surface(self.knit, self.knit_fields, self.grid_yarns);
                 let yarns = &self.scene.yarns;
                 export::gltf::write_nodes_glb(
                     &[

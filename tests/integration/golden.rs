@@ -69,7 +69,7 @@ fn a_small_fit_writes_the_bytes_it_always_has() {
             ("stocking.ply", "63c2db6684f28125"),
             ("leg.ply", "f967b2145b991b6f"),
             ("density.png", "0c7bbf6efea7ed2f"),
-            ("preview.png", "1027bb933f6136d6"),
+            ("preview.png", "8d28b8ee60a55393"),
         ])
     );
 }

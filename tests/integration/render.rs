@@ -327,8 +327,12 @@ fn a_fit_without_preview_in_its_outputs_renders_nothing_and_one_with_it_writes_p
     let r = report(&with);
     let stages = stage_names(&r);
     assert!(stages.contains(&"render preview".to_string()), "{stages:?}");
+    // The preview draws every real stitch as a loop; no yarn file, so nothing to mend.
+    for stage in ["lay stitches", "knit loops"] {
+        assert!(stages.contains(&stage.to_string()), "{stages:?}");
+    }
     assert!(
-        stages.contains(&"penetration fix".to_string()),
+        !stages.contains(&"penetration fix".to_string()),
         "{stages:?}"
     );
     let png = image::open(with.join("preview.png")).unwrap();
@@ -543,4 +547,88 @@ fn the_spp_sweep_prints_time_and_error_per_sample_count_and_writes_nothing() {
     );
     assert!(rows[2][2] < rows[0][2], "error falls with samples: {text}");
     assert_eq!(files_in(dir.path()), ["stocking.glb"]);
+}
+
+/// The rendered stocking's yarn-covered share at the ankle and the thigh, facing the camera
+/// (|cos| ≥ 0.9), against the leg's `_COVERAGE` there, for a fit of the procedural leg whose
+/// yarn files hold every real stitch as a loop: `[(rendered, _COVERAGE); 2]`, ankle first.
+fn loop_sheerness(needles: u32, stitch_m: [f64; 2], denier: f64) -> [(f64, f64); 2] {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = serde_json::json!({
+        "knit": { "needles": needles, "course_spacing_m": stitch_m[0], "wale_spacing_m": stitch_m[1] },
+        "yarns": { "nylon": { "stiffness": 1.0, "denier": denier },
+                   "support": { "stiffness": 10.0, "denier": 2.0 * denier } },
+        "effects": ["yarn_connection", "alternating_yarns", "contact", "penetration_fix"],
+        "outputs": ["glb", "loops"],
+        "tube": { "wales": 60, "courses": 60 }
+    });
+    let scene_path = write(dir.path(), "scene.json", &scene.to_string());
+    let leg = procedural_leg();
+    let args = [
+        "fit",
+        scene_path.to_str().unwrap(),
+        "--leg",
+        leg.to_str().unwrap(),
+    ];
+    let out = knitfit(dir.path(), &[&args[..], &["-q"]].concat());
+    assert!(out.status.success(), "{}", stderr(&out));
+    let scene = Scene::load(Some(&scene_path)).unwrap();
+    let stocking = read_stocking_glb(&dir.path().join("out/stocking.glb")).unwrap();
+    let (lo, hi) = stocking
+        .yarns
+        .positions
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(lo, hi), p| {
+            (lo.min(p[1] as f32), hi.max(p[1] as f32))
+        });
+    let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
+    let b = render_preview(input, &tall_settings(), "test")
+        .unwrap()
+        .buffers;
+    let l = hi - lo;
+    let ankle = band(&b, (lo + 0.04 * l, lo + 0.14 * l), (0.9, 1.0));
+    let thigh = band(&b, (hi - 0.22 * l, hi - 0.08 * l), (0.9, 1.0));
+    assert!(ankle.2 > 100 && thigh.2 > 100, "bands too small");
+    [(ankle.0, ankle.1), (thigh.0, thigh.1)]
+}
+
+#[test]
+fn the_loops_are_as_sheer_as_the_coverage_says_and_a_finer_yarn_is_sheerer() {
+    // 10, 20 and 40 den on a stitch 4× the default's each way and yarn 16× the denier (4× the
+    // diameter): the same geometry as the real stocking, scaled, with 16× fewer loops to
+    // render. `KNITFIT_REAL_STITCH=1` measures the real 400-needle stocking instead (slow).
+    let real = std::env::var_os("KNITFIT_REAL_STITCH").is_some();
+    let (needles, stitch, scale) = match real {
+        true => (400, [0.0005, 0.00074], 1.0),
+        false => (100, [0.002, 0.00296], 16.0),
+    };
+    let mut previous: Option<[(f64, f64); 2]> = None;
+    for denier in [10.0, 20.0, 40.0] {
+        let [ankle, thigh] = loop_sheerness(needles, stitch, scale * denier);
+        eprintln!(
+            "{denier} den: skin seen at the ankle {:.3} (1 − _COVERAGE {:.3}), at the thigh {:.3} \
+             (1 − _COVERAGE {:.3})",
+            1.0 - ankle.0,
+            1.0 - ankle.1,
+            1.0 - thigh.0,
+            1.0 - thigh.1
+        );
+        assert!(
+            thigh.0 < ankle.0,
+            "{denier} den: the thigh is stretched sheerer"
+        );
+        // `_COVERAGE` lays one strip per course and two legs per wale (2b + a of yarn per
+        // stitch); a loop holds about 1.47× that (post::loops), and its crossings overlap, so
+        // the loops cover more than the strips, by less than their extra yarn.
+        for (name, (rendered, coverage)) in [("ankle", ankle), ("thigh", thigh)] {
+            assert!(
+                rendered > coverage && rendered < 1.47 * coverage,
+                "{denier} den, {name}: rendered {rendered:.3} vs _COVERAGE {coverage:.3}"
+            );
+        }
+        if let Some([a, t]) = previous {
+            assert!(ankle.0 > a.0 && thigh.0 > t.0, "{denier} den is not denser");
+        }
+        previous = Some([ankle, thigh]);
+    }
 }
