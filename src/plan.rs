@@ -373,8 +373,8 @@ impl Plan {
         if !effects.contains(&Effect::Contact) {
             effects.push(Effect::Contact);
         }
-        // The penetration fix reroutes yarn polylines: without a file (or a yarn picture) that
-        // shows them, there is nothing for it to do.
+        // The penetration fix reroutes the yarn polylines of the files: without a file that holds
+        // them, there is nothing for it to do.
         let yarn_preview = scene.wants(Output::Preview) && scene.render.mode == RenderMode::Yarn;
         // The preview draws the real loops unmended: a loop dipping into the skin by a few
         // micrometres is hidden where it dips, as in the file it would be mended.

@@ -117,16 +117,19 @@ pub fn run_fit(
         (Some((real, _)), true) => Some(run.stage(Stage::KnitLoops, || loops(real, &fabric))),
         _ => None,
     };
-    // The yarns the files hold: the grid's, or the real stitches' (as crossings or as loops,
-    // laid on the skin: a loop bulges past its stitch's corners).
-    let mut yarns = match (scene.yarns_written(), &real, &real_loops) {
-        (YarnsWritten::Stitches, Some((real, _)), _) => knit_yarns(real, &fabric, &plan.forces),
-        (YarnsWritten::Loops, _, Some(loops)) => {
-            let mut loops = loops.clone();
-            lay_on_skin(&mut loops.positions, &fit.collider, fit.offset);
-            loops
+    // The yarns the files hold: the grid's, or the real stitches' (as crossings, or as loops
+    // laid on the skin: a loop bulges past its stitch's corners). Loops made only for the
+    // preview are drawn as they are: a loop dipping a few micrometres into the skin is hidden
+    // where it dips.
+    let (mut yarns, preview_loops) = match (scene.yarns_written(), &real, real_loops) {
+        (YarnsWritten::Stitches, Some((real, _)), loops) => {
+            (knit_yarns(real, &fabric, &plan.forces), loops)
         }
-        _ => knit_yarns(&fit.knit, &fabric, &plan.forces),
+        (YarnsWritten::Loops, _, Some(mut loops)) => {
+            lay_on_skin(&mut loops.positions, &fit.collider, fit.offset);
+            (loops, None)
+        }
+        (_, _, loops) => (knit_yarns(&fit.knit, &fabric, &plan.forces), loops),
     };
     let slack = slack_details(&fit.knit, &slack, &fit.centreline, |s| {
         fit.path
@@ -163,8 +166,9 @@ pub fn run_fit(
     let mut preview = None;
     if plan.has(Stage::RenderPreview) {
         let (bytes, stats) = run.stage(Stage::RenderPreview, || {
-            // The real loops; a density preview draws no yarn.
-            let drawn = real_loops.as_ref().unwrap_or(&yarns);
+            // The real loops (those of the files where they hold loops); a density preview
+            // draws no yarn.
+            let drawn = preview_loops.as_ref().unwrap_or(&yarns);
             let input = PreviewInput::new(&products.leg_mesh, drawn, &scene.yarns);
             crate::preview::encode_preview(input, &scene.render, PREVIEW_FILE)
         })?;
@@ -223,6 +227,7 @@ fn real_stitches(scene: &Scene, plan: &Plan, fit: &SolvedFit) -> Result<(Knit, L
     let outputs: Vec<_> = plan.files.iter().map(|file| file.output).collect();
     let size = FitSize {
         tube: [wales, courses],
+        loops: plan.has(Stage::KnitLoops),
         ..fit_size(scene, &outputs, fit.leg.triangles.len())
     };
     MemoryCheck::fit(&size, &scene.limits)
@@ -708,6 +713,8 @@ fn fit_size<'a>(scene: &Scene, outputs: &'a [Output], leg_triangles: usize) -> F
         leg_triangles,
         outputs,
         preview_pixels: u64::from(scene.render.width) * u64::from(scene.render.height),
+        // Loops are drawn for the real stitches, checked once their count is known.
+        loops: false,
     }
 }
 

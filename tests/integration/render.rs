@@ -80,10 +80,14 @@ fn band(b: &PreviewBuffers, heights: (f32, f32), facing: (f32, f32)) -> (f64, f6
     (yarn / k, attr / k, n)
 }
 
-/// Lowest and highest yarn height, metres.
+/// Lowest and highest yarn height of the thick fit, metres.
 fn stocking_heights() -> (f32, f32) {
     let (_, glb, _) = thick_fit();
-    let yarns = read_stocking_glb(glb).unwrap().yarns;
+    yarn_heights(&read_stocking_glb(glb).unwrap().yarns)
+}
+
+/// Lowest and highest height of `yarns`, metres.
+fn yarn_heights(yarns: &YarnGeometry) -> (f32, f32) {
     yarns
         .positions
         .iter()
@@ -574,13 +578,7 @@ fn loop_sheerness(needles: u32, stitch_m: [f64; 2], denier: f64) -> [(f64, f64);
     assert!(out.status.success(), "{}", stderr(&out));
     let scene = Scene::load(Some(&scene_path)).unwrap();
     let stocking = read_stocking_glb(&dir.path().join("out/stocking.glb")).unwrap();
-    let (lo, hi) = stocking
-        .yarns
-        .positions
-        .iter()
-        .fold((f32::MAX, f32::MIN), |(lo, hi), p| {
-            (lo.min(p[1] as f32), hi.max(p[1] as f32))
-        });
+    let (lo, hi) = yarn_heights(&stocking.yarns);
     let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
     let b = render_preview(input, &tall_settings(), "test")
         .unwrap()
