@@ -66,6 +66,8 @@ pub enum Stage {
     KnitLoops,
     /// Reroute yarn segments that cut through the leg over the skin (paper §6.3).
     PenetrationFix,
+    /// The knit as `stocking.glb`'s sheer surface, lifted clear of the skin.
+    StockingSurface,
     /// Build a fresh patch for one stretch of the patch experiment.
     KnitPatch(Stretch),
     /// Relax that patch with its edges held.
@@ -98,6 +100,7 @@ impl fmt::Display for Stage {
             Stage::LayStitches => f.write_str("lay stitches"),
             Stage::KnitLoops => f.write_str("knit loops"),
             Stage::PenetrationFix => f.write_str("penetration fix"),
+            Stage::StockingSurface => f.write_str("stocking surface"),
             Stage::KnitPatch(stretch) => write!(f, "knit {stretch}"),
             Stage::RelaxPatch(stretch) => write!(f, "relax {stretch}"),
             Stage::MeasureStitches => f.write_str("measure stitches"),
@@ -504,6 +507,13 @@ impl Plan {
             plan.add(
                 Stage::PenetrationFix,
                 "effect penetration_fix, for the yarn polylines written",
+            );
+        }
+        if scene.wants(Output::Glb) {
+            plan.add(
+                Stage::StockingSurface,
+                "outputs lists \"glb\": the knit as a sheer surface, lifted clear of the skin so \
+                 that viewers tell the two apart",
             );
         }
         for (output, file) in FIT_FILES {

@@ -117,6 +117,8 @@ pub struct FitDetails {
     pub knit: KnitDetails,
     /// The yarns `stocking.ply` and `stocking.glb` hold.
     pub yarns: YarnsDetails,
+    /// `stocking.glb`'s stocking surface; `null` without `glb` in `outputs`.
+    pub stocking_surface: Option<StockingSurfaceDetails>,
     /// Stitch density over the leg's vertices that yarn covers.
     pub stitch_density_per_cm2: DensityRange,
     /// Coverage (0–1) over the covered leg vertices.
@@ -427,6 +429,18 @@ pub struct YarnsDetails {
     pub segments: usize,
     /// The real-count knit the stitches or loops come from; `null` for the grid's yarns.
     pub real_stitches: Option<LaidStitches>,
+}
+
+/// `stocking.glb`'s sheer stocking surface, lifted off the knit (`post::surfaces`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StockingSurfaceDetails {
+    /// How far it is lifted along its normals, metres.
+    pub lift_m: f64,
+    /// The clearance from the skin every triangle's corners, edge midpoints and centre keep,
+    /// metres.
+    pub clearance_m: f64,
+    /// Triangles still closer than that after the further lifting (0 expected).
+    pub triangles_dipping: usize,
 }
 
 /// The real stocking a fit's grid stands for (`knit::Fabric`).

@@ -211,10 +211,11 @@ class FileMesh:
 
 
 def glb_meshes(path: str) -> tuple[dict[str, FileMesh], list[str]]:
-    """The root nodes' meshes of a GLB, keyed by node name, and all root node names."""
+    """The root nodes' meshes of a GLB, keyed by node name, and all root node names, over every
+    scene: `knitfit fit` keeps the yarn lines in a second scene, which Blender imports as a
+    collection left out of the view layer."""
     doc, bin_chunk = read_glb(path)
-    scene = doc["scenes"][doc.get("scene", 0)]
-    roots = [doc["nodes"][i] for i in scene["nodes"]]
+    roots = [doc["nodes"][i] for scene in doc["scenes"] for i in scene["nodes"]]
     out = {}
     for node in roots:
         if "mesh" not in node:

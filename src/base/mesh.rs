@@ -3,6 +3,34 @@
 
 use std::collections::BTreeMap;
 
+/// An opaque surface's look, as core glTF's metallic-roughness material gives it: what the leg
+/// is drawn in. Colours are linear RGB 0–1.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// The material's name.
+    pub name: String,
+    /// Base colour, linear RGB 0–1.
+    pub base_colour: [f64; 3],
+    /// Metalness 0–1.
+    pub metallic: f64,
+    /// Roughness 0–1.
+    pub roughness: f64,
+}
+
+impl Material {
+    /// Skin in daylight, neutral enough to show a stocking over it: linear RGB (0.64, 0.42,
+    /// 0.33), sRGB about (209, 172, 154) — a light skin tone, as a reference rather than a
+    /// portrait; dielectric, roughness 0.5 (skin's sheen, not a mirror).
+    pub fn skin() -> Material {
+        Material {
+            name: "skin".into(),
+            base_colour: [0.64, 0.42, 0.33],
+            metallic: 0.0,
+            roughness: 0.5,
+        }
+    }
+}
+
 /// A triangle surface to write: the leg, or the fitted stocking as a surface.
 ///
 /// Positions in metres, Y up; triangles counter-clockwise seen from outside. Point attributes

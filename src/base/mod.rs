@@ -8,5 +8,5 @@ pub mod settings;
 pub mod yarn;
 
 pub use frame::{perpendicular_frame, Vec3};
-pub use mesh::{vertex_normals, SurfaceMesh};
+pub use mesh::{vertex_normals, Material, SurfaceMesh};
 pub use yarn::{Direction, PerYarn, Segment, YarnGeometry, YarnKind};

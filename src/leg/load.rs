@@ -9,6 +9,7 @@
 //! the file axis nearest the body's own up ([`anatomical_up`]). The mesh is checked: it must have
 //! triangles, finite coordinates, no compressed geometry, and a plausible height.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use nalgebra::{Matrix4, Point3, Vector3};
@@ -17,6 +18,7 @@ use super::clean::{clean_mesh, Cleaned};
 use super::landmarks::anatomical_up;
 use super::orient::orient_outward;
 use super::ply::{self, PlyHeader};
+use crate::base::Material;
 use crate::error::{Error, Result};
 use crate::leg::{Units, UpAxis, UpChoice};
 
@@ -44,6 +46,10 @@ pub struct Leg {
     pub up: Vector3<f64>,
     /// What cleaning removed.
     pub cleaned: Cleaned,
+    /// The material most of the file's triangles had, where it is one `stocking.glb` can carry
+    /// over (a glTF material without a base-colour texture: the leg is written without texture
+    /// coordinates); `None` for a PLY file or an untextured-material-less glTF.
+    pub material: Option<Material>,
 }
 
 /// Shortest and tallest leg accepted, metres: outside this range the file is almost certainly
@@ -79,6 +85,7 @@ impl Leg {
             up_axis_found: false,
             up: Vector3::y(),
             cleaned,
+            material: None,
         }
     }
 
@@ -322,6 +329,7 @@ pub fn decode_leg(file: LegFile, units: Units, choice: UpChoice) -> Result<Leg> 
             FileMesh {
                 positions_file: mesh.positions,
                 triangles: mesh.triangles,
+                material: None,
             }
         }
     };
@@ -365,6 +373,7 @@ pub fn decode_leg(file: LegFile, units: Units, choice: UpChoice) -> Result<Leg> 
         up_axis_found: choice == UpChoice::Auto,
         up,
         cleaned,
+        material: mesh.material,
     };
     check_height(&leg)?;
     Ok(leg)
@@ -376,6 +385,8 @@ struct FileMesh {
     positions_file: Vec<Point3<f64>>,
     /// Triangles as indices into `positions_file`, wound as in the file.
     triangles: Vec<[u32; 3]>,
+    /// See [`Leg::material`].
+    material: Option<Material>,
 }
 
 /// The triangles under `gltf`'s default scene, node transforms applied.
@@ -406,9 +417,11 @@ fn decode_gltf(path: &Path, gltf: gltf::Gltf) -> Result<FileMesh> {
             "has no triangles under its default scene".into()
         }));
     }
+    let material = mesh.carried_material(&gltf.document);
     Ok(FileMesh {
         positions_file: mesh.positions,
         triangles: mesh.triangles,
+        material,
     })
 }
 
@@ -545,6 +558,8 @@ struct MeshCollector {
     positions: Vec<Point3<f64>>,
     triangles: Vec<[u32; 3]>,
     other_primitives: usize,
+    /// Triangles per glTF material index.
+    triangles_by_material: BTreeMap<usize, usize>,
 }
 
 impl MeshCollector {
@@ -632,6 +647,7 @@ impl MeshCollector {
             }
             self.positions.push(q);
         }
+        let before = self.triangles.len();
         let mut push = |a: u32, b: u32, c: u32| {
             let t = if flip { [a, c, b] } else { [a, b, c] };
             self.triangles.push(t.map(|i| first + i));
@@ -657,6 +673,39 @@ impl MeshCollector {
                 }
             }
         }
+        if let Some(material) = prim.material().index() {
+            *self.triangles_by_material.entry(material).or_default() +=
+                self.triangles.len() - before;
+        }
         Ok(())
+    }
+
+    /// The material of most triangles (the lowest index on a tie), where it has no base-colour
+    /// texture: its factors alone would draw a textured skin white. Factors clamped to 0–1; a
+    /// non-finite one (a damaged file) carries nothing over.
+    fn carried_material(&self, document: &gltf::Document) -> Option<Material> {
+        let (&index, _) = self
+            .triangles_by_material
+            .iter()
+            .max_by(|a, b| a.1.cmp(b.1).then(b.0.cmp(a.0)))?;
+        let material = document.materials().nth(index)?;
+        let pbr = material.pbr_metallic_roughness();
+        if pbr.base_color_texture().is_some() {
+            return None;
+        }
+        let [r, g, b, _] = pbr.base_color_factor();
+        let factors = [r, g, b, pbr.metallic_factor(), pbr.roughness_factor()];
+        if !factors.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let unit = |v: f32| f64::from(v).clamp(0.0, 1.0);
+        Some(Material {
+            name: material
+                .name()
+                .map_or_else(|| format!("material {index}"), str::to_string),
+            base_colour: [r, g, b].map(unit),
+            metallic: unit(pbr.metallic_factor()),
+            roughness: unit(pbr.roughness_factor()),
+        })
     }
 }

@@ -6,10 +6,13 @@
 
 use std::collections::BTreeMap;
 
+use nalgebra::{Point3, Vector3};
+use rayon::prelude::*;
+
 use super::fields::KnitFields;
 use crate::base::{colour, SurfaceMesh, YarnGeometry};
 use crate::knit::{Knit, PointId};
-use crate::leg::Leg;
+use crate::leg::{Collider, Leg};
 
 /// The leg with its fields as attributes (`stitch_density`, `stretch_course`, `stretch_wale`,
 /// `coverage`) and the density's heat map as vertex colours.
@@ -43,6 +46,93 @@ pub fn leg_surface(leg: &Leg, fields: &KnitFields) -> SurfaceMesh {
             .insert(name.into(), values.iter().map(|&v| v as f32).collect());
     }
     mesh
+}
+
+/// How far the stocking surface is lifted off the fitted knit along its normals, metres
+/// ([`lift_clear_of`]): enough for a depth buffer to tell it from the skin at any framing
+/// distance (24-bit depth with the near plane at 1 cm resolves about 25 µm at 2 m, 0.15 mm at
+/// 5 m), small beside a leg (a 4 cm ankle's radius grows by 2.5 %). The knit's points rest
+/// 0.03 mm off the skin, which no depth buffer resolves.
+pub const STOCKING_LIFT_M: f64 = 0.001;
+
+/// The least clearance between the lifted stocking surface and the skin, metres, at every
+/// triangle's corners, edge midpoints and centre: where the skin turns faster than the knit's
+/// spacing (a toe's tip on a coarse grid), the chords between lifted points still dip toward
+/// it, and their corners are lifted further.
+pub const STOCKING_CLEARANCE_M: f64 = 0.5 * STOCKING_LIFT_M;
+
+/// Rounds of [`lift_clear_of`]'s further lifting; each clears what the one before left, and
+/// the few triangles still dipping after them are left as they are (counted).
+const CLEARANCE_ROUNDS: usize = 4;
+
+/// Barycentric weights of the points of a triangle checked for clearance.
+const CLEARANCE_SAMPLES: [[f64; 3]; 7] = [
+    [1.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0],
+    [0.0, 0.0, 1.0],
+    [0.5, 0.5, 0.0],
+    [0.0, 0.5, 0.5],
+    [0.5, 0.0, 0.5],
+    [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
+];
+
+/// Lifts `mesh` (the stocking surface) [`STOCKING_LIFT_M`] along its vertex normals, then lifts
+/// the corners of any triangle a point of which is closer than [`STOCKING_CLEARANCE_M`] to the
+/// skin by twice what it lacks, up to [`CLEARANCE_ROUNDS`] times, so that the leg's flat faces never
+/// poke through it and no viewer mixes the two up. Returns how many triangles still dip closer
+/// (a handful of 45,000 on the sample feet at 150×150, in the toes' clefts, still clear of the
+/// skin by a fifth of the clearance or more). The same surface for the same input, whatever the thread count.
+pub fn lift_clear_of(mesh: &mut SurfaceMesh, collider: &Collider) -> usize {
+    let lift = |mesh: &mut SurfaceMesh, by: &[f64]| {
+        for ((p, n), &d) in mesh.positions.iter_mut().zip(&mesh.normals).zip(by) {
+            for k in 0..3 {
+                p[k] += d * f64::from(n[k]);
+            }
+        }
+    };
+    lift(mesh, &vec![STOCKING_LIFT_M; mesh.positions.len()]);
+    // Each round checks the triangles whose corners the round before moved (all, at first).
+    let mut checked: Vec<usize> = (0..mesh.triangles.len()).collect();
+    let mut dipping = 0;
+    for round in 0..=CLEARANCE_ROUNDS {
+        // What each triangle lacks, in parallel; then the most each corner lacks, in order.
+        let lacking: Vec<f64> = checked
+            .par_iter()
+            .map(|&t| {
+                let corners = mesh.triangles[t].map(|v| Vector3::from(mesh.positions[v as usize]));
+                CLEARANCE_SAMPLES
+                    .iter()
+                    .map(|w| {
+                        let p =
+                            Point3::from(corners[0] * w[0] + corners[1] * w[1] + corners[2] * w[2]);
+                        collider
+                            .closest_within(&p, STOCKING_CLEARANCE_M)
+                            .map_or(0.0, |c| STOCKING_CLEARANCE_M - c.signed_distance)
+                    })
+                    .fold(0.0, f64::max)
+            })
+            .collect();
+        let mut by = vec![0.0; mesh.positions.len()];
+        dipping = 0;
+        // Twice what it lacks: lifting the corners along their own normals moves a point between
+        // them less than that away from the skin where the normals fan out (a toe's tip).
+        for (&t, &lack) in checked.iter().zip(&lacking) {
+            if lack > 0.0 {
+                dipping += 1;
+                for &v in &mesh.triangles[t] {
+                    by[v as usize] = f64::max(by[v as usize], 2.0 * lack);
+                }
+            }
+        }
+        if dipping == 0 || round == CLEARANCE_ROUNDS {
+            break;
+        }
+        lift(mesh, &by);
+        checked = (0..mesh.triangles.len())
+            .filter(|&t| mesh.triangles[t].iter().any(|&v| by[v as usize] > 0.0))
+            .collect();
+    }
+    dipping
 }
 
 /// The fitted knit as a triangle surface: its faces ([`Knit::faces`]: the grid, the heel

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Point3, Vector3};
 
 use super::{Outcome, Progress, Run, StepProgress};
-use crate::base::{SurfaceMesh, YarnGeometry, YarnKind};
+use crate::base::{Material, SurfaceMesh, YarnGeometry, YarnKind};
 use crate::draw;
 use crate::draw::density_map::{self, DensityPictureStyle};
 use crate::error::{Error, Result};
@@ -35,12 +35,14 @@ use crate::post::regions::{regions, stretch_by_region};
 use crate::post::stitches::{
     bunched_courses, slack, slack_details, SlackDetails, MAX_BUNCHED_FRACTION,
 };
-use crate::post::surfaces::{leg_surface, stocking_surface};
+use crate::post::surfaces::{
+    leg_surface, lift_clear_of, stocking_surface, STOCKING_CLEARANCE_M, STOCKING_LIFT_M,
+};
 use crate::preview::{PreviewInput, PreviewStats};
 use crate::report::{
     Bounds, ContactDetails, DensityRange, FieldRange, FitDetails, KnitDetails, LandmarkDetails,
-    LegDetails, MemoryDetails, Metrics, PerDirection, SolverDetails, StageClock, TubeDetails,
-    YarnValues, YarnsDetails,
+    LegDetails, MemoryDetails, Metrics, PerDirection, SolverDetails, StageClock,
+    StockingSurfaceDetails, TubeDetails, YarnValues, YarnsDetails,
 };
 use crate::scene::{LoadedScene, Scene, LEG_AXIS};
 use crate::sim::contact::{ContactCounters, LegContact};
@@ -144,18 +146,25 @@ pub fn run_fit(
         yarns = fixed;
         penetration_fix = Some(stats);
     }
-    // The stocking surface is the fitted grid's: it reads the grid's yarn attributes.
-    let grid_yarns = match scene.yarns_written() {
-        YarnsWritten::Grid => None,
-        _ => Some(knit_yarns(&fit.knit, &fabric, &plan.forces)),
-    };
+    let stocking = plan.has(Stage::StockingSurface).then(|| {
+        run.stage(Stage::StockingSurface, || {
+            // The fitted grid's surface: it reads the grid's yarn attributes.
+            let grid_yarns = match scene.yarns_written() {
+                YarnsWritten::Grid => None,
+                _ => Some(knit_yarns(&fit.knit, &fabric, &plan.forces)),
+            };
+            let grid = grid_yarns.as_ref().unwrap_or(&yarns);
+            let mut surface = stocking_surface(&fit.knit, &knit_fields, grid);
+            let dipping = lift_clear_of(&mut surface, &fit.collider);
+            (surface, dipping)
+        })
+    });
     let products = FitProducts {
         scene,
-        knit: &fit.knit,
-        knit_fields: &knit_fields,
-        grid_yarns: grid_yarns.as_ref().unwrap_or(&yarns),
         yarns: &yarns,
         leg_mesh: leg_surface(&fit.leg, &leg_fields),
+        leg_material: fit.leg.material.clone().unwrap_or_else(Material::skin),
+        stocking: stocking.as_ref().map(|(surface, _)| surface),
     };
     for file in fit_files(scene) {
         run.encode(Stage::Encode(File::Fit(file)), file.name(), || {
@@ -191,15 +200,23 @@ pub fn run_fit(
         segments: yarns.segments.len(),
         real_stitches: laid,
     };
-    let details = fit_details(
-        scene,
-        &fit,
-        &leg_fields,
-        slack,
-        penetration_fix,
-        preview,
-        yarns,
-    );
+    let stocking_surface = stocking.map(|(_, dipping)| StockingSurfaceDetails {
+        lift_m: STOCKING_LIFT_M,
+        clearance_m: STOCKING_CLEARANCE_M,
+        triangles_dipping: dipping,
+    });
+    let details = FitDetails {
+        stocking_surface,
+        ..fit_details(
+            scene,
+            &fit,
+            &leg_fields,
+            slack,
+            penetration_fix,
+            preview,
+            yarns,
+        )
+    };
     run.finish(&loaded.name, metrics, details)
 }
 
@@ -331,6 +348,7 @@ fn fit_details(
             peak_resident_bytes: peak_memory(),
         },
         yarns,
+        stocking_surface: None,
         stretch_by_region: match &fit.landmarks {
             Some(landmarks) => {
                 let regions = regions(knit, &fit.centreline, fit.path.as_ref(), landmarks);
@@ -1101,12 +1119,12 @@ fn axial_range(knit: &Knit, centreline: &Centreline) -> [f64; 2] {
 /// What a fit's files are encoded from.
 struct FitProducts<'a> {
     scene: &'a Scene,
-    knit: &'a Knit,
-    knit_fields: &'a KnitFields,
-    /// The grid's yarns (the same as `yarns` unless the files hold the real stitches).
-    grid_yarns: &'a YarnGeometry,
     yarns: &'a YarnGeometry,
     leg_mesh: SurfaceMesh,
+    /// The leg's look in `stocking.glb`: its file's material, or skin.
+    leg_material: Material,
+    /// The stocking surface, lifted ([`Stage::StockingSurface`]; with `glb` only).
+    stocking: Option<&'a SurfaceMesh>,
 }
 
 impl FitProducts<'_> {
@@ -1115,18 +1133,35 @@ impl FitProducts<'_> {
         let comments = || vec![format!("knitfit {} fit", env!("CARGO_PKG_VERSION"))];
         match file {
             FitFile::StockingGlb => {
-                let stocking = stocking_surface(self.knit, self.knit_fields, self.grid_yarns);
+                let Some(stocking) = self.stocking else {
+                    // The plan builds it wherever it encodes stocking.glb.
+                    return Err(Error::Encode {
+                        what: "glTF".into(),
+                        message: "stocking.glb has no stocking surface to hold".into(),
+                    });
+                };
                 let yarns = &self.scene.yarns;
-                export::gltf::write_nodes_glb(
+                // The yarn lines in a scene of their own: drawn in the default one they would
+                // sit on top of the sheer stocking (docs/decisions/0056).
+                export::gltf::write_scenes_glb(
                     &[
-                        GlbNode::Surface(&self.leg_mesh),
-                        GlbNode::Yarns(self.yarns),
-                        // Sheer in the nylon's colour: its coverage is the vertex colours'
-                        // alpha (docs/decisions/0052).
-                        GlbNode::Sheer {
-                            mesh: &stocking,
-                            colour: yarns.nylon.colour,
-                        },
+                        (
+                            "knitfit",
+                            &[
+                                GlbNode::Opaque {
+                                    mesh: &self.leg_mesh,
+                                    material: &self.leg_material,
+                                },
+                                // Sheer in the nylon's colour: its coverage is the vertex
+                                // colours' alpha (docs/decisions/0052).
+                                GlbNode::Sheer {
+                                    mesh: stocking,
+                                    colour: yarns.nylon.colour,
+                                },
+                            ],
+                        ),
+                        // Named apart from its node: three.js renames a node that shares a name.
+                        ("knitfit yarns", &[GlbNode::Yarns(self.yarns)]),
                     ],
                     yarns.each(|y| y.colour),
                 )

@@ -8,8 +8,8 @@ use nalgebra::Point3;
 use ply_rs_bw::ply::Encoding;
 
 use crate::support::{
-    base64, files_in, fit, float, knitfit, leg_as_ply, load_sample, point, procedural_leg,
-    read_ply, report, sample_legs, stderr, write_tube_leg, OPEN_TUBE,
+    base64, edited_sample, files_in, fit, float, knitfit, leg_as_ply, load_sample, point,
+    procedural_leg, read_ply, report, sample_legs, stderr, write_tube_leg, OPEN_TUBE,
 };
 
 #[test]
@@ -156,8 +156,25 @@ fn ply_and_gltf_outputs_agree_and_read_back_with_their_counts() {
 
     let (doc, buffers, _) = gltf::import(out.join("stocking.glb")).unwrap();
     let names: Vec<_> = doc.nodes().map(|n| n.name().unwrap().to_string()).collect();
-    assert_eq!(names, ["leg", "yarns", "stocking"]);
-    let yarn_node = doc.nodes().nth(1).unwrap();
+    assert_eq!(names, ["leg", "stocking", "yarns"]);
+    // Viewers draw the default scene: the leg and the sheer stocking; the yarn lines wait in a
+    // scene of their own instead of sitting on top of the stocking.
+    let scenes: Vec<(String, Vec<String>)> = doc
+        .scenes()
+        .map(|s| {
+            let nodes = s.nodes().map(|n| n.name().unwrap().to_string()).collect();
+            (s.name().unwrap().to_string(), nodes)
+        })
+        .collect();
+    assert_eq!(
+        scenes,
+        [
+            ("knitfit".into(), vec!["leg".into(), "stocking".into()]),
+            ("knitfit yarns".into(), vec!["yarns".into()])
+        ]
+    );
+    assert_eq!(doc.default_scene().map(|s| s.index()), Some(0));
+    let yarn_node = doc.nodes().nth(2).unwrap();
     let prim = yarn_node.mesh().unwrap().primitives().next().unwrap();
     let positions: Vec<[f32; 3]> = prim
         .reader(|b| Some(&buffers[b.index()]))
@@ -189,7 +206,6 @@ fn ply_and_gltf_outputs_agree_and_read_back_with_their_counts() {
         "_STRETCH_COURSE",
         "_STRETCH_WALE",
         "_COVERAGE",
-        "COLOR_0",
         "NORMAL",
     ] {
         assert!(
@@ -197,7 +213,9 @@ fn ply_and_gltf_outputs_agree_and_read_back_with_their_counts() {
             "{name} missing from {semantics:?}"
         );
     }
-    let stocking = doc.nodes().nth(2).unwrap().mesh().unwrap();
+    // No heat map a viewer would paint over the leg's skin.
+    assert!(!semantics.iter().any(|s| s == "COLOR_0"), "{semantics:?}");
+    let stocking = doc.nodes().nth(1).unwrap().mesh().unwrap();
     let stocking = stocking.primitives().next().unwrap();
     let semantics: Vec<String> = stocking.attributes().map(|(s, _)| s.to_string()).collect();
     assert!(semantics.iter().any(|s| s == "TEXCOORD_0"), "{semantics:?}");
@@ -479,26 +497,6 @@ fn a_leg_in_millimetres_read_as_metres_is_refused_with_the_units_that_fit() {
         &std::fs::read(&path).unwrap(),
         "set leg.units or --units to \"mm\"",
     );
-}
-
-/// Rewrites the first sample leg's JSON with `edit`, writing `name` (`.glb`) into `dir`.
-fn edited_sample(dir: &Path, name: &str, edit: impl FnOnce(&mut gltf_json::Root)) -> PathBuf {
-    let bytes = std::fs::read(procedural_leg()).unwrap();
-    let mut gltf = gltf::Gltf::from_slice(&bytes).unwrap();
-    let mut root = gltf.document.clone().into_json();
-    edit(&mut root);
-    let glb = gltf::binary::Glb {
-        header: gltf::binary::Header {
-            magic: *b"glTF",
-            version: 2,
-            length: 0,
-        },
-        json: std::borrow::Cow::Owned(gltf_json::serialize::to_vec(&root).unwrap()),
-        bin: Some(std::borrow::Cow::Owned(gltf.blob.take().unwrap())),
-    };
-    let path = dir.join(name);
-    std::fs::write(&path, glb.to_vec().unwrap()).unwrap();
-    path
 }
 
 /// Mean stitch density of the covered leg vertices in a fit's leg.ply.

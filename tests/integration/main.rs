@@ -13,6 +13,7 @@ mod golden;
 mod hard_cases;
 mod layers;
 mod limits;
+mod look;
 mod physics;
 mod plan;
 mod process_fuzz;

@@ -5,4 +5,4 @@ pub mod read;
 pub mod write;
 
 pub use read::{read_stocking_glb, StockingGlb};
-pub use write::{write_glb, write_nodes_glb, GlbBuilder, GlbNode};
+pub use write::{write_glb, write_nodes_glb, write_scenes_glb, GlbBuilder, GlbNode};

@@ -45,14 +45,26 @@ pub fn read_stocking_glb(path: &Path) -> Result<StockingGlb> {
             "not a glTF file ({e}); give the stocking.glb a `knitfit fit` wrote, or its directory"
         ))
     })?;
-    let scene = doc
-        .default_scene()
-        .or_else(|| doc.scenes().next())
-        .ok_or_else(|| bad("the glTF file has no scene".into()))?;
+    // Every scene's nodes, the default scene's first: `knitfit fit` keeps the yarns in a scene
+    // of their own. Each node is taken once, so a damaged file's cycle cannot loop.
+    let default = doc.default_scene().map(|s| s.index());
+    let mut scenes: Vec<gltf::Scene> = doc.scenes().collect();
+    scenes.sort_by_key(|s| Some(s.index()) != default);
+    if scenes.is_empty() {
+        return Err(bad("the glTF file has no scene".into()));
+    }
     let mut found: BTreeMap<String, (gltf::Node, Matrix4<f64>)> = BTreeMap::new();
-    let mut stack: Vec<(gltf::Node, Matrix4<f64>)> =
-        scene.nodes().map(|n| (n, Matrix4::identity())).collect();
+    let mut seen = vec![false; doc.nodes().len()];
+    let mut stack: Vec<(gltf::Node, Matrix4<f64>)> = scenes
+        .iter()
+        .rev()
+        .flat_map(|scene| scene.nodes().collect::<Vec<_>>().into_iter().rev())
+        .map(|n| (n, Matrix4::identity()))
+        .collect();
     while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut seen[node.index()], true) {
+            continue;
+        }
         let local = Matrix4::from(node.transform().matrix()).cast::<f64>();
         let world = parent * local;
         if let Some(name) = node.name() {

@@ -6,8 +6,9 @@
 //! (the validator requires custom attributes to start with `_`; Blender imports them as point
 //! attributes). Positions are metres, Y up.
 //!
-//! A surface is one `TRIANGLES` primitive. The leg has no material (viewers draw it opaque, in
-//! its `COLOR_0` heat map). The stocking surface is [`GlbNode::Sheer`]: a material of the yarn's
+//! A surface is one `TRIANGLES` primitive. The leg is [`GlbNode::Opaque`]: a material of its own
+//! (skin, or the one its file had) and no `COLOR_0`, which viewers would paint over it. The
+//! stocking surface is [`GlbNode::Sheer`]: a material of the yarn's
 //! colour with `alphaMode` `BLEND`, and its opacity (the knit's coverage) as the alpha of an RGBA
 //! `COLOR_0` whose RGB is white. glTF multiplies `COLOR_0` into the base colour, alpha included,
 //! so core glTF alone draws it sheer: Blender's importer (4.5) wires the colour attribute's alpha
@@ -22,14 +23,23 @@ use gltf_json as json;
 use json::validation::{Checked::Valid, USize64};
 use json::Index;
 
-use crate::base::{PerYarn, SurfaceMesh, YarnGeometry, YarnKind};
+use crate::base::{Material, PerYarn, SurfaceMesh, YarnGeometry, YarnKind};
 use crate::error::{Error, Result};
 use crate::export::ply::{check_surface_mesh, check_yarn_geometry};
 
 /// One root node of a GLB file.
 pub enum GlbNode<'a> {
-    /// A triangle surface without a material (the leg).
+    /// A triangle surface without a material (a leg made for a test).
     Surface(&'a SurfaceMesh),
+    /// An opaque triangle surface in `material` (the leg in `stocking.glb`). Its vertex colours
+    /// are not written: glTF multiplies `COLOR_0` into the base colour, and most viewers apply
+    /// it, so a heat map there would replace the skin.
+    Opaque {
+        /// The surface.
+        mesh: &'a SurfaceMesh,
+        /// Its material.
+        material: &'a Material,
+    },
     /// A see-through triangle surface (the stocking): as [`GlbNode::Surface`], with a material
     /// named after the mesh: base colour `colour` (linear RGB) with alpha 1, `alphaMode`
     /// `BLEND`, double-sided, metallic 0, roughness 0.6. Its opacity, the alpha of `COLOR_0`,
@@ -64,17 +74,36 @@ pub fn write_glb(parts: &[YarnGeometry], yarn_colours: PerYarn<[f64; 3]>) -> Res
 /// Encodes surfaces and yarns as one GLB, a root node each, in the given order. Yarns are
 /// written as by [`write_glb`]; a surface is one `TRIANGLES` primitive with `POSITION`,
 /// `NORMAL`, `TEXCOORD_0` and `COLOR_0` where present (f32 `VEC3`, or `VEC4` with the opacity as
-/// alpha), and its point attributes, no translation, and no material but a
-/// [`GlbNode::Sheer`]'s (a surface without triangles is a node without a mesh, and then a
-/// sheer one has no material either).
+/// alpha; not for an [`GlbNode::Opaque`]), and its point attributes, no translation, and the
+/// material of an opaque or sheer node (a surface without triangles is a node without a mesh,
+/// and then no material either).
 ///
 /// Fails with [`Error::Encode`] if a node's geometry is inconsistent, or a sheer colour is not
 /// within 0–1.
 pub fn write_nodes_glb(nodes: &[GlbNode], yarn_colours: PerYarn<[f64; 3]>) -> Result<Vec<u8>> {
-    for node in nodes {
+    write_scenes_glb(&[("knitfit", nodes)], yarn_colours)
+}
+
+/// Encodes `scenes` (a name and its root nodes each, written as by [`write_nodes_glb`]) as one
+/// GLB whose default scene (`"scene": 0`) is the first. Viewers draw the default scene only and
+/// keep the others a click away: three.js's `GLTFLoader` puts them in `gltf.scenes`, not
+/// `gltf.scene`; Blender 4.5's importer makes each a collection and excludes all but the
+/// default from the view layer. That is how `stocking.glb` keeps its yarn lines without
+/// drawing them over the stocking.
+///
+/// Fails as [`write_nodes_glb`] does.
+pub fn write_scenes_glb(
+    scenes: &[(&str, &[GlbNode])],
+    yarn_colours: PerYarn<[f64; 3]>,
+) -> Result<Vec<u8>> {
+    let nodes: Vec<&GlbNode> = scenes.iter().flat_map(|(_, nodes)| nodes.iter()).collect();
+    for node in &nodes {
         match node {
             GlbNode::Yarns(part) => check_yarn_geometry(part),
             GlbNode::Surface(mesh) => check_surface_mesh(mesh),
+            GlbNode::Opaque { mesh, material } => check_surface_mesh(mesh)
+                .and_then(|()| check_colour(&mesh.name, &material.base_colour))
+                .and_then(|()| check_factors(&mesh.name, material)),
             GlbNode::Sheer { mesh, colour } => {
                 check_surface_mesh(mesh).and_then(|()| check_colour(&mesh.name, colour))
             }
@@ -89,38 +118,60 @@ pub fn write_nodes_glb(nodes: &[GlbNode], yarn_colours: PerYarn<[f64; 3]>) -> Re
     let materials = YarnKind::ALL.map(|kind| {
         let used = nodes.iter().any(|n| match n {
             GlbNode::Yarns(p) => p.segments.iter().any(|s| s.yarn == kind),
-            GlbNode::Surface(_) | GlbNode::Sheer { .. } => false,
+            GlbNode::Surface(_) | GlbNode::Opaque { .. } | GlbNode::Sheer { .. } => false,
         });
         used.then(|| {
             let [r, g, b] = yarn_colours[kind.index() as usize].map(|c| c as f32);
             doc.material(kind.name(), [r, g, b])
         })
     });
-    let roots = nodes
+    let mut node_of = |node: &GlbNode| match node {
+        GlbNode::Yarns(part) => doc.yarn_node(part, &materials),
+        GlbNode::Surface(mesh) => doc.surface_node(mesh, None, true),
+        GlbNode::Opaque { mesh, material } => {
+            let material = (!mesh.triangles.is_empty()).then(|| doc.opaque_material(material));
+            doc.surface_node(mesh, material, false)
+        }
+        GlbNode::Sheer { mesh, colour } => {
+            let material = (!mesh.triangles.is_empty()).then(|| {
+                let [r, g, b] = colour.map(|c| c as f32);
+                doc.sheer_material(&mesh.name, [r, g, b])
+            });
+            doc.surface_node(mesh, material, true)
+        }
+    };
+    let scenes: Vec<json::Scene> = scenes
         .iter()
-        .map(|node| match node {
-            GlbNode::Yarns(part) => doc.yarn_node(part, &materials),
-            GlbNode::Surface(mesh) => doc.surface_node(mesh, None),
-            GlbNode::Sheer { mesh, colour } => {
-                let material = (!mesh.triangles.is_empty()).then(|| {
-                    let [r, g, b] = colour.map(|c| c as f32);
-                    doc.sheer_material(&mesh.name, [r, g, b])
-                });
-                doc.surface_node(mesh, material)
-            }
+        .map(|(name, nodes)| json::Scene {
+            extensions: None,
+            extras: Default::default(),
+            name: Some(name.to_string()),
+            nodes: nodes.iter().map(&mut node_of).collect(),
         })
         .collect();
-    let scene = doc.root.push(json::Scene {
-        extensions: None,
-        extras: Default::default(),
-        name: Some("knitfit".into()),
-        nodes: roots,
-    });
-    doc.root.scene = Some(scene);
+    for (k, scene) in scenes.into_iter().enumerate() {
+        let index = doc.root.push(scene);
+        if k == 0 {
+            doc.root.scene = Some(index);
+        }
+    }
     doc.finish()
 }
 
-/// A sheer surface's colour: linear RGB, each channel within 0–1 (a NaN is not).
+/// An opaque material's metalness and roughness: each within 0–1 (a NaN is not).
+fn check_factors(mesh: &str, material: &Material) -> std::result::Result<(), String> {
+    let factors = [material.metallic, material.roughness];
+    if factors.iter().all(|c| (0.0..=1.0).contains(c)) {
+        Ok(())
+    } else {
+        Err(format!(
+            "mesh {mesh:?}: material {:?} has metallic {} and roughness {}, not within 0–1",
+            material.name, material.metallic, material.roughness
+        ))
+    }
+}
+
+/// A surface's colour: linear RGB, each channel within 0–1 (a NaN is not).
 fn check_colour(mesh: &str, colour: &[f64; 3]) -> std::result::Result<(), String> {
     if colour.iter().all(|c| (0.0..=1.0).contains(c)) {
         Ok(())
@@ -214,6 +265,21 @@ impl GlbBuilder {
         })
     }
 
+    /// `material` as a core-glTF opaque metallic-roughness material.
+    pub fn opaque_material(&mut self, material: &Material) -> Index<json::Material> {
+        let [r, g, b] = material.base_colour.map(|c| c as f32);
+        self.root.push(json::Material {
+            name: Some(material.name.clone()),
+            pbr_metallic_roughness: json::material::PbrMetallicRoughness {
+                base_color_factor: json::material::PbrBaseColorFactor([r, g, b, 1.0]),
+                metallic_factor: json::material::StrengthFactor(material.metallic as f32),
+                roughness_factor: json::material::StrengthFactor(material.roughness as f32),
+                ..Default::default()
+            },
+            ..Default::default()
+        })
+    }
+
     /// [`GlbBuilder::material`] blended (`alphaMode` `BLEND`) and double-sided: a thin fabric
     /// whose opacity comes from `COLOR_0`'s alpha, seen from both sides (inside the welt, the far
     /// side of the tube where the leg does not hide it).
@@ -276,6 +342,7 @@ impl GlbBuilder {
         &mut self,
         mesh: &SurfaceMesh,
         material: Option<Index<json::Material>>,
+        vertex_colours: bool,
     ) -> Index<json::Node> {
         use json::mesh::Semantic;
         if mesh.triangles.is_empty() {
@@ -288,6 +355,7 @@ impl GlbBuilder {
             attributes.insert(Valid(Semantic::TexCoords(0)), self.vectors(uv));
         }
         let colours = match (&mesh.colours, &mesh.opacity) {
+            _ if !vertex_colours => None,
             (Some(rgb), None) => Some(self.vectors(rgb)),
             (Some(rgb), Some(alpha)) => {
                 let rgba: Vec<[f32; 4]> = rgb

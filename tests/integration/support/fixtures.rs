@@ -56,6 +56,7 @@ fn leg(name: &str, positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Leg {
         up: Vec3::y(),
         cleaned: Default::default(),
         reoriented_triangles: 0,
+        material: None,
     }
 }
 
@@ -286,4 +287,24 @@ pub fn write_raw_meshes(dir: &Path, name: &str, meshes: &[RawMesh]) -> PathBuf {
         })
         .collect();
     write_meshes(dir, name, &surfaces)
+}
+
+/// Rewrites the procedural sample leg's JSON with `edit`, writing `name` (`.glb`) into `dir`.
+pub fn edited_sample(dir: &Path, name: &str, edit: impl FnOnce(&mut gltf_json::Root)) -> PathBuf {
+    let bytes = std::fs::read(procedural_leg()).unwrap();
+    let mut gltf = gltf::Gltf::from_slice(&bytes).unwrap();
+    let mut root = gltf.document.clone().into_json();
+    edit(&mut root);
+    let glb = gltf::binary::Glb {
+        header: gltf::binary::Header {
+            magic: *b"glTF",
+            version: 2,
+            length: 0,
+        },
+        json: std::borrow::Cow::Owned(gltf_json::serialize::to_vec(&root).unwrap()),
+        bin: Some(std::borrow::Cow::Owned(gltf.blob.take().unwrap())),
+    };
+    let path = dir.join(name);
+    std::fs::write(&path, glb.to_vec().unwrap()).unwrap();
+    path
 }
