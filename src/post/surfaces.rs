@@ -78,7 +78,7 @@ const CLEARANCE_SAMPLES: [[f64; 3]; 7] = [
 
 /// Lifts `mesh` (the stocking surface) [`STOCKING_LIFT_M`] along its vertex normals, then lifts
 /// the corners of any triangle a point of which is closer than [`STOCKING_CLEARANCE_M`] to the
-/// skin by twice what it lacks, up to [`CLEARANCE_ROUNDS`] times, so that the leg's flat faces never
+/// skin by twice what it lacks, up to four times, so that the leg's flat faces never
 /// poke through it and no viewer mixes the two up. Returns how many triangles still dip closer
 /// (a handful of 45,000 on the sample feet at 150×150, in the toes' clefts, still clear of the
 /// skin by a fifth of the clearance or more). The same surface for the same input, whatever the thread count.
