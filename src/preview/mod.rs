@@ -5,6 +5,7 @@
 
 pub mod camera;
 pub mod sampling;
+pub mod screen_bins;
 pub mod settings;
 pub mod shading;
 pub mod trace;

@@ -1,5 +1,8 @@
-//! Finding the yarn a camera ray meets just above the skin: a uniform hash grid over the yarn
-//! segments' bounding boxes, and the ray–cylinder test of each candidate.
+//! Finding the yarn a camera ray meets just above the skin: the ray–capsule test, and a uniform
+//! hash grid over the yarn segments' bounding boxes for rays from anywhere. The preview's camera
+//! rays look up the capsules in its screen bins instead (`screen_bins.rs`, decision 0054); the
+//! grid holds the few the bins cannot (reaching behind the eye, or over thousands of pixels),
+//! and it is the reference the bins are tested against.
 //!
 //! Method. Sakaguchi & Miyata §7 (Fig. 16): for a point on the skin, look up the springs nearby,
 //! treat each as a cylinder of radius r in a local frame whose xy-plane is tangent to the skin;
@@ -88,26 +91,9 @@ impl YarnIndex {
     /// yarn kind (`radius_m[kind.index()]`, metres). Segments with a non-finite end are left
     /// out.
     pub fn new(yarns: &YarnGeometry, radius_m: PerYarn<f64>) -> YarnIndex {
-        let offset = Vector3::from(yarns.offset_m);
-        let at = |i: u32| {
-            yarns
-                .positions
-                .get(i as usize)
-                .map(|p| Point3::from(*p) + offset)
-        };
-        let capsules: Vec<Capsule> = yarns
-            .segments
-            .iter()
-            .filter_map(|s| {
-                let (a, b) = (at(s.a)?, at(s.b)?);
-                let finite = a.iter().chain(b.iter()).all(|c| c.is_finite());
-                finite.then_some(Capsule {
-                    a,
-                    b,
-                    radius: radius_m[s.yarn.index() as usize],
-                    yarn: s.yarn,
-                })
-            })
+        let capsules: Vec<Capsule> = (0..yarns.segments.len())
+            .into_par_iter()
+            .filter_map(|i| capsule(yarns, radius_m, i))
             .collect();
         YarnIndex::from_capsules(capsules)
     }
@@ -126,18 +112,8 @@ impl YarnIndex {
             }
         }
         let mut lengths: Vec<f64> = capsules.iter().map(|c| (c.b - c.a).norm()).collect();
-        let middle = lengths.len() / 2;
-        let median = match lengths.is_empty() {
-            true => 1.0,
-            false => *lengths.select_nth_unstable_by(middle, f64::total_cmp).1,
-        };
         let extent = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
-        let mut cell = (CELL_PER_MEDIAN_SEGMENT * median)
-            .max(4.0 * max_radius)
-            .max(1e-9);
-        if extent.is_finite() && extent / cell > MAX_CELLS_PER_AXIS {
-            cell = extent / MAX_CELLS_PER_AXIS;
-        }
+        let cell = grid_cell(&mut lengths, max_radius, extent);
         let origin = if lo.iter().all(|c| c.is_finite()) {
             lo
         } else {
@@ -309,33 +285,78 @@ impl YarnIndex {
             t_max[axis] += t_delta[axis];
         }
         let (t, i) = best?;
-        let c = &self.capsules[i as usize];
-        let p = start + dir * t;
-        let ab = c.b - c.a;
-        let len2 = ab.norm_squared();
-        let s = if len2 > 0.0 {
-            ((p - c.a).dot(&ab) / len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let axis_point = c.a + ab * s;
-        let outward = p - axis_point;
-        let normal = if outward.norm() > 1e-12 * c.radius.max(1e-12) {
-            outward.normalize()
-        } else {
-            -dir
-        };
-        let tangent = if len2 > 0.0 {
-            ab / len2.sqrt()
-        } else {
-            Vector3::x()
-        };
-        Some(YarnHit {
-            t: t0 + t,
-            normal,
-            tangent,
-            yarn: c.yarn,
-        })
+        Some(hit_on(&self.capsules[i as usize], &start, dir, t0, t))
+    }
+}
+
+/// The capsule of segment `i` of `yarns` (offset by its `offset_m`), of the radius of its yarn
+/// kind (`radius_m[kind.index()]`, metres); `None` when an end is missing or not finite.
+pub fn capsule(yarns: &YarnGeometry, radius_m: PerYarn<f64>, i: usize) -> Option<Capsule> {
+    let s = yarns.segments.get(i)?;
+    let offset = Vector3::from(yarns.offset_m);
+    let at = |i: u32| {
+        yarns
+            .positions
+            .get(i as usize)
+            .map(|p| Point3::from(*p) + offset)
+    };
+    let (a, b) = (at(s.a)?, at(s.b)?);
+    let finite = a.iter().chain(b.iter()).all(|c| c.is_finite());
+    finite.then_some(Capsule {
+        a,
+        b,
+        radius: radius_m[s.yarn.index() as usize],
+        yarn: s.yarn,
+    })
+}
+
+/// Side of the grid's cells for capsules of these `lengths` (reordered), the largest radius
+/// `max_radius` and a bounding box whose longest side is `extent`, metres: three median lengths,
+/// at least four radii, coarsened to at most two million cells along the box (cell coordinates
+/// are packed in 21 bits).
+pub fn grid_cell(lengths: &mut [f64], max_radius: f64, extent: f64) -> f64 {
+    let middle = lengths.len() / 2;
+    let median = match lengths.is_empty() {
+        true => 1.0,
+        false => *lengths.select_nth_unstable_by(middle, f64::total_cmp).1,
+    };
+    let mut cell = (CELL_PER_MEDIAN_SEGMENT * median)
+        .max(4.0 * max_radius)
+        .max(1e-9);
+    if extent.is_finite() && extent / cell > MAX_CELLS_PER_AXIS {
+        cell = extent / MAX_CELLS_PER_AXIS;
+    }
+    cell
+}
+
+/// The hit on capsule `c` of the ray `start + t·dir` at `t` (`dir` a unit vector), reported at
+/// `t0 + t`: the ray's distance from where `start` lies on it.
+pub fn hit_on(c: &Capsule, start: &Point3<f64>, dir: &Vector3<f64>, t0: f64, t: f64) -> YarnHit {
+    let p = start + dir * t;
+    let ab = c.b - c.a;
+    let len2 = ab.norm_squared();
+    let s = if len2 > 0.0 {
+        ((p - c.a).dot(&ab) / len2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let axis_point = c.a + ab * s;
+    let outward = p - axis_point;
+    let normal = if outward.norm() > 1e-12 * c.radius.max(1e-12) {
+        outward.normalize()
+    } else {
+        -dir
+    };
+    let tangent = if len2 > 0.0 {
+        ab / len2.sqrt()
+    } else {
+        Vector3::x()
+    };
+    YarnHit {
+        t: t0 + t,
+        normal,
+        tangent,
+        yarn: c.yarn,
     }
 }
 
