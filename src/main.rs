@@ -145,7 +145,8 @@ fn print_next(out: &std::path::Path, written: &[std::path::PathBuf]) {
     if wrote("stocking.glb") {
         say!(
             "next: open {out}/stocking.glb in Blender (File > Import > glTF 2.0) or any glTF \
-             viewer: the leg, the sheer stocking over it and its yarns"
+             viewer: the leg and the sheer stocking over it (the yarn lines are its second \
+             scene, \"knitfit yarns\")"
         );
     }
     if wrote("preview.png") {

@@ -736,7 +736,14 @@ mod tests {
                 _ => None,
             })
             .collect();
-        let files: Vec<String> = plan.files.iter().map(|f| f.name.clone()).collect();
+        // The preview is rendered in a stage of its own, not encoded.
+        let files: Vec<String> = plan
+            .files
+            .iter()
+            .map(|f| f.name.clone())
+            .filter(|name| name != "preview.png")
+            .collect();
+        assert!(plan.has(Stage::RenderPreview));
         assert_eq!(encoded, files);
         assert_eq!(
             fit_files(&scene)

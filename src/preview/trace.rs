@@ -4,7 +4,7 @@
 //!
 //! Per sample: the camera ray is cast against the leg's triangles; at the skin hit the ray's
 //! last stretch through the yarn layer — the skin's normal height `layer_m` divided by the
-//! cosine of the view angle, at most two grid cells — is tested against the yarn capsules
+//! cosine of the view angle, at most three layers — is tested against the yarn capsules
 //! nearby; the nearest yarn before the skin is shaded with its cylinder normal and tangent, else
 //! the skin shows (see `yarn_lookup.rs` for why the ray, not only the normal, decides). A ray
 //! that misses the skin sees the background: yarn hovering beyond the outline is a few
@@ -224,7 +224,7 @@ impl<'a> PreparedScene<'a> {
             message: format!("the leg has no triangle to render: {e}"),
         })?;
         let yarn = measure_yarn(input.yarns, input.radius_m);
-        let layer_m = yarn_layer(&mesh, input.yarns, yarn.max_radius, yarn.cell_m);
+        let layer_m = yarn_layer(&mesh, input.yarns, yarn.max_radius);
         let attribute = |name: &str| {
             leg.point_attributes
                 .get(name)
@@ -259,16 +259,18 @@ impl<'a> PreparedScene<'a> {
     }
 }
 
-/// Height above the skin within which yarn is looked for: the 99th percentile of how far a
-/// sample of yarn points lies from the skin, plus the yarn radius, at least four radii. Most
-/// yarn lies at the contact offset; the percentile is there for the few stretches that bridge
-/// a hollow or hang off an end ring, millimetres up. At most two grid cells, which bounds each
-/// ray's walk: yarn floating higher still is missed where its skin is seen face on.
-fn yarn_layer(mesh: &TriMesh, yarns: &YarnGeometry, max_radius: f64, cell_m: f64) -> f64 {
+/// Height above the skin within which yarn is looked for: the greatest height of a sample of
+/// yarn points above the skin, plus the yarn radius, at least four radii, at most
+/// [`MAX_YARN_LAYER_M`]. Most yarn lies at the contact offset; a stocking to the toe bridges the
+/// toes' clefts and floats up to about 9 mm over them, and that yarn must be found where the toes
+/// are seen face on. The screen bins list every capsule a pixel's rays can meet, nearest first,
+/// so a deep layer costs little; the cap bounds the whole-scene grid's walk where they do not
+/// serve.
+fn yarn_layer(mesh: &TriMesh, yarns: &YarnGeometry, max_radius: f64) -> f64 {
     let r = max_radius;
     let offset = Vector3::from(yarns.offset_m);
-    let step = (yarns.positions.len() / 2000).max(1);
-    let mut distances: Vec<f64> = yarns
+    let step = (yarns.positions.len() / 4000).max(1);
+    let highest = yarns
         .positions
         .par_iter()
         .step_by(step)
@@ -277,14 +279,12 @@ fn yarn_layer(mesh: &TriMesh, yarns: &YarnGeometry, max_radius: f64, cell_m: f64
             let q = Point3::from(*p) + offset;
             (mesh.project_local_point(&q, false).point - q).norm()
         })
-        .collect();
-    distances.sort_by(f64::total_cmp);
-    let p99 = distances
-        .get(distances.len() * 99 / 100)
-        .copied()
-        .unwrap_or(0.0);
-    (p99 + r).max(4.0 * r).min(6.0 * cell_m)
+        .reduce(|| 0.0, f64::max);
+    (highest + r).max(4.0 * r).min(MAX_YARN_LAYER_M)
 }
+
+/// The deepest yarn layer looked through, metres (see [`yarn_layer`]).
+const MAX_YARN_LAYER_M: f64 = 0.012;
 
 /// What the renderer needs to know of the yarn before a camera is chosen.
 struct YarnMeasure {

@@ -2,7 +2,9 @@
 
 use std::path::Path;
 
-use crate::support::{files_in, knitfit, knitfit_env, report, stage_names, stderr, stdout, write};
+use crate::support::{
+    files_in, knitfit, knitfit_env, procedural_leg, report, stage_names, stderr, stdout, write,
+};
 
 #[test]
 fn no_arguments_fits_the_bundled_sample_and_says_where_outputs_went() {
@@ -14,6 +16,7 @@ fn no_arguments_fits_the_bundled_sample_and_says_where_outputs_went() {
         [
             "density.png",
             "leg.ply",
+            "preview.png",
             "report.json",
             "stocking.glb",
             "stocking.ply"
@@ -22,13 +25,13 @@ fn no_arguments_fits_the_bundled_sample_and_says_where_outputs_went() {
     let text = stdout(&out);
     assert!(text.contains("wrote to out/"), "{text}");
     assert!(text.contains("converged"), "{text}");
-    // It says what to open next, and how to get the yarn-level still it did not render.
+    // It says what to open next: the file, and the yarn-level still it rendered.
     assert!(
         text.contains("next: open out/stocking.glb in Blender"),
         "{text}"
     );
     assert!(
-        text.contains("knitfit render out draws the yarn-level still"),
+        text.contains("out/preview.png is the yarn-level still"),
         "{text}"
     );
     // The second line says where the stocking went: the bundled leg has no foot and is cut.
@@ -582,4 +585,27 @@ fn written_files_read_back() {
 
     let png = image::open(o.join("patch.png")).unwrap();
     assert!(png.width() > 0 && png.height() > 0);
+}
+
+#[test]
+fn a_fit_without_its_preview_says_how_to_render_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write(dir.path(), "s.json", r#"{"outputs": ["glb"]}"#);
+    let out = knitfit(
+        dir.path(),
+        &[
+            "fit",
+            scene.to_str().unwrap(),
+            "--leg",
+            procedural_leg().to_str().unwrap(),
+            "--resolution",
+            "24x24",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = stdout(&out);
+    assert!(
+        text.contains("knitfit render out draws the yarn-level still"),
+        "{text}"
+    );
 }

@@ -285,14 +285,14 @@ fn plan_says_why_each_stage_runs_and_writes_nothing() {
         "load leg",
         "outputs lists \"glb\"",
         "effect penetration_fix",
-        "left out:",
-        "render preview",
+        "render preview       outputs lists \"preview\"",
         "memory: about",
     ] {
         assert!(text.contains(expected), "{expected:?} in\n{text}");
     }
     let patch = stdout(&knitfit(dir.path(), &["plan", "patch"]));
-    assert!(patch.contains("load leg") && patch.contains("a flat patch has no leg"));
+    assert!(patch.contains("left out:") && patch.contains("load leg"));
+    assert!(patch.contains("a flat patch has no leg"));
     assert!(
         files_in(dir.path()).is_empty(),
         "{:?}",
