@@ -4,7 +4,7 @@
 //! where the courses close, white vertex colours and its coverage as their opacity, so a
 //! blending material of the yarn's colour (`stocking.glb`'s) draws it as sheer as the knit is.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 
 use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
@@ -81,7 +81,8 @@ const CLEARANCE_SAMPLES: [[f64; 3]; 7] = [
 /// skin by twice what it lacks, up to four times, so that the leg's flat faces never
 /// poke through it and no viewer mixes the two up. Returns how many triangles still dip closer
 /// (a handful of 45,000 on the sample feet at 150×150, in the toes' clefts, still clear of the
-/// skin by a fifth of the clearance or more). The same surface for the same input, whatever the thread count.
+/// skin by a fifth of the clearance or more). Points the surface repeats (its texture's seam)
+/// move together. The same surface for the same input, whatever the thread count.
 pub fn lift_clear_of(mesh: &mut SurfaceMesh, collider: &Collider) -> usize {
     let lift = |mesh: &mut SurfaceMesh, by: &[f64]| {
         for ((p, n), &d) in mesh.positions.iter_mut().zip(&mesh.normals).zip(by) {
@@ -90,6 +91,16 @@ pub fn lift_clear_of(mesh: &mut SurfaceMesh, collider: &Collider) -> usize {
             }
         }
     };
+    // A vertex repeated for the texture's seam (the same point, the same normal) must move with
+    // its twin, or the surface would open there.
+    let mut first_at: HashMap<[u64; 3], usize> = HashMap::new();
+    let twin_of: Vec<usize> = (0..mesh.positions.len())
+        .map(|v| {
+            *first_at
+                .entry(mesh.positions[v].map(f64::to_bits))
+                .or_insert(v)
+        })
+        .collect();
     lift(mesh, &vec![STOCKING_LIFT_M; mesh.positions.len()]);
     // Each round checks the triangles whose corners the round before moved (all, at first).
     let mut checked: Vec<usize> = (0..mesh.triangles.len()).collect();
@@ -105,9 +116,13 @@ pub fn lift_clear_of(mesh: &mut SurfaceMesh, collider: &Collider) -> usize {
                     .map(|w| {
                         let p =
                             Point3::from(corners[0] * w[0] + corners[1] * w[1] + corners[2] * w[2]);
-                        collider
-                            .closest_within(&p, STOCKING_CLEARANCE_M)
-                            .map_or(0.0, |c| STOCKING_CLEARANCE_M - c.signed_distance)
+                        // Most points lie about the lift off the skin: a bounded query finds
+                        // them fast. Farther than that, the whole query says whether
+                        // the point floats off the skin (fine) or lies deep inside it.
+                        let closest = collider
+                            .closest_within(&p, 1.25 * STOCKING_LIFT_M)
+                            .unwrap_or_else(|| collider.closest(&p));
+                        STOCKING_CLEARANCE_M - closest.signed_distance
                     })
                     .fold(0.0, f64::max)
             })
@@ -126,6 +141,13 @@ pub fn lift_clear_of(mesh: &mut SurfaceMesh, collider: &Collider) -> usize {
         }
         if dipping == 0 || round == CLEARANCE_ROUNDS {
             break;
+        }
+        for v in 0..by.len() {
+            let first = twin_of[v];
+            by[first] = by[first].max(by[v]);
+        }
+        for v in 0..by.len() {
+            by[v] = by[twin_of[v]];
         }
         lift(mesh, &by);
         checked = (0..mesh.triangles.len())
@@ -517,6 +539,77 @@ mod tests {
                     .expect("a point of the first wale");
                 assert_eq!(mesh.normals[v], mesh.normals[twin]);
             }
+        }
+    }
+    #[test]
+    fn the_lifted_surface_clears_the_skin_between_coarse_wales_and_keeps_its_seam_closed() {
+        // A round leg of radius 30 mm (96 sides) under a 12-wale tube whose points rest on it:
+        // the chords between wales cut 1 mm into the round, so the 1 mm lift alone leaves the
+        // edges' midpoints on the skin, and the further rounds must clear them.
+        let (r, h, sides) = (0.03, 0.2, 96usize);
+        let mut positions = Vec::new();
+        for ring in 0..=4 {
+            for k in 0..sides {
+                let a = TAU * k as f64 / sides as f64;
+                positions.push(Point3::new(r * a.cos(), h * ring as f64 / 4.0, r * a.sin()));
+            }
+        }
+        let mut triangles = Vec::new();
+        let n = sides as u32;
+        for ring in 0..4u32 {
+            for k in 0..n {
+                let (a, b) = (ring * n + k, ring * n + (k + 1) % n);
+                triangles.push([a, a + n, b]);
+                triangles.push([b, a + n, b + n]);
+            }
+        }
+        let leg = Leg::from_world("round".into(), &positions, &triangles);
+        let collider = Collider::new(&leg, crate::leg::ContactMethod::Bvh).unwrap();
+        let (wales, courses) = (12, 8);
+        let knit = Knit::grid(
+            wales,
+            courses,
+            true,
+            &Tile::of(Pattern::Plain),
+            TAU * r / wales as f64,
+            0.02,
+            |w, c| {
+                let a = TAU * w as f64 / wales as f64;
+                Vec3::new(r * a.cos(), 0.02 + 0.02 * c as f64, r * a.sin())
+            },
+        );
+        let mut mesh = surface(&knit);
+        let before: Vec<[f64; 3]> = mesh.positions.clone();
+        let dipping = lift_clear_of(&mut mesh, &collider);
+        assert_eq!(dipping, 0);
+        // The rounds lifted the corners past the first millimetre.
+        let most = mesh
+            .positions
+            .iter()
+            .zip(&before)
+            .map(|(p, q)| (Vector3::from(*p) - Vector3::from(*q)).norm())
+            .fold(0.0, f64::max);
+        assert!(most > 1.5 * STOCKING_LIFT_M, "{most}");
+        for t in &mesh.triangles {
+            for w in CLEARANCE_SAMPLES {
+                let p = (0..3).fold(Vector3::zeros(), |acc, k| {
+                    acc + Vector3::from(mesh.positions[t[k] as usize]) * w[k]
+                });
+                let clearance = collider.closest(&Point3::from(p)).signed_distance;
+                assert!(clearance >= STOCKING_CLEARANCE_M - 1e-9, "{clearance}");
+            }
+        }
+        // Every repeated seam point moved with its twin: no vertex of wale 0 lies apart from a
+        // vertex that started with it.
+        let repeated = mesh.positions.len() - knit.len();
+        assert_eq!(repeated, courses);
+        for c in 0..courses {
+            let row = c * (wales + 1);
+            assert_eq!(
+                mesh.positions[row],
+                mesh.positions[row + wales],
+                "course {c}"
+            );
         }
     }
 }
