@@ -414,6 +414,9 @@ fn scene() -> Value {
     let [wales, courses] = [24, 24];
     scene["tube"]["wales"] = json!(wales);
     scene["tube"]["courses"] = json!(courses);
+    // Without the bundled scene's preview: it would lay and render every real stitch of each
+    // damaged leg, a second a run where the fit takes a tenth; `Render` cases fuzz the renderer.
+    scene["outputs"] = json!(["ply", "glb", "picture"]);
     scene
 }
 
