@@ -458,7 +458,7 @@ fn check_position_accessors(root: &gltf::json::Root) -> std::result::Result<(), 
 /// Refuses a primitive whose positions are not float 3-vectors or whose indices are not
 /// unsigned integer scalars, as glTF requires. Validation lets such types through, and the
 /// reader then misreads the positions or, for indices, panics (`unreachable!`).
-fn check_accessor_types(prim: &gltf::Primitive) -> std::result::Result<(), String> {
+pub(crate) fn check_accessor_types(prim: &gltf::Primitive) -> std::result::Result<(), String> {
     use gltf::accessor::{DataType, Dimensions};
     if let Some(a) = prim.get(&gltf::Semantic::Positions) {
         if (a.data_type(), a.dimensions()) != (DataType::F32, Dimensions::Vec3) {

@@ -753,3 +753,35 @@ fn regression_render_of_a_yarn_segment_kilometres_long_ends_quickly() {
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
     assert!(dir.path().join("fit/preview.png").is_file());
 }
+
+/// Case 73 of `tools/fuzz_long.sh 350000 1000 2` (shard 2): a damaged stocking.glb whose yarn
+/// indices claim to be floats. gltf's index reader takes the type on trust and panicked
+/// ("unreachable", exit 101); `knitfit render` now checks each primitive's accessor types as the
+/// leg loader does and refuses the file in one line.
+#[test]
+fn regression_render_of_float_yarn_indices_is_refused_not_a_panic() {
+    let dir = tempfile::tempdir().unwrap();
+    let before = fit_with_yarn_point(dir.path(), [0.0, 0.5, 0.0]);
+    let path = dir.path().join("fit/stocking.glb");
+    let mut glb = Glb::parse(&std::fs::read(&path).unwrap());
+    let yarns = glb.json["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| n["name"] == "yarns")
+        .unwrap()["mesh"]
+        .as_u64()
+        .unwrap() as usize;
+    let indices = glb.json["meshes"][yarns]["primitives"][0]["indices"]
+        .as_u64()
+        .unwrap() as usize;
+    glb.json["accessors"][indices]["componentType"] = serde_json::json!(5126);
+    std::fs::write(&path, glb.bytes()).unwrap();
+    let out = knitfit_within(dir.path(), &RENDER_ARGS, REGRESSION_BOUND)
+        .expect("knitfit render ends within the bound");
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    let message = stderr(&out);
+    assert_eq!(message.trim().lines().count(), 1, "{message}");
+    assert!(message.contains("not unsigned integer"), "{message}");
+    assert_eq!(files_in(&dir.path().join("fit")), before);
+}

@@ -15,6 +15,7 @@ use nalgebra::{Matrix3, Matrix4, Point3, Vector3};
 
 use crate::base::{vertex_normals, Direction, Segment, SurfaceMesh, YarnGeometry, YarnKind};
 use crate::error::{Error, Result};
+use crate::leg::load::check_accessor_types;
 use crate::leg::load::MAX_COORDINATE_M;
 
 /// The leg and yarns of a `stocking.glb`, world space, metres.
@@ -98,6 +99,16 @@ pub fn read_stocking_glb(path: &Path) -> Result<StockingGlb> {
         if prim.mode() != gltf::mesh::Mode::Triangles {
             continue;
         }
+        // gltf's readers take the accessors' types on trust (float indices panic): checked.
+        check_accessor_types(&prim)
+            .map_err(|e| bad(format!("node \"leg\" primitive {}: {e}", prim.index())))?;
+        let normals_ok = prim.get(&gltf::Semantic::Normals).is_none_or(|a| {
+            (a.data_type(), a.dimensions())
+                == (
+                    gltf::accessor::DataType::F32,
+                    gltf::accessor::Dimensions::Vec3,
+                )
+        });
         let reader = prim.reader(get);
         let Some(p) = reader.read_positions() else {
             continue;
@@ -125,7 +136,7 @@ pub fn read_stocking_glb(path: &Path) -> Result<StockingGlb> {
                 }
             }
         }
-        match reader.read_normals() {
+        match reader.read_normals().filter(|_| normals_ok) {
             Some(n) => normals.extend(n.map(|v| {
                 let w = nm * Vector3::from(v).cast::<f64>();
                 let w = w.try_normalize(1e-12).unwrap_or(Vector3::y());
@@ -171,6 +182,8 @@ pub fn read_stocking_glb(path: &Path) -> Result<StockingGlb> {
         if prim.mode() != gltf::mesh::Mode::Lines {
             continue;
         }
+        check_accessor_types(&prim)
+            .map_err(|e| bad(format!("node \"yarns\" primitive {}: {e}", prim.index())))?;
         let reader = prim.reader(get);
         let Some(p) = reader.read_positions() else {
             continue;
