@@ -929,16 +929,8 @@ mod tests {
                 triangles.push([b, c, d]);
             }
         }
-        let leg = SurfaceMesh {
-            name: "cylinder".into(),
-            positions,
-            triangles,
-            normals,
-            texcoords: None,
-            colours: None,
-            opacity: None,
-            point_attributes: Default::default(),
-        };
+        let mut leg = SurfaceMesh::new("cylinder", positions, triangles);
+        leg.normals = normals;
         let mut points = Vec::new();
         let mut segments = Vec::new();
         // Outside the surface, and inside it (seen from within).

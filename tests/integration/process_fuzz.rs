@@ -679,6 +679,18 @@ fn the_binary_on_damaged_files_ends_cleanly_and_writes_nothing_when_it_refuses()
 /// fuzz's [`TIME_BOUND`].
 const REGRESSION_BOUND: Duration = Duration::from_secs(20);
 
+/// The index of the mesh of `glb`'s node `yarns`.
+fn yarn_mesh(glb: &Glb) -> usize {
+    glb.json["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| n["name"] == "yarns")
+        .unwrap()["mesh"]
+        .as_u64()
+        .unwrap() as usize
+}
+
 /// The fit's outputs in `dir/fit`, with the first yarn point of `stocking.glb` moved to `at`
 /// (metres, the yarns node has no transform); returns the files `fit` then holds.
 fn fit_with_yarn_point(dir: &Path, at: [f32; 3]) -> Vec<String> {
@@ -692,14 +704,7 @@ fn fit_with_yarn_point(dir: &Path, at: [f32; 3]) -> Vec<String> {
         .unwrap()
         .1;
     let mut glb = Glb::parse(glb);
-    let yarns = glb.json["nodes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|n| n["name"] == "yarns")
-        .unwrap()["mesh"]
-        .as_u64()
-        .unwrap() as usize;
+    let yarns = yarn_mesh(&glb);
     let accessor = &glb.json["accessors"][glb.json["meshes"][yarns]["primitives"][0]["attributes"]
         ["POSITION"]
         .as_u64()
@@ -764,14 +769,7 @@ fn regression_render_of_float_yarn_indices_is_refused_not_a_panic() {
     let before = fit_with_yarn_point(dir.path(), [0.0, 0.5, 0.0]);
     let path = dir.path().join("fit/stocking.glb");
     let mut glb = Glb::parse(&std::fs::read(&path).unwrap());
-    let yarns = glb.json["nodes"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|n| n["name"] == "yarns")
-        .unwrap()["mesh"]
-        .as_u64()
-        .unwrap() as usize;
+    let yarns = yarn_mesh(&glb);
     let indices = glb.json["meshes"][yarns]["primitives"][0]["indices"]
         .as_u64()
         .unwrap() as usize;
