@@ -17,9 +17,9 @@
 # KNITFIT_PROCESS_FUZZ_FROM / _KIND / _KEEP / _TIME_BOUND_S / _VERBOSE variables at the top of
 # tests/integration/process_fuzz.rs.
 #
-# Rough rates on 2 shared cores: the five proptest targets together about 600 cases a second
-# (500000 each in about 14 minutes), the process target 20 to 30 runs a second. Ten million
-# inputs in all: CASES=2000000 (five targets) is about 5 hours.
+# Rough rates on 2 shared cores, release build: the five proptest targets together 3,000 to
+# 5,000 cases a second, the process target about 10 runs a second. Ten million inputs in all:
+# CASES=2000000 (five targets) is about an hour.
 #
 # Runs under nice; exits non-zero on the first target that fails.
 set -euo pipefail
