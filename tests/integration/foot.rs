@@ -17,11 +17,7 @@ use knitfit::run::fit::{solve_fit, FitInputs, SolvedFit};
 use knitfit::run::NoProgress;
 use knitfit::scene::Scene;
 
-fn sample(name: &str) -> std::path::PathBuf {
-    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("samples")
-        .join(name)
-}
+use crate::support::sample;
 
 fn to_the_toe(leg: &std::path::Path, heel: TubeHeel) -> SolvedFit {
     let mut scene = Scene::load(None).unwrap();

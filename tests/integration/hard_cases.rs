@@ -17,7 +17,7 @@ use serde_json::{json, Value};
 
 use crate::support::{
     files_in, float, load_sample, point, procedural_leg, read_ply, report, revolved, run_scene,
-    scene_for, stderr, write_mesh, write_meshes,
+    sample, scene_for, stderr, write_mesh, write_meshes,
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -955,12 +955,6 @@ fn a_leg_of_a_million_triangles_fits() {
 
 // ---------------------------------------------------------------------------------------------
 // Futile fits stop early and say where.
-
-fn sample(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("samples")
-        .join(name)
-}
 
 /// Iterations a stopped run's message reports.
 fn iterations_in(message: &str) -> usize {

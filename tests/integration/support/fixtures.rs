@@ -12,6 +12,13 @@ use knitfit::leg::{load_leg, Leg, Units, UpAxis, UpChoice};
 use nalgebra::{Matrix4, Point3};
 use ply_rs_bw::ply::{DefaultElement, Encoding};
 
+/// The bundled sample file `name` (in `samples/`).
+pub fn sample(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("samples")
+        .join(name)
+}
+
 /// Every bundled sample leg.
 pub fn sample_legs() -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples");
