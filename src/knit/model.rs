@@ -580,6 +580,14 @@ impl Knit {
         self.toe_seam
     }
 
+    /// The wale the toe seam joins wale `w` to at the last course (see [`Knit::with_toe_seam`]),
+    /// along which the fabric runs on over the toe; `None` without a seam and at the folds (wales
+    /// 0 and `wales / 2`, and an odd course's middle pair, which a course spring joins).
+    pub fn toe_seam_partner(&self, w: usize) -> Option<usize> {
+        let facing = (self.wales - w % self.wales) % self.wales;
+        (self.toe_seam && facing != w && facing != w + 1 && facing + 1 != w).then_some(facing)
+    }
+
     /// The heel pocket's short rows, if knitted.
     pub fn short_rows(&self) -> Option<&ShortRows> {
         self.short_rows.as_ref()
@@ -629,6 +637,16 @@ impl Knit {
                 .collect(),
             _ => (0..self.courses).map(grid).collect(),
         }
+    }
+
+    /// [`Knit::wale_chain`] of wale `w`, and where a toe seam joins it to another wale, on over
+    /// the toe and back along that wale to its first course: the fabric's path along the wale.
+    pub fn wale_path_over_toe(&self, w: usize) -> Vec<PointId> {
+        let mut path = self.wale_chain(w);
+        if let Some(facing) = self.toe_seam_partner(w) {
+            path.extend(self.wale_chain(facing).into_iter().rev());
+        }
+        path
     }
 
     /// The fabric's faces (see [`Face`]): the grid's cells, the heel pocket's in place of the

@@ -9,7 +9,9 @@
 //!   fabric, so they count as more stitches there.
 //! * **Stretch** at a yarn point, along the course and along the wale: the fitted fabric's length
 //!   over its relaxed length there (1 relaxed, 1.5 stretched by half), measured over
-//!   [`MEASURE_SPAN_M`] either way (see [`stretch`]).
+//!   [`MEASURE_SPAN_M`] of relaxed fabric either way on every grid (fractional spans,
+//!   interpolated), along the wale on over the toe seam, and cut back at the seam's folds to the
+//!   point's own side (see [`stretch`]).
 //! * **Coverage**, 0–1: the fraction of skin hidden by yarn seen along the normal. Each stitch
 //!   is its yarn's loop (Choi & Lo 2003, [`crate::post::loops`]: the shape the `loops` output
 //!   and the preview draw), stretched with the stitch; seen along the normal it hides its
@@ -25,7 +27,9 @@
 //!   with `κ` the fitted fabric's normal curvature along the course and the wale (the skin's,
 //!   where the fabric lies on it), taken over [`MEASURE_SPAN_M`] of relaxed fabric so that no
 //!   grid's spacing sets it; around a leg it is the course tension over the radius. Where the
-//!   fabric bridges a hollow (negative curvature) it presses nothing: 0. Only a tube has it.
+//!   fabric bridges a hollow (negative curvature) it presses nothing: 0; where its span's ends
+//!   lie back past the point (the toe seam's folds, the fabric on itself), 0 too. Only a tube
+//!   has it.
 //! * **On the leg**, a vertex takes the kernel-weighted mean of the yarn points within a bandwidth
 //!   (a biweight kernel, compactly supported, so far-away yarn has no say): smooth where the fit is
 //!   smooth, and 0 where no yarn is near (uncovered skin).
@@ -71,23 +75,16 @@ pub fn stitch_density(fabric: &Fabric, (course, wale): &Stretch) -> Vec<f64> {
 }
 
 /// Stretch along the course and along the wale at every point: `(course, wale)` (see module
-/// docs): the arc through the points [`MEASURE_SPAN_M`] of relaxed fabric either way and the
-/// point itself, over its rest length, so that a grid of the real stitches, whose alternate
-/// courses zigzag by a loop's height, measures the fabric's stretch and not its loops'. Along
-/// the wale the span follows the wale's chain through the heel pocket's short rows; around, a
-/// short row's point has only its own springs. A point with no neighbour in a direction gets 1
-/// there.
+/// docs): the arc through the fabric [`MEASURE_SPAN_M`] of relaxed fabric either way and the
+/// point itself, over that rest length (fractional spans, interpolated). Along the wale the span follows the wale
+/// through the heel pocket's short rows and on over the toe seam; around, a short row's point
+/// has only its own springs. Where the span folds back on itself (the toe seam's folds) it is
+/// shortened to the part that does not. A point with no neighbour in a direction gets 1 there.
 pub fn stretch(knit: &Knit) -> Stretch {
-    let stencil = Stencil::of(knit);
-    let x = &knit.particles.x;
+    let spans = Spans::of(knit);
     let [rest_course, rest_wale] = knit.grid_rest_m();
-    let ratio = |lo: PointId, here: usize, hi: PointId, rest: f64| {
-        if rest > 0.0 && lo != hi {
-            arc_length(x[lo.index()], x[here], x[hi.index()]) / rest
-        } else {
-            1.0
-        }
-    };
+    let [reach_course, reach_wale] = spans.reach;
+    let ratio = |rest: f64| move |ends: &Ends| ends.arc_length() / (rest * ends.steps);
     let course = (0..knit.len())
         .map(|i| {
             let p = PointId(i as u32);
@@ -95,25 +92,52 @@ pub fn stretch(knit: &Knit) -> Stretch {
                 return local_spacing(knit, p).stretch(0);
             }
             let (w, c) = knit.grid_coords(p);
-            let (lo, hi, steps) = stencil.span(knit, w, c, Direction::Course);
-            ratio(lo, i, hi, rest_course * steps as f64)
+            let line = Spans::around(knit, w, c);
+            match rest_course > 0.0 {
+                true => spans.measure(reach_course, true, line, ratio(rest_course)),
+                false => None,
+            }
+            .unwrap_or(1.0)
         })
         .collect();
     let mut wale = vec![1.0; knit.len()];
-    let reach = stencil.reach[Direction::Wale.index()];
-    for w in 0..knit.wales {
-        let chain = knit.wale_chain(w);
-        for (j, p) in chain.iter().enumerate() {
-            let (lo, hi) = (j.saturating_sub(reach), (j + reach).min(chain.len() - 1));
-            wale[p.index()] = ratio(
-                chain[lo],
-                p.index(),
-                chain[hi],
-                rest_wale * (hi - lo) as f64,
-            );
-        }
+    if rest_wale > 0.0 {
+        Spans::along_every_wale(knit, |p, line| {
+            if let Some(s) = spans.measure(reach_wale, true, line, ratio(rest_wale)) {
+                wale[p.index()] = s;
+            }
+        });
     }
     (course, wale)
+}
+
+/// The fabric either side of a point along one direction: where it is `steps` grid steps of
+/// relaxed fabric apart (fractional: a span's ends are interpolated between grid points).
+#[derive(Clone, Copy, Debug)]
+struct Ends {
+    before: Vec3,
+    here: Vec3,
+    after: Vec3,
+    steps: f64,
+}
+
+impl Ends {
+    /// Length of the circular arc through the ends and the point (see [`arc_length`]).
+    fn arc_length(&self) -> f64 {
+        arc_length(self.before, self.here, self.after)
+    }
+
+    /// The curvature vector of the fabric through the ends, 1/m: the turn of its tangent over
+    /// its length (its normal curvature is minus its component along the normal); zero where
+    /// the span is one-sided (the first and last course without a toe seam).
+    fn curvature(&self) -> Vec3 {
+        let (a, b) = (self.here - self.before, self.after - self.here);
+        let (la, lb) = (a.norm(), b.norm());
+        if la <= 0.0 || lb <= 0.0 {
+            return Vec3::zeros();
+        }
+        (b / lb - a / la) * (2.0 / (la + lb))
+    }
 }
 
 /// Length of the circular arc from `a` through `b` to `c` (the chord where they lie on a line):
@@ -134,54 +158,167 @@ fn arc_length(a: Vec3, b: Vec3, c: Vec3) -> f64 {
     }
 }
 
-/// How far either way of a grid point its fabric is measured: [`MEASURE_SPAN_M`] of relaxed
-/// fabric in grid steps, even, so that a grid of the real stitches meets the same yarns of an
-/// alternating pattern at both ends as at the point; at least one step.
-struct Stencil {
-    reach: [usize; 2],
+/// How far either way of a point its fabric is measured: [`MEASURE_SPAN_M`] of relaxed fabric,
+/// in grid steps, fractional, so that every grid measures the same fabric (a span of whole
+/// steps would be 10 mm on one grid and 7 on another, and a sharp curve such as the toe's
+/// would read differently on each): a measure is taken over the whole steps either side of
+/// the reach and interpolated. A knit of single stitches (the patch), whose alternate courses
+/// are different yarns, is measured between points of the same parity.
+struct Spans {
+    reach: [f64; 2],
+    parity: usize,
+    /// True for a knit closed by a toe seam, the only one that folds.
+    folding: bool,
 }
 
-impl Stencil {
-    fn of(knit: &Knit) -> Stencil {
+impl Spans {
+    fn of(knit: &Knit) -> Spans {
+        let parity = if knit.yarn_blend.is_some() { 1 } else { 2 };
         let reach = knit.grid_rest_m().map(|rest| {
             let steps = if rest > 0.0 {
-                (MEASURE_SPAN_M / rest / 2.0).round() * 2.0
+                MEASURE_SPAN_M / rest
             } else {
                 1.0
             };
-            (steps as usize).max(1)
+            steps.max(parity as f64)
         });
-        Stencil { reach }
+        Spans {
+            reach,
+            parity,
+            folding: knit.has_toe_seam(),
+        }
     }
 
-    /// The grid points before and after `(w, c)` along `direction`, within reach, and how many
-    /// steps apart they are: round a tube's courses, stopping at a patch's edges and at the
-    /// first and last course.
-    fn span(
+    /// `measure` of the fabric `reach` steps either way of a point along a line of points,
+    /// `at(j)` the point `j` steps from it (`None` past the line's end, where the span stops at
+    /// the last point there is), interpolated between the whole steps either side of `reach`.
+    ///
+    /// Where the line folds back within reach (it turns against the point's own direction: the
+    /// toe seam's folds), `None`; or, with `unfold`, the span stops short of the fold on that
+    /// side, so that a point beside a fold is measured over the fabric on its own side, as
+    /// much on every grid. `None` too for a point alone on its line.
+    fn measure<M>(
         &self,
-        knit: &Knit,
-        w: usize,
-        c: usize,
-        direction: Direction,
-    ) -> (PointId, PointId, usize) {
-        let reach = self.reach[direction.index()];
-        match direction {
-            Direction::Course if knit.closed_courses && knit.wales >= 3 => {
-                let k = reach.min((knit.wales - 1) / 2).max(1);
-                let wales = knit.wales;
-                (
-                    knit.point((w + wales - k) % wales, c),
-                    knit.point((w + k) % wales, c),
-                    2 * k,
-                )
+        reach: f64,
+        unfold: bool,
+        at: impl Fn(isize) -> Option<Vec3>,
+        measure: impl Fn(&Ends) -> M,
+    ) -> Option<M>
+    where
+        M: std::ops::Mul<f64, Output = M> + std::ops::Add<Output = M>,
+    {
+        let p = self.parity;
+        let k = ((reach / p as f64).floor() as usize * p).max(p);
+        let t = ((reach - k as f64) / p as f64).clamp(0.0, 1.0);
+        let ends = |back, on| Spans::ends(&at, back, on);
+        if !unfold {
+            // The span's ends either side of the point, unless they lie back past it.
+            let turns_back = |e: &Ends| (e.here - e.before).dot(&(e.after - e.here)) <= 0.0;
+            let inner = ends(k, k).filter(|e| !turns_back(e))?;
+            return Some(match ends(k + p, k + p).filter(|e| !turns_back(e)) {
+                Some(outer) if t > 0.0 => measure(&inner) * (1.0 - t) + measure(&outer) * t,
+                _ => measure(&inner),
+            });
+        }
+        // Only a toe seam folds a knit; elsewhere the span runs its full reach.
+        let [back_fold, on_fold] = match self.folding {
+            true => Spans::folds(&at, k + p)?,
+            false => [k + p; 2],
+        };
+        let clear = |within: usize| back_fold.min(on_fold) >= within;
+        if clear(k + p) && t > 0.0 {
+            let (inner, outer) = (ends(k, k)?, ends(k + p, k + p)?);
+            Some(measure(&inner) * (1.0 - t) + measure(&outer) * t)
+        } else if clear(k) {
+            ends(k, k).map(|e| measure(&e))
+        } else if unfold {
+            ends(k.min(back_fold), k.min(on_fold)).map(|e| measure(&e))
+        } else {
+            None
+        }
+    }
+
+    /// How many steps either way (`[back, on]`, up to `k`) the line runs from the point before
+    /// it folds back: before a step turns a right angle or more from the point's own direction
+    /// (the chord through its neighbours; step by step, a grid's small wrinkles would add up
+    /// to a fold). A point at a fold's apex (its two steps a right angle or more apart) is
+    /// measured on its back side alone. A line's end is not a fold: `k` there. `None` for a
+    /// point alone on its line.
+    fn folds(at: &impl Fn(isize) -> Option<Vec3>, k: usize) -> Option<[usize; 2]> {
+        let here = at(0)?;
+        let extent = |sign: isize, heading: Vec3| {
+            let mut last = here;
+            for j in 1..=k {
+                let Some(next) = at(sign * j as isize) else {
+                    return k;
+                };
+                if (next - last).dot(&heading) <= 0.0 {
+                    return j - 1;
+                }
+                last = next;
             }
-            Direction::Course => {
-                let (lo, hi) = (w.saturating_sub(reach), (w + reach).min(knit.wales - 1));
-                (knit.point(lo, c), knit.point(hi, c), hi - lo)
-            }
-            Direction::Wale => {
-                let (lo, hi) = (c.saturating_sub(reach), (c + reach).min(knit.courses - 1));
-                (knit.point(w, lo), knit.point(w, hi), hi - lo)
+            k
+        };
+        let apex = |a: Vec3, b: Vec3| (here - a).dot(&(b - here)) <= 0.0;
+        Some(match (at(-1), at(1)) {
+            (Some(a), Some(b)) if apex(a, b) => [extent(-1, a - here), 0],
+            (Some(a), Some(b)) => [extent(-1, a - b), extent(1, b - a)],
+            (Some(a), None) => [extent(-1, a - here), k],
+            (None, Some(b)) => [k, extent(1, b - here)],
+            (None, None) => return None,
+        })
+    }
+
+    /// The fabric `back` and `on` whole steps either way along the line (see
+    /// [`Spans::measure`]), stopping at its ends; `None` where that leaves no step.
+    fn ends(at: &impl Fn(isize) -> Option<Vec3>, back: usize, on: usize) -> Option<Ends> {
+        let here = at(0)?;
+        let side = |sign: isize, k: usize| {
+            (1..=k as isize)
+                .rev()
+                .find_map(|j| at(sign * j).map(|x| (x, j as f64)))
+                .unwrap_or((here, 0.0))
+        };
+        let ((before, back), (after, on)) = (side(-1, back), side(1, on));
+        (back + on > 0.0).then_some(Ends {
+            before,
+            here,
+            after,
+            steps: back + on,
+        })
+    }
+
+    /// The line round the course of grid point `(w, c)` (see [`Spans::measure`]): round a
+    /// tube's ring (half of it at most either way), stopping at a patch's edges.
+    fn around(knit: &Knit, w: usize, c: usize) -> impl Fn(isize) -> Option<Vec3> + '_ {
+        let wales = knit.wales as isize;
+        let closed = knit.closed_courses && knit.wales >= 3;
+        let half = (wales - 1) / 2;
+        move |j| {
+            let at = w as isize + j;
+            let wale = if closed {
+                (j.abs() <= half).then(|| at.rem_euclid(wales))
+            } else {
+                (0..wales).contains(&at).then_some(at)
+            };
+            wale.map(|wale| knit.particles.x[knit.point(wale as usize, c).index()])
+        }
+    }
+
+    /// Calls `f(point, line)` for every point of every wale, `line` its line along the wale
+    /// (see [`Spans::measure`]): through the heel pocket's short rows, and on over the toe seam
+    /// along the facing wale.
+    fn along_every_wale(knit: &Knit, mut f: impl FnMut(PointId, &dyn Fn(isize) -> Option<Vec3>)) {
+        for w in 0..knit.wales {
+            let path = knit.wale_path_over_toe(w);
+            for (j, &p) in path.iter().take(knit.wale_chain(w).len()).enumerate() {
+                let line = |i: isize| {
+                    usize::try_from(j as isize + i)
+                        .ok()
+                        .and_then(|j| path.get(j))
+                        .map(|q| knit.particles.x[q.index()])
+                };
+                f(p, &line);
             }
         }
     }
@@ -251,42 +388,55 @@ pub fn pressure(knit: &Knit, tension: &[Vec<f64>; 2]) -> Vec<f64> {
     if !knit.closed_courses || knit.wales < 3 || knit.courses < 3 {
         return out;
     }
-    let stencil = Stencil::of(knit);
-    let x = |p: PointId| knit.particles.x[p.index()];
-    let (wales, courses) = (knit.wales, knit.courses);
+    let spans = Spans::of(knit);
+    let [reach_course, reach_wale] = spans.reach;
+    let x = &knit.particles.x;
+    // Each grid point's tangent (over the whole steps within reach) and curvature vector, along
+    // the course and along the wale. Where the span folds back (the toe seam's folds, beyond
+    // the toes) the fabric lies on itself, not on the skin: no curvature there.
+    let bent = |reach: f64, line: &dyn Fn(isize) -> Option<Vec3>| {
+        let k = (reach as usize).max(1);
+        let tangent = Spans::ends(&line, k, k).map_or_else(Vec3::zeros, |e| e.after - e.before);
+        let bend = spans.measure(reach, false, line, Ends::curvature);
+        (tangent, bend.unwrap_or_else(Vec3::zeros))
+    };
+    let around: Vec<(Vec3, Vec3)> = (0..knit.grid_len())
+        .map(|i| {
+            let (w, c) = knit.grid_coords(PointId(i as u32));
+            bent(reach_course, &Spans::around(knit, w, c))
+        })
+        .collect();
+    let mut along = vec![(Vec3::zeros(), Vec3::zeros()); knit.grid_len()];
+    Spans::along_every_wale(knit, |p, line| {
+        if let Some(slot) = along.get_mut(p.index()) {
+            *slot = bent(reach_wale, line);
+        }
+    });
     // The surface's normal, t_course × t_wale, points out of the tube on one side of the grid's
     // numbering and in on the other: one sign for the whole knit, from the rings' centres.
+    let normal = |i: usize| {
+        around[i]
+            .0
+            .cross(&along[i].0)
+            .try_normalize(1e-30)
+            .unwrap_or_default()
+    };
     let mut outward = 0.0;
-    let mut normals = vec![Vec3::zeros(); knit.grid_len()];
-    for c in 0..courses {
-        let centre = (0..wales).map(|w| x(knit.point(w, c))).sum::<Vec3>() / wales as f64;
-        for w in 0..wales {
-            let (prev, next, _) = stencil.span(knit, w, c, Direction::Course);
-            let (down, up, _) = stencil.span(knit, w, c, Direction::Wale);
-            let n = (x(next) - x(prev)).cross(&(x(up) - x(down)));
-            outward += n.dot(&(x(knit.point(w, c)) - centre)).signum();
-            normals[knit.point(w, c).index()] = n.try_normalize(1e-30).unwrap_or_default();
-        }
+    for c in 0..knit.courses {
+        let ring: Vec<usize> = (0..knit.wales).map(|w| knit.point(w, c).index()).collect();
+        let centre = ring.iter().map(|&i| x[i]).sum::<Vec3>() / knit.wales as f64;
+        outward += ring
+            .iter()
+            .map(|&i| normal(i).dot(&(x[i] - centre)).signum())
+            .sum::<f64>();
     }
     let sign = if outward < 0.0 { -1.0 } else { 1.0 };
-    for c in 0..courses {
-        for w in 0..wales {
-            let here = knit.point(w, c);
-            let i = here.index();
-            let n_out = sign * normals[i];
-            let curvature = |d: Direction| {
-                let (lo, hi, _) = stencil.span(knit, w, c, d);
-                // At the first and last course the stencil is one-sided: no curvature there.
-                if lo == here || hi == here {
-                    0.0
-                } else {
-                    convexity([x(lo), x(here), x(hi)], &n_out)
-                }
-            };
-            let pa = tension[0][i] * curvature(Direction::Course)
-                + tension[1][i] * curvature(Direction::Wale);
-            out[i] = pa.max(0.0) / PA_PER_MMHG;
-        }
+    for i in 0..knit.grid_len() {
+        // Convex where the fabric bends away from the outward normal.
+        let n_out = sign * normal(i);
+        let convexity = |bend: &Vec3| -bend.dot(&n_out);
+        let pa = tension[0][i] * convexity(&around[i].1) + tension[1][i] * convexity(&along[i].1);
+        out[i] = pa.max(0.0) / PA_PER_MMHG;
     }
     // A short row's point takes the grid point below it on its wale.
     for i in knit.grid_len()..knit.len() {
@@ -294,18 +444,6 @@ pub fn pressure(knit: &Knit, tension: &[Vec<f64>; 2]) -> Vec<f64> {
         out[i] = out[knit.point(w as usize, c.floor() as usize).index()];
     }
     out
-}
-
-/// Normal curvature of the polyline `prev, here, next` against the outward normal, 1/m: the
-/// turn of its tangent over its length, positive where it bends away from the normal (convex).
-fn convexity([prev, here, next]: [Vec3; 3], n_out: &Vec3) -> f64 {
-    let (a, b) = (here - prev, next - here);
-    let (la, lb) = (a.norm(), b.norm());
-    if la <= 0.0 || lb <= 0.0 {
-        return 0.0;
-    }
-    let turn = b / lb - a / la;
-    -2.0 * turn.dot(n_out) / (la + lb)
 }
 
 /// The springs at one point, summed per direction (index 0 course, 1 wale).
@@ -567,9 +705,14 @@ mod tests {
         let (a, b) = (0.002, 0.001);
         let tile = Tile::of(Pattern::Plain);
         let at = |w: usize, c: f64| Vec3::new(w as f64 * a, c * b, 0.0);
-        let knit = Knit::grid(4, 3, false, &tile, a, b, |w, c| at(w, c as f64))
-            .with_toe_seam(b)
-            .with_short_rows(0, vec![0, 1, 1, 0], &tile, a, b, at);
+        let knit = Knit::grid(4, 3, false, &tile, a, b, |w, c| at(w, c as f64)).with_short_rows(
+            0,
+            vec![0, 1, 1, 0],
+            &tile,
+            a,
+            b,
+            at,
+        );
         let density = stitch_density(&fabric([a, b]), &stretch(&knit));
         let relaxed = M2_PER_CM2 / (a * b);
         for c in 0..3 {
@@ -586,6 +729,47 @@ mod tests {
         }
         let first_short = PointId(knit.grid_len() as u32);
         assert!((density[first_short.index()] - 2.0 * relaxed).abs() < 1e-9 * relaxed);
+    }
+
+    #[test]
+    fn a_toe_seams_folds_are_measured_on_each_points_own_side() {
+        // A tube of 12 wales laid flat as hosiery is at the toe: each ring a slit, wales 1–5 on
+        // top and 7–11 underneath, one wale spacing apart, wales 0 and 6 the folds between
+        // them; the toe seam closes the last course, each wale's step across it one course
+        // spacing. Every spring is at its rest length, so the fabric is unstretched: the
+        // wales' spans run over the seam and the courses' round the folds, each cut back to
+        // the point's own side of a fold (a span over a fold reads 0.5–1.4 here).
+        let (n, courses, a, b) = (12, 20, 0.001_f64, 0.001);
+        let h = b / 2.0;
+        let fold = (a * a - h * h).sqrt();
+        let at = |w: usize, c: usize| {
+            let (x, z) = match w {
+                0 => (a - fold, 0.0),
+                6 => (5.0 * a + fold, 0.0),
+                1..=5 => (w as f64 * a, h),
+                _ => ((n - w) as f64 * a, -h),
+            };
+            Vec3::new(x, c as f64 * b, z)
+        };
+        let knit =
+            Knit::grid(n, courses, true, &Tile::of(Pattern::Plain), a, b, at).with_toe_seam(b);
+        let (course, wale) = stretch(&knit);
+        for c in 0..courses {
+            for w in 0..n {
+                let i = knit.point(w, c).index();
+                assert!(
+                    (wale[i] - 1.0).abs() < 1e-9,
+                    "wale {w}, course {c}: {}",
+                    wale[i]
+                );
+                // The corners of a slit are not arcs: within 3 % there.
+                assert!(
+                    (course[i] - 1.0).abs() < 0.03,
+                    "wale {w}, course {c}: {}",
+                    course[i]
+                );
+            }
+        }
     }
 
     #[test]

@@ -6,7 +6,7 @@ use std::path::Path;
 use serde_json::json;
 
 use crate::support::{
-    files_in, fit, float, knitfit, procedural_leg, read_ply, run_scene, scene_for, stderr,
+    files_in, fit, float, knitfit, procedural_leg, read_ply, run_scene, sample, scene_for, stderr,
 };
 
 /// Per leg vertex: stitch density, coverage and pressure, from a fit's `leg.ply`.
@@ -65,6 +65,36 @@ fn the_legs_fields_are_the_same_on_a_coarse_grid_and_at_the_real_stitch_count() 
             100.0 * error
         );
         assert!(error < 0.03, "{field}: {:.2}% apart", 100.0 * error);
+    }
+}
+
+#[test]
+fn a_whole_stockings_fields_are_the_same_on_the_default_grid_and_at_the_real_stitch_count() {
+    // Over the heel and the toe, closed by the toe seam: the fields are measured over the same
+    // fabric on every grid, on over the seam, and cut back at its folds (decision 0057).
+    let leg = sample("makehuman_leg_foot.glb");
+    let (coarse_dir, coarse) = fit(&leg, "150x150", &[]);
+    let courses = coarse["details"]["knit"]["courses"]
+        .as_f64()
+        .unwrap()
+        .round() as usize
+        + 1;
+    let (real_dir, _) = fit(&leg, &format!("400x{courses}"), &[]);
+    let a = leg_fields(&coarse_dir.path().join("out"));
+    let b = leg_fields(&real_dir.path().join("out"));
+    // Pressure is not yet within 3 %: the toe tip's curve, a centimetre across, is a few cells
+    // of the 150-course grid (issue 21); this holds what is reached.
+    for (k, field, bound) in [
+        (0, "stitch_density", 0.03),
+        (1, "coverage", 0.03),
+        (2, "pressure", 0.12),
+    ] {
+        let error = relative_l2(&a, &b, k);
+        eprintln!(
+            "{field}: 150x150 against 400x{courses}: {:.2}%",
+            100.0 * error
+        );
+        assert!(error < bound, "{field}: {:.2}% apart", 100.0 * error);
     }
 }
 
