@@ -491,6 +491,7 @@ fn check_coordinates(
     triangles: &[[u32; 3]],
     units: Units,
 ) -> std::result::Result<(), String> {
+    // Every index names a vertex: both decoders refuse one past the last.
     let far = triangles
         .iter()
         .flatten()
@@ -625,6 +626,11 @@ impl MeshCollector {
             .read_positions()
             .ok_or("has no POSITION attribute")?
             .collect();
+        // Triangles index the leg's vertices as u32: the whole leg must have fewer (the memory
+        // check refuses such a file first, unless `allow_large`).
+        if self.positions.len() + positions.len() > u32::MAX as usize {
+            return Err("has more vertices than 32-bit indices can reach".into());
+        }
         let n = positions.len() as u32;
         let indices: Vec<u32> = match reader.read_indices() {
             Some(i) => i.into_u32().collect(),
@@ -635,6 +641,7 @@ impl MeshCollector {
         }
         // A mirroring transform (negative determinant) flips the winding; undo it.
         let flip = file_from_node.fixed_view::<3, 3>(0, 0).determinant() < 0.0;
+        // Fits: checked with `n` above.
         let first = self.positions.len() as u32;
         for p in &positions {
             if !p.iter().all(|c| c.is_finite()) {
@@ -658,6 +665,7 @@ impl MeshCollector {
                     push(t[0], t[1], t[2]);
                 }
             }
+            // Every index is below `n`, checked above, and `first + n` fits in u32.
             Mode::TriangleStrip => {
                 for (k, t) in indices.windows(3).enumerate() {
                     if k % 2 == 0 {
