@@ -113,14 +113,20 @@ pub fn read_stocking_glb(path: &Path) -> Result<StockingGlb> {
         let Some(p) = reader.read_positions() else {
             continue;
         };
-        let base = positions.len() as u32;
         let p: Vec<[f64; 3]> = p
             .map(|q| {
                 let w = leg_world.transform_point(&Point3::from(q).cast::<f64>());
                 [w.x, w.y, w.z]
             })
             .collect();
-        let count = p.len() as u32;
+        // Indices are u32: with the vertices read so far they must fit (then neither the
+        // casts nor `base + i` wrap).
+        if positions.len() + p.len() > u32::MAX as usize {
+            return Err(bad(
+                "node \"leg\" has more vertices than 32-bit indices can reach".into(),
+            ));
+        }
+        let (base, count) = (positions.len() as u32, p.len() as u32);
         match reader.read_indices() {
             Some(ix) => {
                 let ix: Vec<u32> = ix.into_u32().collect();
@@ -188,12 +194,18 @@ pub fn read_stocking_glb(path: &Path) -> Result<StockingGlb> {
         let Some(p) = reader.read_positions() else {
             continue;
         };
-        let base = yarn_positions.len() as u32;
+        let base = yarn_positions.len();
         yarn_positions.extend(p.map(|q| {
             let w = yarn_world.transform_point(&Point3::from(q).cast::<f64>());
             [w.x, w.y, w.z]
         }));
-        let count = yarn_positions.len() as u32 - base;
+        // Indices are u32 (see the leg's primitives above).
+        if yarn_positions.len() > u32::MAX as usize {
+            return Err(bad(
+                "node \"yarns\" has more vertices than 32-bit indices can reach".into(),
+            ));
+        }
+        let (base, count) = (base as u32, (yarn_positions.len() - base) as u32);
         let by_material = prim
             .material()
             .name()
