@@ -188,6 +188,14 @@ pub struct Face {
     pub stitches: f64,
 }
 
+/// The wale a toe seam joins wale `w` of `wales` to, facing it across the flattened last
+/// course: `wales − w`. `None` at the folds (wales 0 and `wales / 2`, facing themselves) and for
+/// an odd course's middle pair, which are course neighbours already.
+fn seam_facing(wales: usize, w: usize) -> Option<usize> {
+    let facing = (wales - w % wales) % wales;
+    (facing != w && facing != w + 1 && facing + 1 != w).then_some(facing)
+}
+
 impl Knit {
     /// Builds a `wales × courses` grid. `position(wale, course)` gives each point's start position
     /// in metres; `rest_course` / `rest_wale` are the rest lengths of course and wale springs.
@@ -287,11 +295,9 @@ impl Knit {
     pub fn with_toe_seam(mut self, rest: f64) -> Knit {
         let (wales, last) = (self.wales, self.courses - 1);
         for w in 1..wales.div_ceil(2) {
-            let facing = wales - w;
-            // An odd course's middle pair are course neighbours already.
-            if facing == w + 1 {
+            let Some(facing) = seam_facing(wales, w) else {
                 continue;
-            }
+            };
             self.springs.push(Spring {
                 a: self.point(w, last),
                 b: self.point(facing, last),
@@ -584,8 +590,7 @@ impl Knit {
     /// along which the fabric runs on over the toe; `None` without a seam and at the folds (wales
     /// 0 and `wales / 2`, and an odd course's middle pair, which a course spring joins).
     pub fn toe_seam_partner(&self, w: usize) -> Option<usize> {
-        let facing = (self.wales - w % self.wales) % self.wales;
-        (self.toe_seam && facing != w && facing != w + 1 && facing + 1 != w).then_some(facing)
+        seam_facing(self.wales, w).filter(|_| self.toe_seam)
     }
 
     /// The heel pocket's short rows, if knitted.

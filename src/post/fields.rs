@@ -76,10 +76,11 @@ pub fn stitch_density(fabric: &Fabric, (course, wale): &Stretch) -> Vec<f64> {
 
 /// Stretch along the course and along the wale at every point: `(course, wale)` (see module
 /// docs): the arc through the fabric [`MEASURE_SPAN_M`] of relaxed fabric either way and the
-/// point itself, over that rest length (fractional spans, interpolated). Along the wale the span follows the wale
-/// through the heel pocket's short rows and on over the toe seam; around, a short row's point
-/// has only its own springs. Where the span folds back on itself (the toe seam's folds) it is
-/// shortened to the part that does not. A point with no neighbour in a direction gets 1 there.
+/// point itself, over that rest length (fractional spans, interpolated). Along the wale the
+/// span follows the wale through the heel pocket's short rows and on over the toe seam; around,
+/// a short row's point has only its own springs. Where the span folds back on itself (the toe
+/// seam's folds) it is shortened to the part that does not. A point with no neighbour in a
+/// direction gets 1 there.
 pub fn stretch(knit: &Knit) -> Stretch {
     let spans = Spans::of(knit);
     let [rest_course, rest_wale] = knit.grid_rest_m();
@@ -94,7 +95,7 @@ pub fn stretch(knit: &Knit) -> Stretch {
             let (w, c) = knit.grid_coords(p);
             let line = Spans::around(knit, w, c);
             match rest_course > 0.0 {
-                true => spans.measure(reach_course, true, line, ratio(rest_course)),
+                true => spans.measure_to_folds(reach_course, line, ratio(rest_course)),
                 false => None,
             }
             .unwrap_or(1.0)
@@ -103,7 +104,7 @@ pub fn stretch(knit: &Knit) -> Stretch {
     let mut wale = vec![1.0; knit.len()];
     if rest_wale > 0.0 {
         Spans::along_every_wale(knit, |p, line| {
-            if let Some(s) = spans.measure(reach_wale, true, line, ratio(rest_wale)) {
+            if let Some(s) = spans.measure_to_folds(reach_wale, line, ratio(rest_wale)) {
                 wale[p.index()] = s;
             }
         });
@@ -111,8 +112,8 @@ pub fn stretch(knit: &Knit) -> Stretch {
     (course, wale)
 }
 
-/// The fabric either side of a point along one direction: where it is `steps` grid steps of
-/// relaxed fabric apart (fractional: a span's ends are interpolated between grid points).
+/// The fabric either side of a point along one direction, at whole grid steps: its ends,
+/// `steps` grid steps of relaxed fabric apart in all.
 #[derive(Clone, Copy, Debug)]
 struct Ends {
     before: Vec3,
@@ -191,51 +192,75 @@ impl Spans {
 
     /// `measure` of the fabric `reach` steps either way of a point along a line of points,
     /// `at(j)` the point `j` steps from it (`None` past the line's end, where the span stops at
-    /// the last point there is), interpolated between the whole steps either side of `reach`.
-    ///
-    /// Where the line folds back within reach (it turns against the point's own direction: the
-    /// toe seam's folds), `None`; or, with `unfold`, the span stops short of the fold on that
-    /// side, so that a point beside a fold is measured over the fabric on its own side, as
-    /// much on every grid. `None` too for a point alone on its line.
-    fn measure<M>(
+    /// the last point there is). On a knit with a toe seam, where the line folds back within
+    /// reach, the span stops short of the fold on that side, so that a point beside a fold is
+    /// measured over the fabric on its own side, as much on every grid. `None` for a point
+    /// alone on its line.
+    fn measure_to_folds<M>(
         &self,
         reach: f64,
-        unfold: bool,
         at: impl Fn(isize) -> Option<Vec3>,
         measure: impl Fn(&Ends) -> M,
     ) -> Option<M>
     where
         M: std::ops::Mul<f64, Output = M> + std::ops::Add<Output = M>,
     {
-        let p = self.parity;
-        let k = ((reach / p as f64).floor() as usize * p).max(p);
-        let t = ((reach - k as f64) / p as f64).clamp(0.0, 1.0);
-        let ends = |back, on| Spans::ends(&at, back, on);
-        if !unfold {
-            // The span's ends either side of the point, unless they lie back past it.
-            let turns_back = |e: &Ends| (e.here - e.before).dot(&(e.after - e.here)) <= 0.0;
-            let inner = ends(k, k).filter(|e| !turns_back(e))?;
-            return Some(match ends(k + p, k + p).filter(|e| !turns_back(e)) {
-                Some(outer) if t > 0.0 => measure(&inner) * (1.0 - t) + measure(&outer) * t,
-                _ => measure(&inner),
-            });
-        }
+        let outer = self.whole_steps(reach).0 + self.parity;
         // Only a toe seam folds a knit; elsewhere the span runs its full reach.
-        let [back_fold, on_fold] = match self.folding {
-            true => Spans::folds(&at, k + p)?,
-            false => [k + p; 2],
+        let [back, on] = match self.folding {
+            true => Spans::folds(&at, outer)?,
+            false => [outer; 2],
         };
-        let clear = |within: usize| back_fold.min(on_fold) >= within;
-        if clear(k + p) && t > 0.0 {
-            let (inner, outer) = (ends(k, k)?, ends(k + p, k + p)?);
-            Some(measure(&inner) * (1.0 - t) + measure(&outer) * t)
-        } else if clear(k) {
-            ends(k, k).map(|e| measure(&e))
-        } else if unfold {
-            ends(k.min(back_fold), k.min(on_fold)).map(|e| measure(&e))
+        if back.min(on) >= outer {
+            self.interpolated(reach, |k| Spans::ends(&at, k, k), measure)
         } else {
-            None
+            let k = self.whole_steps(reach).0;
+            Spans::ends(&at, k.min(back), k.min(on)).map(|e| measure(&e))
         }
+    }
+
+    /// `measure` of the fabric `reach` steps either way along the line `at` (as
+    /// [`Spans::measure_to_folds`]), but `None` where the span's ends lie back past the point:
+    /// there the fabric lies on itself (the toe seam's folds), and has no one curvature.
+    fn measure_unless_turned_back<M>(
+        &self,
+        reach: f64,
+        at: impl Fn(isize) -> Option<Vec3>,
+        measure: impl Fn(&Ends) -> M,
+    ) -> Option<M>
+    where
+        M: std::ops::Mul<f64, Output = M> + std::ops::Add<Output = M>,
+    {
+        let turns_back = |e: &Ends| (e.here - e.before).dot(&(e.after - e.here)) <= 0.0;
+        let ends = |k| Spans::ends(&at, k, k).filter(|e| !turns_back(e));
+        self.interpolated(reach, ends, measure)
+    }
+
+    /// `measure` over `reach` steps, interpolated between the spans of the whole steps either
+    /// side of it, `ends(k)` (the inner alone where there is no outer).
+    fn interpolated<M>(
+        &self,
+        reach: f64,
+        ends: impl Fn(usize) -> Option<Ends>,
+        measure: impl Fn(&Ends) -> M,
+    ) -> Option<M>
+    where
+        M: std::ops::Mul<f64, Output = M> + std::ops::Add<Output = M>,
+    {
+        let (k, t) = self.whole_steps(reach);
+        let inner = ends(k)?;
+        Some(match ends(k + self.parity) {
+            Some(outer) if t > 0.0 => measure(&inner) * (1.0 - t) + measure(&outer) * t,
+            _ => measure(&inner),
+        })
+    }
+
+    /// The whole steps below `reach` (a multiple of the parity, at least one) and how far
+    /// `reach` lies from them toward the next, 0–1.
+    fn whole_steps(&self, reach: f64) -> (usize, f64) {
+        let p = self.parity as f64;
+        let k = ((reach / p).floor() * p).max(p);
+        (k as usize, ((reach - k) / p).clamp(0.0, 1.0))
     }
 
     /// How many steps either way (`[back, on]`, up to `k`) the line runs from the point before
@@ -269,8 +294,8 @@ impl Spans {
         })
     }
 
-    /// The fabric `back` and `on` whole steps either way along the line (see
-    /// [`Spans::measure`]), stopping at its ends; `None` where that leaves no step.
+    /// The fabric `back` and `on` whole steps either way along the line `at` (see
+    /// [`Spans::measure_to_folds`]), stopping at its ends; `None` where that leaves no step.
     fn ends(at: &impl Fn(isize) -> Option<Vec3>, back: usize, on: usize) -> Option<Ends> {
         let here = at(0)?;
         let side = |sign: isize, k: usize| {
@@ -288,7 +313,7 @@ impl Spans {
         })
     }
 
-    /// The line round the course of grid point `(w, c)` (see [`Spans::measure`]): round a
+    /// The line round the course of grid point `(w, c)` (see [`Spans::measure_to_folds`]): round a
     /// tube's ring (half of it at most either way), stopping at a patch's edges.
     fn around(knit: &Knit, w: usize, c: usize) -> impl Fn(isize) -> Option<Vec3> + '_ {
         let wales = knit.wales as isize;
@@ -306,8 +331,8 @@ impl Spans {
     }
 
     /// Calls `f(point, line)` for every point of every wale, `line` its line along the wale
-    /// (see [`Spans::measure`]): through the heel pocket's short rows, and on over the toe seam
-    /// along the facing wale.
+    /// (see [`Spans::measure_to_folds`]): through the heel pocket's short rows, and on over the
+    /// toe seam along the facing wale.
     fn along_every_wale(knit: &Knit, mut f: impl FnMut(PointId, &dyn Fn(isize) -> Option<Vec3>)) {
         for w in 0..knit.wales {
             let path = knit.wale_path_over_toe(w);
@@ -325,8 +350,9 @@ impl Spans {
 }
 
 /// Coverage at every point (see module docs), from the real yarns' loops: each stitch's loop
-/// ([`LoopShape`](crate::post::loops::LoopShape), stretched with its stitch) hides its in-plane length times its yarn's diameter,
-/// over the stitch's fitted area, the loops' overlaps taken as random. An alternating pattern's
+/// ([`LoopShape`](crate::post::loops::LoopShape), stretched with its stitch) hides its in-plane
+/// length times its yarn's diameter, over the stitch's fitted area, the loops' overlaps taken
+/// as random. An alternating pattern's
 /// stitches are of either yarn by their courses' shares, so it reads the fabric, not a grid
 /// course.
 pub fn coverage(
@@ -397,7 +423,7 @@ pub fn pressure(knit: &Knit, tension: &[Vec<f64>; 2]) -> Vec<f64> {
     let bent = |reach: f64, line: &dyn Fn(isize) -> Option<Vec3>| {
         let k = (reach as usize).max(1);
         let tangent = Spans::ends(&line, k, k).map_or_else(Vec3::zeros, |e| e.after - e.before);
-        let bend = spans.measure(reach, false, line, Ends::curvature);
+        let bend = spans.measure_unless_turned_back(reach, line, Ends::curvature);
         (tangent, bend.unwrap_or_else(Vec3::zeros))
     };
     let around: Vec<(Vec3, Vec3)> = (0..knit.grid_len())
