@@ -27,6 +27,7 @@ use clap::Parser;
 use cli::{
     print_written, Bar, BenchArgs, Cli, Command, FitArgs, PatchArgs, PlanArgs, PlanOf, RenderArgs,
 };
+use knitfit::export::YarnsWritten;
 use knitfit::report::stocking_extent;
 use knitfit::run::{
     plan_fit, plan_patch, run_bench, run_fit, run_patch, run_render, run_spp_sweep, BenchOptions,
@@ -111,14 +112,17 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
             k.stitches_per_cell.wale
         );
         if let Some(real) = &d.yarns.real_stitches {
+            let (w, c) = (real.wales, real.courses);
+            let written = match d.yarns.written {
+                YarnsWritten::Loops => format!("every real stitch as a loop, {w} × {c}"),
+                YarnsWritten::Stitches => format!("every real stitch's crossings, {w} × {c}"),
+                // The real stitches were laid for the preview only.
+                YarnsWritten::Grid => {
+                    format!("the fitted grid's (the preview draws every real stitch, {w} × {c})")
+                }
+            };
             say!(
-                "yarns: every real stitch{}, {} × {}: {} points, {} segments",
-                match d.yarns.written {
-                    knitfit::export::YarnsWritten::Loops => " as a loop",
-                    _ => "'s crossings",
-                },
-                real.wales,
-                real.courses,
+                "yarns: {written}: {} points, {} segments",
                 d.yarns.points,
                 d.yarns.segments
             );

@@ -34,6 +34,12 @@ fn no_arguments_fits_the_bundled_sample_and_says_where_outputs_went() {
         text.contains("out/preview.png is the yarn-level still"),
         "{text}"
     );
+    // The yarn files hold the fitted grid; the real stitches are laid for the preview only, and
+    // the summary does not claim them written.
+    assert!(
+        text.contains("yarns: the fitted grid's (the preview draws every real stitch, 400 × "),
+        "{text}"
+    );
     // The second line says where the stocking went: the bundled leg has no foot and is cut.
     let extent = text.lines().nth(1).unwrap();
     assert!(
