@@ -3,6 +3,8 @@
 
 use std::collections::BTreeMap;
 
+use super::Vec3;
+
 /// An opaque surface's look, as core glTF's metallic-roughness material gives it: what the leg
 /// is drawn in. Colours are linear RGB 0–1.
 #[derive(Clone, Debug, PartialEq)]
@@ -78,13 +80,22 @@ impl SurfaceMesh {
 /// every normal is a unit vector as glTF requires. A triangle with an index past the last
 /// position is skipped: the writers refuse such a mesh with a message, rather than panic here.
 pub fn vertex_normals(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f32; 3]> {
-    use nalgebra::Vector3;
-    let mut sum = vec![Vector3::<f64>::zeros(); positions.len()];
+    let positions: Vec<Vec3> = positions.iter().map(|&p| Vec3::from(p)).collect();
+    area_weighted_normals(&positions, triangles)
+        .into_iter()
+        .map(|n| n.map_or([0.0, 1.0, 0.0], |u| [u.x as f32, u.y as f32, u.z as f32]))
+        .collect()
+}
+
+/// Unit area-weighted vertex normals, `None` for a vertex on no triangle or on only degenerate
+/// ones; a triangle with an index past the last position is skipped.
+pub fn area_weighted_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Option<Vec3>> {
+    let mut sum = vec![Vec3::zeros(); positions.len()];
     for t in triangles {
         if t.iter().any(|&i| i as usize >= positions.len()) {
             continue;
         }
-        let [a, b, c] = t.map(|i| Vector3::from(positions[i as usize]));
+        let [a, b, c] = t.map(|i| positions[i as usize]);
         let n = (b - a).cross(&(c - a));
         for &i in t {
             sum[i as usize] += n;
@@ -93,12 +104,7 @@ pub fn vertex_normals(positions: &[[f64; 3]], triangles: &[[u32; 3]]) -> Vec<[f3
     sum.iter()
         .map(|n| {
             let len = n.norm();
-            if len > 0.0 && len.is_finite() {
-                let u = n / len;
-                [u.x as f32, u.y as f32, u.z as f32]
-            } else {
-                [0.0, 1.0, 0.0]
-            }
+            (len > 0.0 && len.is_finite()).then(|| n / len)
         })
         .collect()
 }

@@ -4,9 +4,11 @@
 pub mod colour;
 pub mod frame;
 pub mod mesh;
+pub mod near;
 pub mod settings;
 pub mod yarn;
 
 pub use frame::{perpendicular_frame, Vec3};
-pub use mesh::{vertex_normals, Material, SurfaceMesh};
+pub use mesh::{area_weighted_normals, vertex_normals, Material, SurfaceMesh};
+pub use near::PointGrid;
 pub use yarn::{Direction, PerYarn, Segment, YarnGeometry, YarnKind};

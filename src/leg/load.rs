@@ -89,6 +89,29 @@ impl Leg {
         }
     }
 
+    /// An open round tube up +Y for tests: `radius`, `height`, `sides` around, `bands` of
+    /// triangles along.
+    #[cfg(test)]
+    pub fn round(radius: f64, height: f64, sides: u32, bands: u32) -> Leg {
+        let mut positions = Vec::new();
+        for ring in 0..=bands {
+            for k in 0..sides {
+                let a = std::f64::consts::TAU * k as f64 / sides as f64;
+                let y = height * ring as f64 / bands as f64;
+                positions.push(Point3::new(radius * a.cos(), y, radius * a.sin()));
+            }
+        }
+        let mut triangles = Vec::new();
+        for ring in 0..bands {
+            for k in 0..sides {
+                let (a, b) = (ring * sides + k, ring * sides + (k + 1) % sides);
+                triangles.push([a, a + sides, b]);
+                triangles.push([b, a + sides, b + sides]);
+            }
+        }
+        Leg::from_world("round".into(), &positions, &triangles)
+    }
+
     /// Converts a point in world space to the file's coordinates and units.
     pub fn file_from_world(&self, p: &Point3<f64>) -> Point3<f64> {
         let turned = turn_back(self.up_axis, p);

@@ -4,6 +4,7 @@
 pub mod axis;
 pub mod clean;
 pub mod collider;
+pub mod curvature;
 pub mod landmarks;
 pub mod load;
 pub mod orient;
@@ -15,6 +16,7 @@ pub mod weld;
 pub use axis::{leaves_mesh, Axis, AxisSource};
 pub use clean::Cleaned;
 pub use collider::{Closest, Collider};
+pub use curvature::SkinCurvature;
 pub use landmarks::{find_landmarks, Landmarks, ThighTopKind};
 pub use load::{decode_leg, load_leg, read_leg_file, Leg, LegFile};
 pub use settings::{ContactMethod, LegAxis, LegSettings, Side, Units, UpAxis, UpChoice};

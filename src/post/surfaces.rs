@@ -374,6 +374,7 @@ mod tests {
     use super::*;
     use crate::base::Vec3;
     use crate::knit::{Pattern, Tile};
+    use crate::leg::{ContactMethod, SkinCurvature};
 
     const WALES: usize = 8;
     const COURSES: usize = 5;
@@ -417,7 +418,9 @@ mod tests {
             stiffness: [1.0, 10.0, 1.0],
             connection_factor: Some(0.2),
         };
-        KnitFields::measure(knit, &fabric, &terms)
+        let leg = Collider::new(&Leg::round(RADIUS, 0.1, 48, 10), ContactMethod::Bvh).unwrap();
+        let skin = SkinCurvature::of(&leg, 0.008);
+        KnitFields::measure(knit, &fabric, &terms, &skin, 0.0)
     }
 
     fn surface(knit: &Knit) -> SurfaceMesh {
@@ -546,25 +549,9 @@ mod tests {
         // A round leg of radius 30 mm (96 sides) under a 12-wale tube whose points rest on it:
         // the chords between wales cut 1 mm into the round, so the 1 mm lift alone leaves the
         // edges' midpoints on the skin, and the further rounds must clear them.
-        let (r, h, sides) = (0.03, 0.2, 96usize);
-        let mut positions = Vec::new();
-        for ring in 0..=4 {
-            for k in 0..sides {
-                let a = TAU * k as f64 / sides as f64;
-                positions.push(Point3::new(r * a.cos(), h * ring as f64 / 4.0, r * a.sin()));
-            }
-        }
-        let mut triangles = Vec::new();
-        let n = sides as u32;
-        for ring in 0..4u32 {
-            for k in 0..n {
-                let (a, b) = (ring * n + k, ring * n + (k + 1) % n);
-                triangles.push([a, a + n, b]);
-                triangles.push([b, a + n, b + n]);
-            }
-        }
-        let leg = Leg::from_world("round".into(), &positions, &triangles);
-        let collider = Collider::new(&leg, crate::leg::ContactMethod::Bvh).unwrap();
+        let r = 0.03;
+        let leg = Leg::round(r, 0.2, 96, 4);
+        let collider = Collider::new(&leg, ContactMethod::Bvh).unwrap();
         let (wales, courses) = (12, 8);
         let knit = Knit::grid(
             wales,

@@ -26,7 +26,6 @@ use crate::knit::TubeBottom;
 use crate::leg::AxisSource;
 use crate::limits::{peak_memory, reset_peak_memory};
 use crate::plan::{Plan, Stage};
-use crate::post::fields::measure_fields;
 use crate::report::StageClock;
 use crate::scene::{Scene, BUNDLED_SCENE_DIR};
 use crate::sim::SolverMethod;
@@ -342,9 +341,7 @@ impl Reference {
 /// The stitch density on the leg's vertices, stitches per cm².
 fn leg_density(fit: &SolvedFit, scene: &Scene) -> Vec<f64> {
     let terms = Plan::fit(scene).forces;
-    measure_fields(&fit.knit, &fit.leg, &scene.fabric(), &terms)
-        .1
-        .stitch_density
+    fit.fields(&scene.fabric(), &terms).1.stitch_density
 }
 
 /// One curve per leg, solver and resolution: error against time over the tolerances.

@@ -23,7 +23,7 @@ use crate::knit::Fabric;
 use crate::knit::{Knit, TubeBottom, TubeHeel, RELAXED_LENGTH_FRACTION};
 use crate::leg::{
     decode_leg, find_landmarks, leaves_mesh, read_leg_file, Axis, AxisSource, Collider, Landmarks,
-    Leg,
+    Leg, SkinCurvature,
 };
 use crate::limits::{peak_memory, FitSize, MemoryCheck};
 use crate::plan::{fit_files, File, FitFile, Plan, Stage, PREVIEW_FILE};
@@ -101,9 +101,7 @@ pub fn run_fit(
     )?;
     let fabric = scene.fabric();
     let (knit_fields, leg_fields) = if plan.has(Stage::LegAttributes) {
-        run.stage(Stage::LegAttributes, || {
-            measure_fields(&fit.knit, &fit.leg, &fabric, &plan.forces)
-        })
+        run.stage(Stage::LegAttributes, || fit.fields(&fabric, &plan.forces))
     } else {
         (KnitFields::default(), KnitFields::default())
     };
@@ -400,6 +398,9 @@ pub struct SolvedFit {
     pub centreline: Centreline,
     /// The leg's collider.
     pub collider: Collider,
+    /// The toes boxed (`TubePath::box_the_toes`), where the path has toes: the surface the fit's
+    /// contact saw there, the fabric bridging the gaps between toes.
+    pub toe_box: Option<Collider>,
     /// The tube asked for.
     pub spec: TubeSpec,
     /// Distance kept between yarn centre line and skin, metres.
@@ -587,6 +588,7 @@ pub fn solve_fit(
         path,
         centreline,
         collider,
+        toe_box: boxed_toes,
         spec,
         offset,
         knit,
@@ -600,6 +602,20 @@ pub fn solve_fit(
 }
 
 /// How many of `knit`'s courses came to rest below a course before them; refused as
+impl SolvedFit {
+    /// The surface the fitted fabric rests on: the skin, with the toes boxed where it has toes.
+    pub fn rested_on(&self) -> &Collider {
+        self.toe_box.as_ref().unwrap_or(&self.collider)
+    }
+
+    /// The fitted knit's fields, per point and on the leg's vertices ([`measure_fields`]), as
+    /// the real stocking `fabric` with the stiffness of `terms`, pressing on the skin it rests on.
+    pub fn fields(&self, fabric: &Fabric, terms: &ForceTerms) -> (KnitFields, KnitFields) {
+        let skin = SkinCurvature::of(self.rested_on(), fields::MEASURE_SPAN_M);
+        measure_fields(&self.knit, &self.leg, &skin, self.offset, fabric, terms)
+    }
+}
+
 /// [`Error::Bunched`] above [`MAX_BUNCHED_FRACTION`] of them.
 fn refuse_bunched(
     knit: &Knit,

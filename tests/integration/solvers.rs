@@ -4,7 +4,6 @@
 use knitfit::base::Direction;
 use knitfit::leg::AxisSource;
 use knitfit::plan::Plan;
-use knitfit::post::fields::measure_fields;
 use knitfit::report::StageClock;
 use knitfit::run::fit::{solve_fit, FitInputs, SolvedFit};
 use knitfit::run::NoProgress;
@@ -53,9 +52,7 @@ fn solve_scene(leg: &std::path::Path, scene: Scene) -> (SolvedFit, Scene) {
 
 fn leg_density(fit: &SolvedFit, scene: &Scene) -> Vec<f64> {
     let terms = Plan::fit(scene).forces;
-    measure_fields(&fit.knit, &fit.leg, &scene.fabric(), &terms)
-        .1
-        .stitch_density
+    fit.fields(&scene.fabric(), &terms).1.stitch_density
 }
 
 #[test]

@@ -82,12 +82,13 @@ fn a_whole_stockings_fields_are_the_same_on_the_default_grid_and_at_the_real_sti
     let (real_dir, _) = fit(&leg, &format!("400x{courses}"), &[]);
     let a = leg_fields(&coarse_dir.path().join("out"));
     let b = leg_fields(&real_dir.path().join("out"));
-    // Pressure is not yet within 3 %: the toe tip's curve, a centimetre across, is a few cells
-    // of the 150-course grid (issue 21); this holds what is reached.
+    // Pressure is not yet within 3 % (6.4 % measured): on the toes the fabric is stretched by
+    // 5–8 %, and the grids' stretch there differs by 1–1.5 %, so their tension does by 15–30 %
+    // (issue 21, decision 0058); this holds what is reached.
     for (k, field, bound) in [
         (0, "stitch_density", 0.03),
         (1, "coverage", 0.03),
-        (2, "pressure", 0.12),
+        (2, "pressure", 0.08),
     ] {
         let error = relative_l2(&a, &b, k);
         eprintln!(
