@@ -87,8 +87,7 @@ fn fit_quadric(
     scale: f64,
 ) -> Matrix3<f64> {
     let (e1, e2) = perpendicular_frame(n);
-    let radii = [scale, 2.0 * scale, 4.0 * scale];
-    for (attempt, radius) in radii.into_iter().enumerate() {
+    for radius in [scale, 2.0 * scale, 4.0 * scale] {
         // Coordinates over the radius, so the normal equations are well scaled at any size.
         let mut normal_matrix = SMatrix::<f64, 5, 5>::zeros();
         let mut rhs = SVector::<f64, 5>::zeros();
@@ -109,14 +108,12 @@ fn fit_quadric(
         if count < MIN_NEIGHBOURS {
             continue;
         }
-        let svd = normal_matrix.svd(true, true);
-        let largest = svd.singular_values.max();
-        if svd.singular_values.min() < MIN_CONDITION * largest && attempt + 1 < radii.len() {
+        let eigenvalues = normal_matrix.symmetric_eigenvalues();
+        if eigenvalues.min() < MIN_CONDITION * eigenvalues.max() {
             continue;
         }
-        let tolerance = MIN_CONDITION * largest;
-        let Ok(coefficients) = svd.solve(&rhs, tolerance) else {
-            return Matrix3::zeros();
+        let Some(coefficients) = normal_matrix.cholesky().map(|c| c.solve(&rhs)) else {
+            continue;
         };
         // Back from coordinates over the radius: z/r = A (x/r)² … gives a = A / r.
         let [a, b, c] = [0, 1, 2].map(|k| coefficients[k] / radius);
