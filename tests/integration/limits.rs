@@ -161,3 +161,47 @@ fn a_bad_memory_limit_is_refused_by_name() {
     let out = knitfit(dir.path(), &["fit", "s.json"]);
     assert_refused(dir.path(), &out, &["limits.memory_gib", "positive"]);
 }
+
+/// A stitch 100 times finer than a stocking's on 100,000 needles: the fitted grid is small, but
+/// the real stitches it stands for, 100000 × about 158,000, number more points than 32-bit
+/// indices can. `--allow-large` lifts the memory check, not this bound; before it the fit
+/// aborted allocating 380 GB for them (exit 134), and on a machine that had it the ids wrapped.
+const FINE_STITCH: &str = r#"{"knit": {"needles": 100000, "course_spacing_m": 2e-6,
+  "wale_spacing_m": 2.96e-6}, "limits": {"allow_large": true}}"#;
+
+#[test]
+fn regression_real_stitches_past_32_bit_indices_are_refused_even_with_allow_large() {
+    let leg = procedural_leg();
+    for (outputs, expect) in [
+        (
+            r#"["ply", "stitches"]"#,
+            "over the 1073741823 points a knit's 32-bit indices can number",
+        ),
+        (
+            r#"["ply", "preview"]"#,
+            "over the 89478485 stitches that 32-bit indices can number drawn as loops",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let mut scene: serde_json::Value = serde_json::from_str(FINE_STITCH).unwrap();
+        scene["outputs"] = serde_json::from_str(outputs).unwrap();
+        write(dir.path(), "s.json", &scene.to_string());
+        let args = [
+            "fit",
+            "s.json",
+            "--leg",
+            leg.to_str().unwrap(),
+            "--resolution",
+            "16x16",
+        ];
+        let out = knitfit(dir.path(), &args);
+        assert_refused(
+            dir.path(),
+            &out,
+            &[
+                "s.json: knit: the real stitches of this stocking, 100000×",
+                expect,
+            ],
+        );
+    }
+}
