@@ -205,3 +205,26 @@ fn regression_real_stitches_past_32_bit_indices_are_refused_even_with_allow_larg
         );
     }
 }
+
+/// A relaxed circumference sets the needles (circumference / knit.course_spacing_m), which then
+/// passed knit.needles' bound unchecked: 10 m of 1e-9 m stitches is 10¹⁰ needles. Refused where
+/// the scene is read, naming the field; before, the fit ran and ended in a misleading refusal
+/// ("not on the leg") or, for a finer stitch, a diverged solver (exit 1).
+#[test]
+fn regression_a_circumference_of_more_needles_than_the_bound_is_refused_at_the_load() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "s.json",
+        r#"{"tube": {"relaxed_circumference_m": 10}, "knit": {"course_spacing_m": 1e-9}}"#,
+    );
+    let out = knitfit(dir.path(), &["fit", "s.json"]);
+    assert_refused(
+        dir.path(),
+        &out,
+        &[
+            "s.json: tube.relaxed_circumference_m: 10 m of 1e-9 m stitches is 1e10 needles, over \
+           the 100000 knit.needles allows",
+        ],
+    );
+}
