@@ -1,7 +1,9 @@
 //! Resource limits: a fit too large for memory is refused up front, with its estimate and the
 //! override; the override skips the check.
 
-use crate::support::{files_in, knitfit, procedural_leg, report, stderr, stdout, write};
+use crate::support::{
+    files_in, knitfit, knitfit_within, procedural_leg, report, stderr, stdout, write,
+};
 
 /// A .gltf whose one primitive declares a billion triangles over a buffer file that does not
 /// exist: decoding it would fail on the buffer, so a refusal by size proves the check came first.
@@ -225,6 +227,39 @@ fn regression_a_circumference_of_more_needles_than_the_bound_is_refused_at_the_l
         &[
             "s.json: tube.relaxed_circumference_m: 10 m of 1e-9 m stitches is 1e10 needles, over \
            the 100000 knit.needles allows",
+        ],
+    );
+}
+
+/// The paper's solver splits a step above the stability limit into `time_step / limit`
+/// sub-steps; a time step of 1e308 saturated that to `usize::MAX` and the fit never ended (as
+/// did a finite step over a limit of 1e-149, from a stitch of 1e-300 m). More than 10,000
+/// sub-steps a step is refused, with the largest time step that would do.
+#[test]
+fn regression_a_time_step_past_the_sub_step_bound_is_refused_not_run_for_ever() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "s.json",
+        r#"{"solver": {"method": "paper", "time_step": 1e308}}"#,
+    );
+    let leg = procedural_leg();
+    let args = [
+        "fit",
+        "s.json",
+        "--leg",
+        leg.to_str().unwrap(),
+        "--resolution",
+        "16x16",
+    ];
+    let out = knitfit_within(dir.path(), &args, std::time::Duration::from_secs(60))
+        .expect("the fit ends within the bound");
+    assert_refused(
+        dir.path(),
+        &out,
+        &[
+            "solver.time_step 1e308 would take more than 10000 sub-steps a step",
+            "use a time step of at most",
         ],
     );
 }
