@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Point3, Vector3};
 
 use super::{Outcome, Progress, Run, StepProgress};
+use crate::base::settings::number;
 use crate::base::{Material, SurfaceMesh, YarnGeometry, YarnKind};
 use crate::draw;
 use crate::draw::density_map::{self, DensityPictureStyle};
@@ -18,7 +19,8 @@ use crate::export::{Output, YarnsWritten};
 use crate::knit::path::{path_to_toe, TubePath};
 use crate::knit::settings::MAX_TUBE_POINTS;
 use crate::knit::tube::{
-    build_stocking, build_tube, end_rings, part_at, tube_axis, Centreline, TubeSpec,
+    build_stocking, build_tube, end_rings, heel_pocket_half_length_m, part_at, tube_axis,
+    Centreline, TubeSpec,
 };
 use crate::knit::Fabric;
 use crate::knit::{Knit, TubeBottom, TubeHeel, RELAXED_LENGTH_FRACTION};
@@ -502,6 +504,7 @@ pub fn solve_fit(
         relaxed_length_m: relaxed_length,
         stitch_m: fabric.stitch_m,
     };
+    check_heel_pocket(scene, &spec, path.is_some(), scene_name)?;
     let offset = scene.contact.offset(&scene.yarns);
     let mut levels = TubeLevels {
         spec,
@@ -1100,6 +1103,30 @@ fn relaxed_length(scene: &Scene, length: f64, scene_name: &str) -> Result<f64> {
             ),
         }),
     }
+}
+
+/// Refuses a heel pocket longer than the relaxed stocking it is knitted into: its rows on the
+/// grid are its length over the grid's course spacing, so such a pocket has more rows than the
+/// stocking has courses, without bound (a relaxed length of 1e-9 m aborted allocating them).
+fn check_heel_pocket(scene: &Scene, spec: &TubeSpec, to_toe: bool, scene_name: &str) -> Result<()> {
+    let half = heel_pocket_half_length_m(spec);
+    if scene.tube.heel != TubeHeel::Pocket || !to_toe || half <= spec.relaxed_length_m {
+        return Ok(());
+    }
+    Err(Error::InvalidScene {
+        path: scene_name.to_string(),
+        field: "tube.heel".into(),
+        message: format!(
+            "the heel pocket would be {} m of fabric each way ({:.0} stitches around / 6 courses \
+             of {} m), longer than the relaxed stocking ({} m): ask for fewer stitches around \
+             (knit.needles) or a shorter knit.wale_spacing_m, or give a longer \
+             tube.relaxed_length_m",
+            format!("{half:.3}"),
+            spec.relaxed_circumference_m / spec.stitch_m[0],
+            number(spec.stitch_m[1]),
+            number(spec.relaxed_length_m),
+        ),
+    })
 }
 
 /// A fit whose yarn rests on the skin at fewer than this fraction of its points is no stocking

@@ -263,3 +263,35 @@ fn regression_a_time_step_past_the_sub_step_bound_is_refused_not_run_for_ever() 
         ],
     );
 }
+
+/// A heel pocket's rows on the grid are its length (a sixth of the stitches around, of the
+/// relaxed stitch) over the grid's course spacing. A relaxed stocking of 1e-9 m made that
+/// 10⁸ rows a wale and the fit aborted allocating them (exit 134); a pocket longer than the
+/// stocking it is knitted into is refused before any grid is built.
+#[test]
+fn regression_a_heel_pocket_longer_than_the_stocking_is_refused_not_allocated() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "s.json",
+        r#"{"tube": {"heel": "pocket", "relaxed_length_m": 1e-9}, "outputs": ["ply"]}"#,
+    );
+    let leg = crate::support::sample("makehuman_leg_foot.glb");
+    let args = [
+        "fit",
+        "s.json",
+        "--leg",
+        leg.to_str().unwrap(),
+        "--resolution",
+        "60x60",
+    ];
+    let out = knitfit(dir.path(), &args);
+    assert_refused(
+        dir.path(),
+        &out,
+        &[
+            "s.json: tube.heel: the heel pocket would be 0.049 m of fabric each way",
+            "longer than the relaxed stocking (1e-9 m)",
+        ],
+    );
+}
