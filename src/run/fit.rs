@@ -1117,11 +1117,10 @@ fn check_heel_pocket(scene: &Scene, spec: &TubeSpec, to_toe: bool, scene_name: &
         path: scene_name.to_string(),
         field: "tube.heel".into(),
         message: format!(
-            "the heel pocket would be {} m of fabric each way ({:.0} stitches around / 6 courses \
-             of {} m), longer than the relaxed stocking ({} m): ask for fewer stitches around \
-             (knit.needles) or a shorter knit.wale_spacing_m, or give a longer \
+            "the heel pocket would be {half:.3} m of fabric each way ({:.0} stitches around / \
+             6 courses of {} m), longer than the relaxed stocking ({} m): ask for fewer \
+             stitches around (knit.needles) or a shorter knit.wale_spacing_m, or give a longer \
              tube.relaxed_length_m",
-            format!("{half:.3}"),
             spec.relaxed_circumference_m / spec.stitch_m[0],
             number(spec.stitch_m[1]),
             number(spec.relaxed_length_m),
