@@ -189,6 +189,8 @@ pub fn build_stocking(spec: &TubeSpec, path: &TubePath, heel: TubeHeel) -> Knit 
     if heel == TubeHeel::Pocket {
         let [lo, hi] = path.heel_range();
         let course = ((0.5 * (lo + hi) / length) * (c_count - 1) as f64).round() as usize;
+        // `c_count ≥ 2` (tube.courses is checked, a real count takes at least 2), so the
+        // pocket's course and the next one exist, as `with_short_rows` asserts.
         let course = course.min(c_count - 2);
         let depth = heel_pocket_depths(spec, w_count, rest_wale);
         let (centre, ..) = path.frame_at(along(course));
