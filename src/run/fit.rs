@@ -1109,21 +1109,25 @@ fn relaxed_length(scene: &Scene, length: f64, scene_name: &str) -> Result<f64> {
 /// grid are its length over the grid's course spacing, so such a pocket has more rows than the
 /// stocking has courses, without bound (a relaxed length of 1e-9 m aborted allocating them).
 fn check_heel_pocket(scene: &Scene, spec: &TubeSpec, to_toe: bool, scene_name: &str) -> Result<()> {
-    let half = heel_pocket_half_length_m(spec);
-    if scene.tube.heel != TubeHeel::Pocket || !to_toe || half <= spec.relaxed_length_m {
+    let (half, length) = (heel_pocket_half_length_m(spec), spec.relaxed_length_m);
+    if scene.tube.heel != TubeHeel::Pocket || !to_toe || half <= length {
         return Ok(());
     }
+    // Millimetres as millimetres; a length far below them as the number it is.
+    let length = match length >= 1e-3 {
+        true => format!("{length:.3}"),
+        false => number(length),
+    };
     Err(Error::InvalidScene {
         path: scene_name.to_string(),
         field: "tube.heel".into(),
         message: format!(
             "the heel pocket would be {half:.3} m of fabric each way ({:.0} stitches around / \
-             6 courses of {} m), longer than the relaxed stocking ({} m): ask for fewer \
+             6 courses of {} m), longer than the relaxed stocking ({length} m): ask for fewer \
              stitches around (knit.needles) or a shorter knit.wale_spacing_m, or give a longer \
              tube.relaxed_length_m",
             spec.relaxed_circumference_m / spec.stitch_m[0],
             number(spec.stitch_m[1]),
-            number(spec.relaxed_length_m),
         ),
     })
 }
