@@ -86,6 +86,22 @@ pub enum Error {
         limit: f64,
         stiffest: f64,
     },
+    /// The time step is so far above the explicit stability limit that sub-stepping it would
+    /// take more than `max_substeps` sub-steps a step (a run that would never end).
+    #[error(
+        "solver.time_step {} would take more than {max_substeps} sub-steps a step under the \
+         explicit stability limit {limit:.3e} for the stiffest spring (c1 = {}); use a time step \
+         of at most {most:.3e}",
+        crate::base::settings::number(*.time_step),
+        crate::base::settings::number(*.stiffest)
+    )]
+    TooManySubsteps {
+        time_step: f64,
+        limit: f64,
+        stiffest: f64,
+        max_substeps: usize,
+        most: f64,
+    },
     /// The relaxation blew up (energy grew without bound, or a value stopped being finite).
     #[error(
         "relaxation diverged at step {step} ({what}); nothing was written. Lower solver.time_step \
@@ -165,7 +181,8 @@ impl Error {
             | Error::OutputDir { .. }
             | Error::OutputNotDirectory { .. }
             | Error::WouldOverwriteInput { .. }
-            | Error::TimeStepTooLarge { .. } => 2,
+            | Error::TimeStepTooLarge { .. }
+            | Error::TooManySubsteps { .. } => 2,
             Error::Write { .. }
             | Error::Diverged { .. }
             | Error::SolverDiverged { .. }
@@ -204,6 +221,13 @@ mod tests {
                 place: "gathered 1–6 cm above the stocking's bottom end".into(),
                 ratio: 1000.0,
                 circumference_m: 0.2,
+            },
+            Error::TooManySubsteps {
+                time_step: 1e308,
+                limit: 0.225,
+                stiffest: 10.0,
+                max_substeps: 10_000,
+                most: 2250.0,
             },
             Error::TimeStepTooLarge {
                 time_step: 0.4,

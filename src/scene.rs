@@ -13,10 +13,10 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use crate::base::settings::Invalid;
+use crate::base::settings::{number, Invalid};
 use crate::error::{Error, Result};
 use crate::export::{default_outputs, Output, YarnsWritten};
-use crate::knit::settings::{KnitSettings, PatchSettings, TubeSettings, Yarns};
+use crate::knit::settings::{KnitSettings, PatchSettings, TubeSettings, Yarns, MAX_NEEDLES};
 use crate::knit::{Fabric, Pattern};
 use crate::leg::settings::LegSettings;
 use crate::limits::Limits;
@@ -147,6 +147,24 @@ impl Scene {
         self.patch.validate().map_err(|e| e.within("patch"))?;
         self.render.validate().map_err(|e| e.within("render"))?;
         self.tube.validate().map_err(|e| e.within("tube"))?;
+        if let Some(circumference) = self.tube.relaxed_circumference_m {
+            // The circumference then sets the needles (`Fabric::of`): held to knit.needles'
+            // bound, so the real stitch count stays a count.
+            let needles = circumference / self.knit.course_spacing_m;
+            if needles > MAX_NEEDLES as f64 {
+                return Err(Invalid::new(
+                    "tube.relaxed_circumference_m",
+                    format!(
+                        "{} m of {} m stitches is {} needles, over the {MAX_NEEDLES} knit.needles \
+                         allows: give a smaller circumference or a larger knit.course_spacing_m",
+                        number(circumference),
+                        number(self.knit.course_spacing_m),
+                        number(needles.round()),
+                    ),
+                )
+                .with(&["knit.course_spacing_m"]));
+            }
+        }
         if self.tube.relaxed_circumference_m.is_none() && self.tube.wales > self.knit.needles {
             // A grid point stands for one or more real stitches, never for less than one.
             return Err(Invalid::new(

@@ -84,7 +84,9 @@ impl Fabric {
     /// The real stitch count of a stocking `relaxed_length_m` long: its wales around (the
     /// needles, at least 3) and its courses (one per relaxed wale spacing, both ends included).
     pub fn real_count(&self, relaxed_length_m: f64) -> [usize; 2] {
-        let courses = (relaxed_length_m / self.stitch_m[1]).round() as usize + 1;
+        // `as usize` saturates, and the `+ 1` must too: a stitch of 1e-300 m would wrap to 0
+        // courses. The caller refuses a count over the 32-bit bound.
+        let courses = ((relaxed_length_m / self.stitch_m[1]).round() as usize).saturating_add(1);
         [(self.needles.round() as usize).max(3), courses.max(2)]
     }
 

@@ -208,6 +208,8 @@ impl Knit {
         rest_wale: f64,
         position: impl Fn(usize, usize) -> Vec3,
     ) -> Knit {
+        // Within `u32`: a grid is at most `MAX_TUBE_POINTS` (`TubeSettings::validate`), and the
+        // fit refuses a real stitch count past it (`run::fit`); patches are smaller still.
         let n = wales * courses;
         let id = |w: usize, c: usize| PointId((c * wales + w) as u32);
         let mut x = Vec::with_capacity(n);

@@ -189,6 +189,8 @@ pub fn build_stocking(spec: &TubeSpec, path: &TubePath, heel: TubeHeel) -> Knit 
     if heel == TubeHeel::Pocket {
         let [lo, hi] = path.heel_range();
         let course = ((0.5 * (lo + hi) / length) * (c_count - 1) as f64).round() as usize;
+        // `c_count ≥ 2` (tube.courses is checked, a real count takes at least 2), so the
+        // pocket's course and the next one exist, as `with_short_rows` asserts.
         let course = course.min(c_count - 2);
         let depth = heel_pocket_depths(spec, w_count, rest_wale);
         let (centre, ..) = path.frame_at(along(course));
@@ -216,9 +218,11 @@ pub fn build_stocking(spec: &TubeSpec, path: &TubePath, heel: TubeHeel) -> Knit 
 /// The same length of fabric at any grid size: rows on the grid are that length over
 /// `rest_wale`. The back half is `v < 0`: wales `wales / 2..wales`, centred on `3 wales / 4`.
 pub fn heel_pocket_depths(spec: &TubeSpec, wales: usize, rest_wale: f64) -> Vec<usize> {
-    let stitches_around = spec.relaxed_circumference_m / spec.stitch_m[0];
-    let half_length = stitches_around / 6.0 * spec.stitch_m[1];
-    let rows = (half_length / rest_wale).round().max(1.0);
+    // At most the grid's courses: a fit refuses a pocket longer than the relaxed stocking
+    // (`heel_pocket_half_length_m`), and `rest_wale` is that length over the courses.
+    let rows = (heel_pocket_half_length_m(spec) / rest_wale)
+        .round()
+        .max(1.0);
     let n = wales as f64;
     let centre = 0.75 * n;
     (0..wales)
@@ -229,6 +233,13 @@ pub fn heel_pocket_depths(spec: &TubeSpec, wales: usize, rest_wale: f64) -> Vec<
             (rows * f).round() as usize
         })
         .collect()
+}
+
+/// The length of fabric each half of a heel pocket knits ([`heel_pocket_depths`]): `n / 6` rows
+/// of the relaxed stitch, `n` the stitches around. Metres.
+pub fn heel_pocket_half_length_m(spec: &TubeSpec) -> f64 {
+    let stitches_around = spec.relaxed_circumference_m / spec.stitch_m[0];
+    stitches_around / 6.0 * spec.stitch_m[1]
 }
 
 /// The stocking's centreline, from course 0's end to the last course's: the path's centres for

@@ -421,6 +421,7 @@ fn render_with(scene: &PreparedScene, settings: &PreviewSettings, lookup: Lookup
     };
     // One row per task, written in place; each row's pixels in order, each pixel's samples in
     // order. The counts are sums of integers: the same in any order.
+    // No `u32` overflow: `PreviewSettings::validate` holds w × h to `MAX_RENDER_PIXELS` (4096²).
     let n = (w * h) as usize;
     let row = w as usize;
     let mut buffers = PreviewBuffers {

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Point3, Vector3};
 
 use super::{Outcome, Progress, Run, StepProgress};
+use crate::base::settings::number;
 use crate::base::{Material, SurfaceMesh, YarnGeometry, YarnKind};
 use crate::draw;
 use crate::draw::density_map::{self, DensityPictureStyle};
@@ -16,8 +17,10 @@ use crate::export;
 use crate::export::gltf::GlbNode;
 use crate::export::{Output, YarnsWritten};
 use crate::knit::path::{path_to_toe, TubePath};
+use crate::knit::settings::MAX_TUBE_POINTS;
 use crate::knit::tube::{
-    build_stocking, build_tube, end_rings, part_at, tube_axis, Centreline, TubeSpec,
+    build_stocking, build_tube, end_rings, heel_pocket_half_length_m, part_at, tube_axis,
+    Centreline, TubeSpec,
 };
 use crate::knit::Fabric;
 use crate::knit::{Knit, TubeBottom, TubeHeel, RELAXED_LENGTH_FRACTION};
@@ -29,7 +32,7 @@ use crate::limits::{peak_memory, FitSize, MemoryCheck};
 use crate::plan::{fit_files, File, FitFile, Plan, Stage, PREVIEW_FILE};
 use crate::post::fields::{self, measure_fields, KnitFields};
 use crate::post::lattice::{lay_on_skin, lay_stitches, LaidStitches};
-use crate::post::loops::loops;
+use crate::post::loops::{loops, SAMPLES_PER_LOOP};
 use crate::post::penetration::{fix_penetrations, PenetrationStats};
 use crate::post::regions::{regions, stretch_by_region};
 use crate::post::stitches::{
@@ -109,7 +112,7 @@ pub fn run_fit(
     // The real stitches, for the yarn files (`stitches`, `loops`) or the preview, which draws
     // every stitch as a loop so that its sheerness comes out of the knit's structure.
     let real = match plan.has(Stage::LayStitches) {
-        true => Some(run.stage(Stage::LayStitches, || real_stitches(scene, &plan, &fit))?),
+        true => Some(run.stage(Stage::LayStitches, || real_stitches(loaded, &plan, &fit))?),
         false => None,
     };
     let laid = real.as_ref().map(|(_, stats)| *stats);
@@ -235,14 +238,40 @@ fn knit_yarns(knit: &Knit, fabric: &Fabric, forces: &ForceTerms) -> YarnGeometry
 
 /// The knit at the real stitch count, built like the fitted grid (path, toe seam, heel pocket)
 /// and laid in it on the skin ([`lay_stitches`]).
-fn real_stitches(scene: &Scene, plan: &Plan, fit: &SolvedFit) -> Result<(Knit, LaidStitches)> {
+fn real_stitches(
+    loaded: &LoadedScene,
+    plan: &Plan,
+    fit: &SolvedFit,
+) -> Result<(Knit, LaidStitches)> {
+    let scene = &loaded.scene;
     let [wales, courses] = scene.fabric().real_count(fit.spec.relaxed_length_m);
+    let loops = plan.has(Stage::KnitLoops);
+    // Point ids are 32-bit, and drawn as loops each stitch is `SAMPLES_PER_LOOP` points: a bound
+    // on the count, not on memory, so `allow_large` does not lift it.
+    let (most, what) = match loops {
+        true => (
+            MAX_TUBE_POINTS / SAMPLES_PER_LOOP,
+            "stitches that 32-bit indices can number drawn as loops (\"loops\", \"preview\")",
+        ),
+        false => (MAX_TUBE_POINTS, "points a knit's 32-bit indices can number"),
+    };
+    if wales.checked_mul(courses).is_none_or(|n| n > most) {
+        return Err(Error::InvalidScene {
+            path: loaded.name.clone(),
+            field: "knit".into(),
+            message: format!(
+                "the real stitches of this stocking, {wales}×{courses}, are over the {most} \
+                 {what}; ask for fewer knit.needles or a larger stitch (knit.course_spacing_m, \
+                 knit.wale_spacing_m)"
+            ),
+        });
+    }
     // The stocking's length, and so the real count, is known only now: checked as a fit of
     // that size would be (an upper bound: no solver runs on it).
     let outputs: Vec<_> = plan.files.iter().map(|file| file.output).collect();
     let size = FitSize {
         tube: [wales, courses],
-        loops: plan.has(Stage::KnitLoops),
+        loops,
         ..fit_size(scene, &outputs, fit.leg.triangles.len())
     };
     MemoryCheck::fit(&size, &scene.limits)
@@ -476,6 +505,7 @@ pub fn solve_fit(
         relaxed_length_m: relaxed_length,
         stitch_m: fabric.stitch_m,
     };
+    check_heel_pocket(scene, &spec, path.is_some(), scene_name)?;
     let offset = scene.contact.offset(&scene.yarns);
     let mut levels = TubeLevels {
         spec,
@@ -1089,6 +1119,33 @@ fn relaxed_length(scene: &Scene, length: f64, scene_name: &str) -> Result<f64> {
             ),
         }),
     }
+}
+
+/// Refuses a heel pocket longer than the relaxed stocking it is knitted into: its rows on the
+/// grid are its length over the grid's course spacing, so such a pocket has more rows than the
+/// stocking has courses, without bound (a relaxed length of 1e-9 m aborted allocating them).
+fn check_heel_pocket(scene: &Scene, spec: &TubeSpec, to_toe: bool, scene_name: &str) -> Result<()> {
+    let (half, length) = (heel_pocket_half_length_m(spec), spec.relaxed_length_m);
+    if scene.tube.heel != TubeHeel::Pocket || !to_toe || half <= length {
+        return Ok(());
+    }
+    // Millimetres as millimetres; a length far below them as the number it is.
+    let length = match length >= 1e-3 {
+        true => format!("{length:.3}"),
+        false => number(length),
+    };
+    Err(Error::InvalidScene {
+        path: scene_name.to_string(),
+        field: "tube.heel".into(),
+        message: format!(
+            "the heel pocket would be {half:.3} m of fabric each way ({:.0} stitches around / \
+             6 courses of {} m), longer than the relaxed stocking ({length} m): ask for fewer \
+             stitches around (knit.needles) or a shorter knit.wale_spacing_m, or give a longer \
+             tube.relaxed_length_m",
+            spec.relaxed_circumference_m / spec.stitch_m[0],
+            number(spec.stitch_m[1]),
+        ),
+    })
 }
 
 /// A fit whose yarn rests on the skin at fewer than this fraction of its points is no stocking

@@ -35,6 +35,11 @@ use crate::sim::{OnUnstable, SolverSettings};
 /// Energy growth over the starting energy that counts as divergence.
 const DIVERGENCE_ENERGY_GROWTH: f64 = 1e3;
 
+/// The most sub-steps one step may be split into: a time step further above the stability
+/// limit is refused ([`Error::TooManySubsteps`]) rather than run for ever (`1e308` would be
+/// `usize::MAX` sub-steps).
+pub const MAX_SUBSTEPS_PER_STEP: usize = 10_000;
+
 /// What a relaxation did.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct RelaxStats {
@@ -74,7 +79,8 @@ pub fn stability_limit(knit: &Knit, terms: &ForceTerms) -> f64 {
 /// Relaxes `knit` in place until it converges, reaches `settings.max_steps`, or diverges.
 ///
 /// Errors: [`Error::TimeStepTooLarge`] when the step is above the stability limit and
-/// `on_unstable` is `error`; [`Error::Diverged`] when the energy watchdog fires.
+/// `on_unstable` is `error`; [`Error::TooManySubsteps`] when sub-stepping it would take more
+/// than [`MAX_SUBSTEPS_PER_STEP`] sub-steps; [`Error::Diverged`] when the energy watchdog fires.
 pub fn relax(
     knit: &mut Knit,
     terms: &ForceTerms,
@@ -177,13 +183,28 @@ fn substeps_for(settings: &SolverSettings, limit: f64, terms: &ForceTerms) -> Re
     if t <= limit {
         return Ok(1);
     }
+    let stiffest = terms.stiffness.iter().copied().fold(0.0, f64::max);
     match settings.on_unstable {
-        OnUnstable::Substep => Ok((t / limit).ceil() as usize),
+        OnUnstable::Substep => {
+            // Checked before the cast: `t / limit` can be any size (a limit of 0 makes it
+            // infinite), and `as usize` would saturate it into a loop that never ends.
+            let ratio = t / limit;
+            if ratio.is_nan() || ratio > MAX_SUBSTEPS_PER_STEP as f64 {
+                return Err(Error::TooManySubsteps {
+                    time_step: t,
+                    limit,
+                    stiffest,
+                    max_substeps: MAX_SUBSTEPS_PER_STEP,
+                    most: limit * MAX_SUBSTEPS_PER_STEP as f64,
+                });
+            }
+            Ok(ratio.ceil() as usize)
+        }
         OnUnstable::Ignore => Ok(1),
         OnUnstable::Error => Err(Error::TimeStepTooLarge {
             time_step: t,
             limit,
-            stiffest: terms.stiffness.iter().copied().fold(0.0, f64::max),
+            stiffest,
         }),
     }
 }

@@ -1,7 +1,9 @@
 //! Resource limits: a fit too large for memory is refused up front, with its estimate and the
 //! override; the override skips the check.
 
-use crate::support::{files_in, knitfit, procedural_leg, report, stderr, stdout, write};
+use crate::support::{
+    files_in, knitfit, knitfit_within, procedural_leg, report, stderr, stdout, write,
+};
 
 /// A .gltf whose one primitive declares a billion triangles over a buffer file that does not
 /// exist: decoding it would fail on the buffer, so a refusal by size proves the check came first.
@@ -160,4 +162,136 @@ fn a_bad_memory_limit_is_refused_by_name() {
     write(dir.path(), "s.json", r#"{"limits": {"memory_gib": 0}}"#);
     let out = knitfit(dir.path(), &["fit", "s.json"]);
     assert_refused(dir.path(), &out, &["limits.memory_gib", "positive"]);
+}
+
+/// A stitch 100 times finer than a stocking's on 100,000 needles: the fitted grid is small, but
+/// the real stitches it stands for, 100000 × about 158,000, number more points than 32-bit
+/// indices can. `--allow-large` lifts the memory check, not this bound; before it the fit
+/// aborted allocating 380 GB for them (exit 134), and on a machine that had it the ids wrapped.
+const FINE_STITCH: &str = r#"{"knit": {"needles": 100000, "course_spacing_m": 2e-6,
+  "wale_spacing_m": 2.96e-6}, "limits": {"allow_large": true}}"#;
+
+#[test]
+fn regression_real_stitches_past_32_bit_indices_are_refused_even_with_allow_large() {
+    let leg = procedural_leg();
+    for (outputs, expect) in [
+        (
+            r#"["ply", "stitches"]"#,
+            "over the 1073741823 points a knit's 32-bit indices can number",
+        ),
+        (
+            r#"["ply", "preview"]"#,
+            "over the 89478485 stitches that 32-bit indices can number drawn as loops",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let mut scene: serde_json::Value = serde_json::from_str(FINE_STITCH).unwrap();
+        scene["outputs"] = serde_json::from_str(outputs).unwrap();
+        write(dir.path(), "s.json", &scene.to_string());
+        let args = [
+            "fit",
+            "s.json",
+            "--leg",
+            leg.to_str().unwrap(),
+            "--resolution",
+            "16x16",
+        ];
+        let out = knitfit(dir.path(), &args);
+        assert_refused(
+            dir.path(),
+            &out,
+            &[
+                "s.json: knit: the real stitches of this stocking, 100000×",
+                expect,
+            ],
+        );
+    }
+}
+
+/// A relaxed circumference sets the needles (circumference / knit.course_spacing_m), which then
+/// passed knit.needles' bound unchecked: 10 m of 1e-9 m stitches is 10¹⁰ needles. Refused where
+/// the scene is read, naming the field; before, the fit ran and ended in a misleading refusal
+/// ("not on the leg") or, for a finer stitch, a diverged solver (exit 1).
+#[test]
+fn regression_a_circumference_of_more_needles_than_the_bound_is_refused_at_the_load() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "s.json",
+        r#"{"tube": {"relaxed_circumference_m": 10}, "knit": {"course_spacing_m": 1e-9}}"#,
+    );
+    let out = knitfit(dir.path(), &["fit", "s.json"]);
+    assert_refused(
+        dir.path(),
+        &out,
+        &[
+            "s.json: tube.relaxed_circumference_m: 10 m of 1e-9 m stitches is 1e10 needles, over \
+           the 100000 knit.needles allows",
+        ],
+    );
+}
+
+/// The paper's solver splits a step above the stability limit into `time_step / limit`
+/// sub-steps; a time step of 1e308 saturated that to `usize::MAX` and the fit never ended (as
+/// did a finite step over a limit of 1e-149, from a stitch of 1e-300 m). More than 10,000
+/// sub-steps a step is refused, with the largest time step that would do.
+#[test]
+fn regression_a_time_step_past_the_sub_step_bound_is_refused_not_run_for_ever() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "s.json",
+        r#"{"solver": {"method": "paper", "time_step": 1e308}}"#,
+    );
+    let leg = procedural_leg();
+    let args = [
+        "fit",
+        "s.json",
+        "--leg",
+        leg.to_str().unwrap(),
+        "--resolution",
+        "16x16",
+    ];
+    let out = knitfit_within(dir.path(), &args, std::time::Duration::from_secs(60))
+        .expect("the fit ends within the bound");
+    assert_refused(
+        dir.path(),
+        &out,
+        &[
+            "solver.time_step 1e308 would take more than 10000 sub-steps a step",
+            "use a time step of at most",
+        ],
+    );
+}
+
+/// A heel pocket's rows on the grid are its length (a sixth of the stitches around, of the
+/// relaxed stitch) over the grid's course spacing. A relaxed stocking of 1e-9 m made that
+/// 10⁸ rows a wale and the fit aborted allocating them (exit 134); a pocket longer than the
+/// stocking it is knitted into is refused before any grid is built.
+#[test]
+fn regression_a_heel_pocket_longer_than_the_stocking_is_refused_not_allocated() {
+    let dir = tempfile::tempdir().unwrap();
+    write(
+        dir.path(),
+        "s.json",
+        r#"{"tube": {"heel": "pocket", "relaxed_length_m": 1e-9}, "outputs": ["ply"]}"#,
+    );
+    let leg = crate::support::sample("makehuman_leg_foot.glb");
+    let args = [
+        "fit",
+        "s.json",
+        "--leg",
+        leg.to_str().unwrap(),
+        "--resolution",
+        "60x60",
+    ];
+    let out = knitfit(dir.path(), &args);
+    assert_refused(
+        dir.path(),
+        &out,
+        &[
+            "s.json: tube.heel: the heel pocket would be 0.049 m of fabric each way",
+            "longer than the relaxed stocking (1e-9 m)",
+        ],
+    );
 }

@@ -504,6 +504,7 @@ impl GlbBuilder {
             .root
             .to_vec()
             .map_err(|e| encode_error(e.to_string()))?;
+        check_glb_length(json_bytes.len(), self.bin.len()).map_err(encode_error)?;
         let glb = gltf::binary::Glb {
             header: gltf::binary::Header {
                 magic: *b"glTF",
@@ -517,9 +518,31 @@ impl GlbBuilder {
     }
 }
 
+/// Refuses a GLB whose length would not fit its header's `u32`: gltf's writer casts the length
+/// with `as u32`, so a file over 4 GiB (a fit of about 10⁸ points or more) would be written
+/// with a wrapped length, unreadable.
+fn check_glb_length(json_len: usize, bin_len: usize) -> std::result::Result<(), String> {
+    // Header 12 bytes, two chunk headers of 8, each chunk padded to 4.
+    let total = 12 + 8 + json_len.div_ceil(4) as u64 * 4 + 8 + bin_len.div_ceil(4) as u64 * 4;
+    if total > u64::from(u32::MAX) {
+        return Err(format!(
+            "the file would be {total} bytes, over the 4 GiB a GLB can hold; write \"ply\" \
+             instead, or fewer points (--resolution, \"stitches\" or \"loops\" left out)"
+        ));
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_glb_over_4_gib_is_refused_not_written_with_a_wrapped_length() {
+        assert!(check_glb_length(1000, 1 << 20).is_ok());
+        let err = check_glb_length(1000, u32::MAX as usize).unwrap_err();
+        assert!(err.contains("over the 4 GiB a GLB can hold"), "{err}");
+    }
 
     use crate::base::yarn::sample_geometry as part;
 
