@@ -468,7 +468,7 @@ mod tests {
         .unwrap_err();
         assert_eq!(
             err.to_string(),
-            "s.json: yarns.support.stiffness: must be a positive number, got -1"
+            "s.json: yarns.support.stiffness: must be from 1e-6 to 1e6, got -1"
         );
     }
 
@@ -493,7 +493,7 @@ mod tests {
         // not met as a failed fit.
         assert_eq!(
             refused(r#"{"knit": {"course_spacing_m": 1e308}}"#),
-            "s.json: knit.course_spacing_m: must be at most 0.02, got 1e308"
+            "s.json: knit.course_spacing_m: must be from 1e-5 to 0.02, got 1e308"
         );
         assert!(refused(r#"{"tube": {"relaxed_circumference_m": 1e9}}"#)
             .starts_with("s.json: tube.relaxed_circumference_m: must be at most 10"));

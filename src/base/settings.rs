@@ -82,6 +82,25 @@ pub fn positive_at_most(field: &str, value: f64, max: f64) -> Result<(), Invalid
     }
 }
 
+/// Checks that `value` is a finite number from `min` to `max`, both included: a bound that keeps
+/// a physical setting within what any stocking has, so an absurd one is refused at the load
+/// rather than diverging the solver later.
+pub fn within(field: &str, value: f64, min: f64, max: f64) -> Result<(), Invalid> {
+    if value.is_finite() && (min..=max).contains(&value) {
+        Ok(())
+    } else {
+        Err(Invalid::new(
+            field,
+            format!(
+                "must be from {} to {}, got {}",
+                number(min),
+                number(max),
+                number(value)
+            ),
+        ))
+    }
+}
+
 /// A number as a person would write it: `0.5`, but `1e308` rather than 309 digits.
 pub fn number(value: f64) -> String {
     if value != 0.0 && !(1e-4..1e6).contains(&value.abs()) {

@@ -304,11 +304,16 @@ pub const MAX_TUBE_POINTS: usize = (u32::MAX / 4) as usize;
 pub const MAX_NEEDLES: usize = 100_000;
 /// Largest relaxed stitch accepted, metres: a knitted stitch is well under a centimetre.
 pub const MAX_STITCH_M: f64 = 0.02;
+/// Smallest relaxed stitch accepted, metres: a stitch is several of its yarn's diameters, and the
+/// finest yarn (about 7 den) is some 30 µm across.
+pub const MIN_STITCH_M: f64 = 1e-5;
 /// Heaviest yarn accepted, denier (10,000 den is a nylon cord over 1 mm across).
 pub const MAX_DENIER: f64 = 10_000.0;
 /// Largest yarn stiffness accepted, relative to nylon's: far past any yarn pair the solver can
 /// balance.
 pub const MAX_STIFFNESS: f64 = 1e6;
+/// Smallest yarn stiffness accepted, relative to nylon's: as far below as the largest is above.
+pub const MIN_STIFFNESS: f64 = 1e-6;
 /// Longest relaxed circumference or length of a stocking accepted, metres.
 pub const MAX_STOCKING_M: f64 = 10.0;
 
@@ -324,8 +329,10 @@ impl KnitSettings {
                 ),
             ));
         }
-        settings::positive_at_most("course_spacing_m", self.course_spacing_m, MAX_STITCH_M)?;
-        settings::positive_at_most("wale_spacing_m", self.wale_spacing_m, MAX_STITCH_M)?;
+        let stitch =
+            |field: &str, value: f64| settings::within(field, value, MIN_STITCH_M, MAX_STITCH_M);
+        stitch("course_spacing_m", self.course_spacing_m)?;
+        stitch("wale_spacing_m", self.wale_spacing_m)?;
         let c2 = self.connection_factor;
         if !(c2.is_finite() && (0.0..1.0).contains(&c2)) {
             return Err(Invalid::new(
@@ -343,7 +350,7 @@ impl Yarns {
         for kind in YarnKind::KNITTED {
             let yarn = self.get(kind);
             let check = || -> Result<(), Invalid> {
-                settings::positive_at_most("stiffness", yarn.stiffness, MAX_STIFFNESS)?;
+                settings::within("stiffness", yarn.stiffness, MIN_STIFFNESS, MAX_STIFFNESS)?;
                 settings::positive_at_most("denier", yarn.denier, MAX_DENIER)?;
                 settings::colour("colour", yarn.colour)
             };

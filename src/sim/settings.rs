@@ -123,6 +123,10 @@ impl SolverSettings {
     }
 }
 
+/// Largest contact offset accepted, metres: a yarn's centre line a centimetre off the skin is
+/// no longer on it (the default is the nylon's radius, 25 µm).
+pub const MAX_OFFSET_M: f64 = 0.01;
+
 impl ContactSettings {
     /// The contact offset in metres.
     pub fn offset(&self, yarns: &Yarns) -> f64 {
@@ -132,7 +136,7 @@ impl ContactSettings {
     /// Checks every value; the error names the field under `contact`.
     pub fn validate(&self) -> Result<(), Invalid> {
         match self.offset_m {
-            Some(offset) => settings::non_negative("offset_m", offset),
+            Some(offset) => settings::within("offset_m", offset, 0.0, MAX_OFFSET_M),
             None => Ok(()),
         }
     }

@@ -405,7 +405,7 @@ fn negative_stiffness_is_refused() {
             "s.json",
             r#"{"yarns": {"nylon": {"stiffness": -1, "denier": 20}}}"#,
         )],
-        "s.json: yarns.nylon.stiffness: must be a positive number, got -1",
+        "s.json: yarns.nylon.stiffness: must be from 1e-6 to 1e6, got -1",
     );
 }
 

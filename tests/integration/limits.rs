@@ -164,12 +164,40 @@ fn a_bad_memory_limit_is_refused_by_name() {
     assert_refused(dir.path(), &out, &["limits.memory_gib", "positive"]);
 }
 
-/// A stitch 100 times finer than a stocking's on 100,000 needles: the fitted grid is small, but
-/// the real stitches it stands for, 100000 × about 158,000, number more points than 32-bit
-/// indices can. `--allow-large` lifts the memory check, not this bound; before it the fit
-/// aborted allocating 380 GB for them (exit 134), and on a machine that had it the ids wrapped.
-const FINE_STITCH: &str = r#"{"knit": {"needles": 100000, "course_spacing_m": 2e-6,
-  "wale_spacing_m": 2.96e-6}, "limits": {"allow_large": true}}"#;
+/// Finite but absurd physical settings are refused where the scene is read, naming the field and
+/// the range any stocking lies in: before, each passed the checks and the fit diverged or
+/// bunched (exit 1) with a message printing the value in hundreds of digits.
+#[test]
+fn regression_absurd_physical_settings_are_refused_at_the_load_not_run() {
+    for (scene, expect) in [
+        (
+            r#"{"yarns": {"support": {"stiffness": 1e-300, "denier": 40,
+                "colour": [0.08, 0.07, 0.10]}}}"#,
+            "s.json: yarns.support.stiffness: must be from 1e-6 to 1e6, got 1e-300",
+        ),
+        (
+            r#"{"knit": {"course_spacing_m": 1e-300}}"#,
+            "s.json: knit.course_spacing_m: must be from 1e-5 to 0.02, got 1e-300",
+        ),
+        (
+            r#"{"contact": {"offset_m": 1e308}}"#,
+            "s.json: contact.offset_m: must be from 0 to 0.01, got 1e308",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        write(dir.path(), "s.json", scene);
+        let out = knitfit(dir.path(), &["fit", "s.json"]);
+        assert_refused(dir.path(), &out, &[expect]);
+    }
+}
+
+/// The finest stitch accepted, 10 µm, on 30,000 needles (a stocking's girth): the fitted grid is
+/// small, but the real stitches it stands for, 30000 × about 47,000, number more points than
+/// 32-bit indices can. `--allow-large` lifts the memory check, not this bound; before it a fit of
+/// such a count aborted allocating hundreds of GB (exit 134), and on a machine that had them
+/// the ids wrapped.
+const FINE_STITCH: &str = r#"{"knit": {"needles": 30000, "course_spacing_m": 1e-5,
+  "wale_spacing_m": 1e-5}, "limits": {"allow_large": true}}"#;
 
 #[test]
 fn regression_real_stitches_past_32_bit_indices_are_refused_even_with_allow_large() {
@@ -201,7 +229,7 @@ fn regression_real_stitches_past_32_bit_indices_are_refused_even_with_allow_larg
             dir.path(),
             &out,
             &[
-                "s.json: knit: the real stitches of this stocking, 100000×",
+                "s.json: knit: the real stitches of this stocking, 30000×",
                 expect,
             ],
         );
@@ -209,7 +237,7 @@ fn regression_real_stitches_past_32_bit_indices_are_refused_even_with_allow_larg
 }
 
 /// A relaxed circumference sets the needles (circumference / knit.course_spacing_m), which then
-/// passed knit.needles' bound unchecked: 10 m of 1e-9 m stitches is 10¹⁰ needles. Refused where
+/// passed knit.needles' bound unchecked: 10 m of 1e-5 m stitches is 10⁶ needles. Refused where
 /// the scene is read, naming the field; before, the fit ran and ended in a misleading refusal
 /// ("not on the leg") or, for a finer stitch, a diverged solver (exit 1).
 #[test]
@@ -218,14 +246,14 @@ fn regression_a_circumference_of_more_needles_than_the_bound_is_refused_at_the_l
     write(
         dir.path(),
         "s.json",
-        r#"{"tube": {"relaxed_circumference_m": 10}, "knit": {"course_spacing_m": 1e-9}}"#,
+        r#"{"tube": {"relaxed_circumference_m": 10}, "knit": {"course_spacing_m": 1e-5}}"#,
     );
     let out = knitfit(dir.path(), &["fit", "s.json"]);
     assert_refused(
         dir.path(),
         &out,
         &[
-            "s.json: tube.relaxed_circumference_m: 10 m of 1e-9 m stitches is 1e10 needles, over \
+            "s.json: tube.relaxed_circumference_m: 10 m of 1e-5 m stitches is 1e6 needles, over \
            the 100000 knit.needles allows",
         ],
     );
@@ -233,7 +261,7 @@ fn regression_a_circumference_of_more_needles_than_the_bound_is_refused_at_the_l
 
 /// The paper's solver splits a step above the stability limit into `time_step / limit`
 /// sub-steps; a time step of 1e308 saturated that to `usize::MAX` and the fit never ended (as
-/// did a finite step over a limit of 1e-149, from a stitch of 1e-300 m). More than 10,000
+/// did a finite step over a limit of 1e-149, from a stitch of 1e-300 m, now refused itself). More than 10,000
 /// sub-steps a step is refused, with the largest time step that would do.
 #[test]
 fn regression_a_time_step_past_the_sub_step_bound_is_refused_not_run_for_ever() {
