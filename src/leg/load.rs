@@ -460,7 +460,7 @@ fn invalid_gltf(e: &gltf::Error) -> String {
 /// Refuses a primitive whose `POSITION` names an accessor the file does not have. The glTF
 /// validator would report it, but gltf-json 1.4's check of the accessor's bounds indexes it
 /// first and panics; so it is checked here, before validating.
-fn check_position_accessors(root: &gltf::json::Root) -> std::result::Result<(), String> {
+pub(crate) fn check_position_accessors(root: &gltf::json::Root) -> std::result::Result<(), String> {
     let positions = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, prim) in mesh.primitives.iter().enumerate() {
