@@ -191,45 +191,28 @@ impl Spans {
     /// reach, the span stops short of the fold on that side, so that a point beside a fold is
     /// measured over the fabric on its own side, as much on every grid. `None` for a point
     /// alone on its line.
-    fn measure_to_folds<M>(
+    fn measure_to_folds(
         &self,
         reach: f64,
         at: impl Fn(isize) -> Option<Vec3>,
-        measure: impl Fn(&Ends) -> M,
-    ) -> Option<M>
-    where
-        M: std::ops::Mul<f64, Output = M> + std::ops::Add<Output = M>,
-    {
-        let outer = self.whole_steps(reach).0 + self.parity;
+        measure: impl Fn(&Ends) -> f64,
+    ) -> Option<f64> {
+        let (k, t) = self.whole_steps(reach);
+        let outer = k + self.parity;
         // Only a toe seam folds a knit; elsewhere the span runs its full reach.
         let [back, on] = match self.folding {
             true => Spans::folds(&at, outer)?,
             false => [outer; 2],
         };
-        if back.min(on) >= outer {
-            self.interpolated(reach, |k| Spans::ends(&at, k, k), measure)
-        } else {
-            let k = self.whole_steps(reach).0;
-            Spans::ends(&at, k.min(back), k.min(on)).map(|e| measure(&e))
+        if back.min(on) < outer {
+            return Spans::ends(&at, k.min(back), k.min(on)).map(|e| measure(&e));
         }
-    }
-
-    /// `measure` over `reach` steps, interpolated between the spans of the whole steps either
-    /// side of it, `ends(k)` (the inner alone where there is no outer).
-    fn interpolated<M>(
-        &self,
-        reach: f64,
-        ends: impl Fn(usize) -> Option<Ends>,
-        measure: impl Fn(&Ends) -> M,
-    ) -> Option<M>
-    where
-        M: std::ops::Mul<f64, Output = M> + std::ops::Add<Output = M>,
-    {
-        let (k, t) = self.whole_steps(reach);
-        let inner = ends(k)?;
-        Some(match ends(k + self.parity) {
-            Some(outer) if t > 0.0 => measure(&inner) * (1.0 - t) + measure(&outer) * t,
-            _ => measure(&inner),
+        // Interpolated between the whole steps either side of the reach (the inner alone where
+        // the line has no outer).
+        let inner = measure(&Spans::ends(&at, k, k)?);
+        Some(match Spans::ends(&at, outer, outer) {
+            Some(e) if t > 0.0 => inner * (1.0 - t) + measure(&e) * t,
+            _ => inner,
         })
     }
 

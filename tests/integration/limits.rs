@@ -14,11 +14,17 @@ const HUGE_GLTF: &str = r#"{"asset": {"version": "2.0"}, "scene": 0, "scenes": [
   "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3000000000, "type": "VEC3",
                  "min": [0, 0, 0], "max": [1, 1, 1]}]}"#;
 
-/// Asserts a one-line refusal with exit code 2 that contains every `expect`, and no file written.
 /// A knitting machine of 30,000 needles, so that a 30000-wale grid stands for its stitches.
 const FINE_MACHINE: &str = r#"{"knit": {"needles": 30000},
   "effects": ["yarn_connection", "alternating_yarns", "contact", "penetration_fix"]}"#;
 
+/// The arguments of `knitfit fit s.json` on `leg` at `resolution`.
+fn fit_args<'a>(leg: &'a std::path::Path, resolution: &'a str) -> [&'a str; 6] {
+    let leg = leg.to_str().unwrap();
+    ["fit", "s.json", "--leg", leg, "--resolution", resolution]
+}
+
+/// Asserts a one-line refusal with exit code 2 that contains every `expect`, and no file written.
 fn assert_refused(dir: &std::path::Path, out: &std::process::Output, expect: &[&str]) {
     let err = stderr(out);
     assert_eq!(out.status.code(), Some(2), "{err}");
@@ -216,14 +222,7 @@ fn regression_real_stitches_past_32_bit_indices_are_refused_even_with_allow_larg
         let mut scene: serde_json::Value = serde_json::from_str(FINE_STITCH).unwrap();
         scene["outputs"] = serde_json::from_str(outputs).unwrap();
         write(dir.path(), "s.json", &scene.to_string());
-        let args = [
-            "fit",
-            "s.json",
-            "--leg",
-            leg.to_str().unwrap(),
-            "--resolution",
-            "16x16",
-        ];
+        let args = fit_args(&leg, "16x16");
         let out = knitfit(dir.path(), &args);
         assert_refused(
             dir.path(),
@@ -261,8 +260,8 @@ fn regression_a_circumference_of_more_needles_than_the_bound_is_refused_at_the_l
 
 /// The paper's solver splits a step above the stability limit into `time_step / limit`
 /// sub-steps; a time step of 1e308 saturated that to `usize::MAX` and the fit never ended (as
-/// did a finite step over a limit of 1e-149, from a stitch of 1e-300 m, now refused itself). More than 10,000
-/// sub-steps a step is refused, with the largest time step that would do.
+/// did a finite step over a limit of 1e-149, from a stitch of 1e-300 m, now refused itself).
+/// More than 10,000 sub-steps a step is refused, with the largest time step that would do.
 #[test]
 fn regression_a_time_step_past_the_sub_step_bound_is_refused_not_run_for_ever() {
     let dir = tempfile::tempdir().unwrap();
@@ -272,14 +271,7 @@ fn regression_a_time_step_past_the_sub_step_bound_is_refused_not_run_for_ever() 
         r#"{"solver": {"method": "paper", "time_step": 1e308}}"#,
     );
     let leg = procedural_leg();
-    let args = [
-        "fit",
-        "s.json",
-        "--leg",
-        leg.to_str().unwrap(),
-        "--resolution",
-        "16x16",
-    ];
+    let args = fit_args(&leg, "16x16");
     let out = knitfit_within(dir.path(), &args, std::time::Duration::from_secs(60))
         .expect("the fit ends within the bound");
     assert_refused(
@@ -305,14 +297,7 @@ fn regression_a_heel_pocket_longer_than_the_stocking_is_refused_not_allocated() 
         r#"{"tube": {"heel": "pocket", "relaxed_length_m": 1e-9}, "outputs": ["ply"]}"#,
     );
     let leg = crate::support::sample("makehuman_leg_foot.glb");
-    let args = [
-        "fit",
-        "s.json",
-        "--leg",
-        leg.to_str().unwrap(),
-        "--resolution",
-        "60x60",
-    ];
+    let args = fit_args(&leg, "60x60");
     let out = knitfit(dir.path(), &args);
     assert_refused(
         dir.path(),
