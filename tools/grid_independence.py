@@ -1,0 +1,121 @@
+#!/usr/bin/env python3
+"""Grid independence of the leg's fields (issue 21, docs/decisions/0059): fits each sample leg at
+several grids and prints, per grid, the relative L2 difference of `_STITCH_DENSITY`, `_COVERAGE`
+and `_PRESSURE` on the covered leg vertices against a reference fit (the real stitch count, by
+default at a tight tolerance), over the whole leg and over the vertices above the ankle.
+
+    python3 tools/grid_independence.py --out /tmp/gi                       # every sample leg
+    python3 tools/grid_independence.py --out /tmp/gi --samples makehuman_leg_foot \\
+        --grids 150x150,300x300 --tolerance 1e-3 --reference-tolerance 3e-5
+
+Fits already in --out are reused (delete the folder to refit). Standard library only; needs a
+release build (`cargo build --release`). The real count's fit can take minutes at 3e-5.
+"""
+
+import argparse
+import json
+import math
+import pathlib
+import struct
+import subprocess
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+SAMPLES = ["procedural_leg", "makehuman_leg", "lowpoly_leg", "makehuman_leg_foot",
+           "makehuman_body", "makehuman_hips_heavy"]
+FIELDS = ["stitch_density", "coverage", "pressure"]
+PLY_TYPES = {"float": "f", "uchar": "B", "int": "i", "uint": "I"}
+
+
+def read_leg_ply(path):
+    """The vertices of a binary little-endian leg.ply: a list of dicts of their properties."""
+    data = path.read_bytes()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    count, props, in_vertex = 0, [], False
+    for line in data[:end].decode().splitlines():
+        words = line.split()
+        if words[:2] == ["element", "vertex"]:
+            count, in_vertex = int(words[2]), True
+        elif words[:1] == ["element"]:
+            in_vertex = False
+        elif in_vertex and words[:1] == ["property"]:
+            props.append((words[2], PLY_TYPES[words[1]]))
+    record = struct.Struct("<" + "".join(t for _, t in props))
+    names = [n for n, _ in props]
+    return [dict(zip(names, record.unpack_from(data, end + k * record.size)))
+            for k in range(count)]
+
+
+def fit(binary, scene, leg, grid, tolerance, out):
+    """Fits `leg` at `grid` into `out` unless its report is there; returns the report."""
+    report = out / "report.json"
+    if not report.exists():
+        out.mkdir(parents=True, exist_ok=True)
+        command = [str(binary), "fit", str(scene), "--leg", str(leg), "--resolution", grid,
+                   "--tolerance", str(tolerance), "-q", "--out", str(out)]
+        run = subprocess.run(command, capture_output=True, text=True)
+        # Exit 3: written, but not converged within solver.max_steps; say so and use it.
+        if run.returncode not in (0, 3):
+            sys.exit(f"{' '.join(command)}: exit {run.returncode}: {run.stderr.strip()}")
+        if run.returncode == 3:
+            print(f"warning: {grid} at {tolerance:g} did not converge", file=sys.stderr)
+    return json.loads(report.read_text())
+
+
+def relative_l2(vertices, reference, field, keep):
+    num = sum((v[field] - r[field]) ** 2 for v, r, k in zip(vertices, reference, keep) if k)
+    den = sum(r[field] ** 2 for r, k in zip(reference, keep) if k)
+    return 100.0 * math.sqrt(num / den) if den > 0 else float("nan")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--out", required=True, type=pathlib.Path)
+    parser.add_argument("--samples", default=",".join(SAMPLES))
+    parser.add_argument("--grids", default="100x100,150x150,300x300")
+    parser.add_argument("--tolerance", type=float, default=1e-3)
+    parser.add_argument("--reference-tolerance", type=float, default=3e-5)
+    parser.add_argument("--binary", type=pathlib.Path, default=ROOT / "target/release/knitfit")
+    args = parser.parse_args()
+
+    scene = json.loads((ROOT / "samples/scene.json").read_text())
+    scene["outputs"] = ["ply"]
+    args.out.mkdir(parents=True, exist_ok=True)
+    scene_path = args.out / "scene.json"
+    scene_path.write_text(json.dumps(scene))
+
+    for sample in args.samples.split(","):
+        leg = ROOT / "samples" / f"{sample}.glb"
+        here = args.out / sample
+        first = fit(args.binary, scene_path, leg, "150x150", args.tolerance,
+                    here / f"150x150_{args.tolerance:g}")
+        knit = first["details"]["knit"]
+        real = f"{round(knit['needles'])}x{round(knit['courses']) + 1}"
+        ref_report = fit(args.binary, scene_path, leg, real, args.reference_tolerance,
+                         here / f"{real}_{args.reference_tolerance:g}")
+        reference = read_leg_ply(here / f"{real}_{args.reference_tolerance:g}" / "leg.ply")
+        marks = ref_report["details"]["leg"]["landmarks"]
+        up = marks["up"]
+        height = lambda p: sum(a * b for a, b in zip(p, up))
+        ankle = height(marks["ankle"]["centre"]["m"]) if marks.get("ankle") else -math.inf
+        covered = [r["coverage"] > 0 for r in reference]
+        above = [c and height((r["x"], r["y"], r["z"])) >= ankle
+                 for c, r in zip(covered, reference)]
+        print(f"\n{sample}: against {real} at {args.reference_tolerance:g}; "
+              f"{sum(covered)} covered vertices, {sum(above)} above the ankle")
+        print("| grid (tolerance) | density | coverage | pressure | above the ankle: "
+              "density / coverage / pressure | seconds |")
+        print("|---|---:|---:|---:|---:|---:|")
+        for grid in args.grids.split(","):
+            out = here / f"{grid}_{args.tolerance:g}"
+            report = fit(args.binary, scene_path, leg, grid, args.tolerance, out)
+            vertices = read_leg_ply(out / "leg.ply")
+            whole = [relative_l2(vertices, reference, f, covered) for f in FIELDS]
+            leg_only = [relative_l2(vertices, reference, f, above) for f in FIELDS]
+            print(f"| {grid} ({args.tolerance:g}) | " + " | ".join(f"{e:.1f} %" for e in whole)
+                  + " | " + " / ".join(f"{e:.1f}" for e in leg_only) + " % | "
+                  + f"{report['wall_seconds']:.2f} |")
+
+
+if __name__ == "__main__":
+    main()
