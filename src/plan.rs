@@ -12,7 +12,7 @@ use crate::export::{Output, YarnsWritten};
 use crate::knit::{Stretch, TubeBottom, TubeTop};
 use crate::preview::RenderMode;
 use crate::scene::{Effect, Scene};
-use crate::sim::multilevel::grid_sizes;
+use crate::sim::multilevel::{grid_sizes_down_to, COARSEST, STOCKING_COARSEST};
 use crate::sim::{ForceTerms, SolverMethod};
 
 /// Where `tube.bottom` puts the stocking's start, in words.
@@ -441,16 +441,26 @@ impl Plan {
                 );
             }
             SolverMethod::Multilevel => {
-                let grids: Vec<String> = grid_sizes(wales, courses)
-                    .iter()
-                    .map(|(w, c)| format!("{w}×{c}"))
-                    .collect();
+                let chain = |coarsest: usize| -> String {
+                    let sizes = grid_sizes_down_to(wales, courses, coarsest);
+                    let grids: Vec<String> =
+                        sizes.iter().map(|(w, c)| format!("{w}×{c}")).collect();
+                    grids.join(" → ")
+                };
+                // A stocking to the toe coarsens less (its heel and toe need rings a few
+                // centimetres apart); without tube.bottom the leg decides, so name both.
+                let (tube, stocking) = (chain(COARSEST), chain(STOCKING_COARSEST));
+                let grids = match scene.tube.bottom {
+                    Some(TubeBottom::Ankle) => tube,
+                    Some(TubeBottom::Toe) => stocking,
+                    None if tube == stocking => tube,
+                    None => format!("{tube} (to the toe: {stocking})"),
+                };
                 plan.add(
                     Stage::Fit,
                     format!(
                         "{terms}; solver.method \"multilevel\": tubes knitted and relaxed \
-                         coarse to fine on grids {}",
-                        grids.join(" → ")
+                         coarse to fine on grids {grids}"
                     ),
                 );
             }
@@ -668,6 +678,16 @@ mod tests {
             .unwrap()
             .why;
         assert!(why.contains("38×39 → 75×76 → 150×150"), "{why}");
+        // A stocking to the toe starts at 60 a side, and the plan says so.
+        scene.tube.bottom = Some(TubeBottom::Toe);
+        let fit = Plan::fit(&scene);
+        let why = &fit
+            .stages
+            .iter()
+            .find(|s| s.stage == Stage::Fit)
+            .unwrap()
+            .why;
+        assert!(why.ends_with("on grids 75×76 → 150×150"), "{why}");
         scene.solver.method = SolverMethod::Paper;
         let fit = Plan::fit(&scene);
         assert!(fit.has(Stage::KnitTube));

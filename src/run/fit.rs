@@ -49,6 +49,7 @@ use crate::report::{
 };
 use crate::scene::{LoadedScene, Scene, LEG_AXIS};
 use crate::sim::contact::{ContactCounters, LegContact};
+use crate::sim::multilevel::STOCKING_COARSEST;
 use crate::sim::{
     relax_constrained, relax_multilevel, Constraints, ForceTerms, LevelStats, Levels,
     MultilevelStats, RelaxStats, SolverMethod,
@@ -781,10 +782,6 @@ fn fit_size<'a>(scene: &Scene, outputs: &'a [Output], leg_triangles: usize) -> F
         loops: false,
     }
 }
-
-/// Fewest wales or courses on the coarsest grid of a stocking to the toe: 24 courses over a
-/// leg and foot of 70 cm put rings 3 cm apart, coarser than the heel, and that level chattered.
-const STOCKING_COARSEST: usize = 60;
 
 /// The tube at any grid size, and its contact with the leg: what the solvers knit and constrain.
 struct TubeLevels<'a> {

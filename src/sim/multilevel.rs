@@ -29,6 +29,9 @@ use crate::knit::Knit;
 /// rings are polygons whose corners catch on the leg (a point of a 19-wale ring spans 2 cm of
 /// thigh), and their contact chatters instead of settling.
 pub const COARSEST: usize = 24;
+/// Fewest wales or courses on the coarsest grid of a stocking to the toe: 24 courses over a
+/// leg and foot of 70 cm put rings 3 cm apart, coarser than the heel, and that level chattered.
+pub const STOCKING_COARSEST: usize = 60;
 /// Iterations a coarser level may take at most: it only makes the starting point of the next,
 /// so one that has not converged by then hands on what it has.
 pub const COARSE_LEVEL_ITERATIONS: usize = 2000;
