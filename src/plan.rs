@@ -668,26 +668,22 @@ mod tests {
 
     #[test]
     fn the_multilevel_fit_knits_each_grid_inside_the_fit_stage() {
+        let fit_why = |scene: &Scene| {
+            let fit = Plan::fit(scene);
+            let stage = fit.stages.iter().find(|s| s.stage == Stage::Fit).unwrap();
+            stage.why.clone()
+        };
         let mut scene = Scene::load(None).unwrap();
-        let fit = Plan::fit(&scene);
-        assert!(!fit.has(Stage::KnitTube));
-        let why = &fit
-            .stages
-            .iter()
-            .find(|s| s.stage == Stage::Fit)
-            .unwrap()
-            .why;
+        assert!(!Plan::fit(&scene).has(Stage::KnitTube));
+        let why = fit_why(&scene);
         assert!(why.contains("38×39 → 75×76 → 150×150"), "{why}");
         // A stocking to the toe starts at 60 a side, and the plan says so.
         scene.tube.bottom = Some(TubeBottom::Toe);
-        let fit = Plan::fit(&scene);
-        let why = &fit
-            .stages
-            .iter()
-            .find(|s| s.stage == Stage::Fit)
-            .unwrap()
-            .why;
+        let why = fit_why(&scene);
         assert!(why.ends_with("on grids 75×76 → 150×150"), "{why}");
+        scene.tube.bottom = Some(TubeBottom::Ankle);
+        let why = fit_why(&scene);
+        assert!(why.ends_with("on grids 38×39 → 75×76 → 150×150"), "{why}");
         scene.solver.method = SolverMethod::Paper;
         let fit = Plan::fit(&scene);
         assert!(fit.has(Stage::KnitTube));

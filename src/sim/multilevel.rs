@@ -103,13 +103,10 @@ impl MultilevelStats {
 }
 
 /// Grid sizes from the coarsest to `wales × courses`, each about half the next in both
-/// directions. A closed course of `w` points coarsens to `⌈w/2⌉`; a wale of `c` points (`c − 1`
-/// intervals between the held end rings) to `⌈(c − 1)/2⌉ + 1`.
-pub fn grid_sizes(wales: usize, courses: usize) -> Vec<(usize, usize)> {
-    grid_sizes_down_to(wales, courses, COARSEST)
-}
-
-/// [`grid_sizes`] with at least `coarsest` wales and courses on every level.
+/// directions, with at least `coarsest` wales and courses on every level ([`COARSEST`] for a
+/// tube, [`STOCKING_COARSEST`] for a stocking to the toe). A closed course of `w` points
+/// coarsens to `⌈w/2⌉`; a wale of `c` points (`c − 1` intervals between the held end rings) to
+/// `⌈(c − 1)/2⌉ + 1`.
 pub fn grid_sizes_down_to(wales: usize, courses: usize, coarsest: usize) -> Vec<(usize, usize)> {
     let mut sizes = vec![(wales, courses)];
     loop {
@@ -317,8 +314,13 @@ mod tests {
 
     #[test]
     fn grids_halve_down_to_the_coarsest_and_end_at_the_asked_size() {
+        let grid_sizes = |w, c| grid_sizes_down_to(w, c, COARSEST);
         assert_eq!(grid_sizes(150, 150), vec![(38, 39), (75, 76), (150, 150)]);
         assert_eq!(grid_sizes(40, 40), vec![(40, 40)]);
+        assert_eq!(
+            grid_sizes_down_to(150, 150, STOCKING_COARSEST),
+            vec![(75, 76), (150, 150)]
+        );
         let real = grid_sizes(400, 1600);
         assert_eq!(real.first(), Some(&(25, 101)));
         assert_eq!(real.last(), Some(&(400, 1600)));
