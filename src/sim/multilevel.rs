@@ -40,7 +40,7 @@ pub const COARSE_LEVEL_ITERATIONS: usize = 10_000;
 /// the course-to-course difference of wale tension, the smaller the finer the grid), so it
 /// stops at the tolerance with that error still in it: at twice the tolerance, a whole
 /// stocking's pressure above the ankle was 3–8 % from its rest. Coarse iterations are cheap:
-/// a tenth of the tolerance brings it within 0.2–2.3 % for 1.1–1.5× the fit's time
+/// a tenth of the tolerance brings it within 0.2–2.3 % for 1.1–1.7× the run's time
 /// (docs/decisions/0060).
 pub const COARSE_TOLERANCE_FACTOR: f64 = 0.1;
 
