@@ -33,20 +33,21 @@ pub const COARSEST: usize = 24;
 /// leg and foot of 70 cm put rings 3 cm apart, coarser than the heel, and that level chattered.
 pub const STOCKING_COARSEST: usize = 60;
 /// Iterations a coarser level may take at most: it only makes the starting point of the next,
-/// so one that has not converged by then hands on what it has.
+/// so one that has not converged by then hands on what it has. At the default tolerance the
+/// samples' coarse levels take 1,000–6,500.
 pub const COARSE_LEVEL_ITERATIONS: usize = 10_000;
 /// Coarser levels stop at this many times the tolerance asked for. The finer level cannot see
 /// the smooth error a coarse level leaves (the courses' slide along the leg: its residual is
 /// the course-to-course difference of wale tension, the smaller the finer the grid), so it
-/// stops at the tolerance with that error still in it: at twice the tolerance, a whole
-/// stocking's pressure above the ankle was 3–8 % from its rest. Coarse iterations are cheap:
-/// a tenth of the tolerance brings it within 0.2–2.3 % for 1.1–1.7× the run's time
-/// (docs/decisions/0060).
+/// stops at the tolerance with that error still in it. Coarse iterations are cheap: at a tenth
+/// of the tolerance a whole stocking's leg above the ankle is within 0.2–2.3 % in pressure of
+/// its rest (3–8 % at twice it), for 1.1–1.7× the run's time (docs/decisions/0060).
 pub const COARSE_TOLERANCE_FACTOR: f64 = 0.1;
 
 /// A coarser level stopped as futile hands its state on all the same when its residual is
 /// below this many times its tolerance: close enough to be a start. Further off (a fit that
-/// cannot hold on the leg, residuals of 1e-2 and more) it stops the fit there.
+/// cannot hold on the leg, residuals of 1e-2 and more) it stops the fit there. Only
+/// tolerances looser than 2e-2 reach past [`HAND_ON_RESIDUAL_FLOOR`] with it.
 pub const HAND_ON_RESIDUAL_FACTOR: f64 = 5.0;
 
 /// A coarser level stopped as futile below this residual hands its state on whatever the
