@@ -20,8 +20,8 @@
 //! reached. Every inserted point lies on a triangle edge, so the yarn lies on the skin from
 //! triangle to triangle. Where the walk cannot finish (an open edge, a non-manifold edge, a
 //! mesh that folds back) or a piece still crosses the skin (two sheets of skin close together),
-//! the piece is split at its midpoint, projected onto the skin, recursively: a fallback, counted
-//! separately.
+//! the piece is split at a point lifted off the skin above where it is deepest (a bump's or a
+//! crest's top), recursively: a fallback, counted separately.
 //!
 //! Inserted points carry the attributes of the segment they split: `course`, `wale` and
 //! `tension` are interpolated by arc length where they are continuous (not across the seam,
@@ -270,15 +270,14 @@ impl<'a> SurfaceWalker<'a> {
                 .is_some()
     }
 
-    /// Halves the piece `a`–`b` at its midpoint moved onto the skin (plus offset), recursively
-    /// while a half crosses and `depth` lasts, pushing the points between `a` and `b` in order.
-    /// Returns how many pieces still cross.
+    /// Splits the piece `a`–`b` at a point on the skin above where it is deepest ([`Self::
+    /// lifted_above`]), recursively while a part crosses and `depth` lasts, pushing the points
+    /// between `a` and `b` in order. Returns how many pieces still cross.
     fn split(&self, a: &Vec3, b: &Vec3, depth: u32, points: &mut Vec<Vec3>) -> usize {
         if depth == 0 {
             return 1;
         }
-        let c = self.collider.closest(&Point3::from((a + b) / 2.0));
-        let mid = c.point.coords + c.outward * self.offset;
+        let mid = self.lifted_above(a, b);
         let mut left = 0;
         if self.crosses(a, &mid) {
             left = self.split(a, &mid, depth - 1, points);
@@ -289,6 +288,38 @@ impl<'a> SurfaceWalker<'a> {
             right = self.split(&mid, b, depth - 1, points);
         }
         left + right
+    }
+
+    /// Where the fallback splits the piece `a`–`b`: from the middle of its stretch inside the
+    /// leg (halfway between where it enters and last leaves the skin), out across the chord
+    /// along the mean of the two skin normals there to the skin, plus the offset. Over a bump
+    /// or a sharp crest that is its top, which both halves clear. The closest skin point of the
+    /// piece's midpoint would not do: under a crest it lies on a flank, and the halves straddle
+    /// the crest again, many halvings short of clearing it. That is kept where there is no
+    /// such direction (a piece through a thin sheet, or one whose middle is outside the leg).
+    fn lifted_above(&self, a: &Vec3, b: &Vec3) -> Vec3 {
+        let d = b - a;
+        let length = d.norm();
+        let mut middle = (a + b) / 2.0;
+        let mut across = None;
+        if length > 0.0 {
+            let dir = d / length;
+            let enters = self.collider.first_hit(&Point3::from(*a), &dir, length);
+            let leaves = self.collider.first_hit(&Point3::from(*b), &-dir, length);
+            if let (Some((enter, n_enter)), Some((leave, n_leave))) = (enters, leaves) {
+                middle = a + dir * ((enter + length - leave) / 2.0);
+                let n = n_enter + n_leave;
+                across = (n - dir * n.dot(&dir)).try_normalize(1e-9);
+            }
+        }
+        let closest = self.collider.closest(&Point3::from(middle));
+        if let Some(n) = across.filter(|_| closest.signed_distance < 0.0) {
+            let out = self.collider.first_hit(&Point3::from(middle), &n, f64::MAX);
+            if let Some((t, _)) = out {
+                return middle + n * (t + self.offset);
+            }
+        }
+        closest.point.coords + closest.outward * self.offset
     }
 
     /// Walks over the skin from the closest point `start` to the closest point `goal`,
@@ -478,6 +509,28 @@ mod tests {
         let wale = &fixed.point_attributes["wale"];
         assert!(wale[2] > 7.0 && wale[2] < wale[crest_index]);
         assert_eq!(fixed.point_attributes["class"][2], 1.0);
+    }
+
+    #[test]
+    fn the_fallback_clears_a_sharp_crest_in_one_split() {
+        // Flanks rising 3 in 1: their normals 143° apart. A chord between points on them passes
+        // 24 mm under the crest; split at its midpoint, it took more halvings than the depth.
+        let (w, h, offset) = (0.01, 0.03, 0.00003);
+        let collider = Collider::new(&ridge(w, h), ContactMethod::Bvh).unwrap();
+        let walker = SurfaceWalker::new(&collider, offset);
+        let on_flank = |x: f64| {
+            let normal = Vec3::new(x.signum() * h, 0.0, w).normalize();
+            Vec3::new(x, 0.05, w + h * (1.0 - x.abs() / w)) + normal * offset
+        };
+        let (a, b) = (on_flank(-0.008), on_flank(0.008));
+        assert!(walker.crosses(&a, &b));
+        let mut points = Vec::new();
+        assert_eq!(walker.split(&a, &b, MAX_SPLIT_DEPTH, &mut points), 0);
+        assert_eq!(points.len(), 1, "{points:?}");
+        // The one point is on the crest, offset above it.
+        assert!(points[0].x.abs() < 1e-9 && (points[0].z - (w + h + offset)).abs() < 1e-9);
+        let chain: Vec<Vec3> = [a].into_iter().chain(points).chain([b]).collect();
+        assert!(chain.windows(2).all(|p| !walker.crosses(&p[0], &p[1])));
     }
 
     #[test]
