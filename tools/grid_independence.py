@@ -2,7 +2,9 @@
 """Grid independence of the leg's fields (issue 21, docs/decisions/0059): fits each sample leg at
 several grids and prints, per grid, the relative L2 difference of `_STITCH_DENSITY`, `_COVERAGE`
 and `_PRESSURE` on the covered leg vertices against a reference fit (the real stitch count, by
-default at a tight tolerance), over the whole leg and over the vertices above the ankle.
+default at a tight tolerance), over the whole leg and over the vertices above the ankle, and over
+the whole leg with each vertex weighted by its share of the skin's area (per vertex, a finely
+meshed foot's toes weigh more than the rest of the leg).
 
     python3 tools/grid_independence.py --out /tmp/gi                       # every sample leg
     python3 tools/grid_independence.py --out /tmp/gi --samples makehuman_leg_foot \\
@@ -28,22 +30,48 @@ PLY_TYPES = {"float": "f", "uchar": "B", "int": "i", "uint": "I"}
 
 
 def read_leg_ply(path):
-    """The vertices of a binary little-endian leg.ply: a list of dicts of their properties."""
+    """The vertices of a binary little-endian leg.ply (a list of dicts of their properties) and
+    its faces (lists of vertex indices)."""
     data = path.read_bytes()
     end = data.index(b"end_header\n") + len(b"end_header\n")
-    count, props, in_vertex = 0, [], False
+    count, faces, props, in_vertex = 0, 0, [], False
     for line in data[:end].decode().splitlines():
         words = line.split()
         if words[:2] == ["element", "vertex"]:
             count, in_vertex = int(words[2]), True
-        elif words[:1] == ["element"]:
-            in_vertex = False
+        elif words[:2] == ["element", "face"]:
+            faces, in_vertex = int(words[2]), False
         elif in_vertex and words[:1] == ["property"]:
             props.append((words[2], PLY_TYPES[words[1]]))
     record = struct.Struct("<" + "".join(t for _, t in props))
     names = [n for n, _ in props]
-    return [dict(zip(names, record.unpack_from(data, end + k * record.size)))
-            for k in range(count)]
+    vertices = [dict(zip(names, record.unpack_from(data, end + k * record.size)))
+                for k in range(count)]
+    polygons, at = [], end + count * record.size
+    for _ in range(faces):
+        corners = data[at]
+        polygons.append(struct.unpack_from(f"<{corners}i", data, at + 1))
+        at += 1 + 4 * corners
+    return vertices, polygons
+
+
+def vertex_areas(vertices, faces):
+    """Each vertex's share of the skin: a third of the area of each triangle on it (polygons
+    fanned from their first corner)."""
+    areas = [0.0] * len(vertices)
+    point = lambda i: (vertices[i]["x"], vertices[i]["y"], vertices[i]["z"])
+    for face in faces:
+        for j in range(1, len(face) - 1):
+            corners = (face[0], face[j], face[j + 1])
+            a, b, c = (point(i) for i in corners)
+            u = [q - p for p, q in zip(a, b)]
+            v = [q - p for p, q in zip(a, c)]
+            cross = (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                     u[0] * v[1] - u[1] * v[0])
+            third = math.sqrt(sum(x * x for x in cross)) / 6.0
+            for i in corners:
+                areas[i] += third
+    return areas
 
 
 def fit(binary, scene, leg, grid, tolerance, out):
@@ -62,9 +90,10 @@ def fit(binary, scene, leg, grid, tolerance, out):
     return json.loads(report.read_text())
 
 
-def relative_l2(vertices, reference, field, keep):
-    num = sum((v[field] - r[field]) ** 2 for v, r, k in zip(vertices, reference, keep) if k)
-    den = sum(r[field] ** 2 for r, k in zip(reference, keep) if k)
+def relative_l2(vertices, reference, field, weights):
+    """Relative L2 difference in %, each vertex weighted (0 leaves it out)."""
+    num = sum(w * (v[field] - r[field]) ** 2 for v, r, w in zip(vertices, reference, weights))
+    den = sum(w * r[field] ** 2 for r, w in zip(reference, weights))
     return 100.0 * math.sqrt(num / den) if den > 0 else float("nan")
 
 
@@ -93,7 +122,8 @@ def main():
         real = f"{round(knit['needles'])}x{round(knit['courses']) + 1}"
         ref_report = fit(args.binary, scene_path, leg, real, args.reference_tolerance,
                          here / f"{real}_{args.reference_tolerance:g}")
-        reference = read_leg_ply(here / f"{real}_{args.reference_tolerance:g}" / "leg.ply")
+        reference, faces = read_leg_ply(here / f"{real}_{args.reference_tolerance:g}" / "leg.ply")
+        areas = vertex_areas(reference, faces)
         marks = ref_report["details"]["leg"]["landmarks"]
         up = marks["up"]
         height = lambda p: sum(a * b for a, b in zip(p, up))
@@ -104,16 +134,20 @@ def main():
         print(f"\n{sample}: against {real} at {args.reference_tolerance:g}; "
               f"{sum(covered)} covered vertices, {sum(above)} above the ankle")
         print("| grid (tolerance) | density | coverage | pressure | above the ankle: "
-              "density / coverage / pressure | seconds |")
-        print("|---|---:|---:|---:|---:|---:|")
+              "density / coverage / pressure | by area: density / coverage / pressure "
+              "| seconds |")
+        print("|---|---:|---:|---:|---:|---:|---:|")
         for grid in args.grids.split(","):
             out = here / f"{grid}_{args.tolerance:g}"
             report = fit(args.binary, scene_path, leg, grid, args.tolerance, out)
-            vertices = read_leg_ply(out / "leg.ply")
+            vertices, _ = read_leg_ply(out / "leg.ply")
             whole = [relative_l2(vertices, reference, f, covered) for f in FIELDS]
             leg_only = [relative_l2(vertices, reference, f, above) for f in FIELDS]
+            by_area = [relative_l2(vertices, reference, f, [a * c for a, c in zip(areas, covered)])
+                       for f in FIELDS]
             print(f"| {grid} ({args.tolerance:g}) | " + " | ".join(f"{e:.1f} %" for e in whole)
                   + " | " + " / ".join(f"{e:.1f}" for e in leg_only) + " % | "
+                  + " / ".join(f"{e:.1f}" for e in by_area) + " % | "
                   + f"{report['wall_seconds']:.2f} |")
 
 
