@@ -742,6 +742,11 @@ pub struct Placement {
     pub path: Option<TubePath>,
 }
 
+/// Fewest wales or courses a stocking to the toe is fitted on: below it the rings are
+/// centimetres apart over the heel and the toe. Its coarse levels may go to
+/// [`STOCKING_COARSEST`], as they only start the next level.
+const SMALLEST_STOCKING: usize = 60;
+
 /// The path of a stocking to the toe on `landmarks`, its top where `tube.top` puts it.
 fn stocking_path(scene: &Scene, leg: &Leg, landmarks: &Landmarks) -> Result<TubePath> {
     let fail = |message: String| Error::Leg {
@@ -752,11 +757,11 @@ fn stocking_path(scene: &Scene, leg: &Leg, landmarks: &Landmarks) -> Result<Tube
         ),
     };
     let (wales, courses) = (scene.tube.wales, scene.tube.courses);
-    if wales.min(courses) < STOCKING_COARSEST {
+    if wales.min(courses) < SMALLEST_STOCKING {
         return Err(fail(format!(
             "at {wales}×{courses} the rings would be centimetres apart over the heel and the \
              toe, where such a coarse fit chatters instead of settling; give at least \
-             {STOCKING_COARSEST}×{STOCKING_COARSEST} (--resolution, tube.wales and \
+             {SMALLEST_STOCKING}×{SMALLEST_STOCKING} (--resolution, tube.wales and \
              tube.courses)"
         )));
     }

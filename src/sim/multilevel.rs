@@ -31,7 +31,9 @@ use crate::knit::Knit;
 pub const COARSEST: usize = 24;
 /// Fewest wales or courses on the coarsest grid of a stocking to the toe: 24 courses over a
 /// leg and foot of 70 cm put rings 3 cm apart, coarser than the heel, and that level chattered.
-pub const STOCKING_COARSEST: usize = 60;
+/// At 48 a 100×100 stocking still gets a 50×51 level, which carries the courses' slide along
+/// the leg that its finest level cannot see (decision 0060).
+pub const STOCKING_COARSEST: usize = 48;
 /// Iterations a coarser level may take at most: it only makes the starting point of the next,
 /// so one that has not converged by then hands on what it has. At the default tolerance the
 /// samples' coarse levels take 1,000–6,500.
@@ -323,6 +325,10 @@ mod tests {
         assert_eq!(
             grid_sizes_down_to(150, 150, STOCKING_COARSEST),
             vec![(75, 76), (150, 150)]
+        );
+        assert_eq!(
+            grid_sizes_down_to(100, 100, STOCKING_COARSEST),
+            vec![(50, 51), (100, 100)]
         );
         let real = grid_sizes(400, 1600);
         assert_eq!(real.first(), Some(&(25, 101)));
