@@ -20,8 +20,8 @@
 //! reached. Every inserted point lies on a triangle edge, so the yarn lies on the skin from
 //! triangle to triangle. Where the walk cannot finish (an open edge, a non-manifold edge, a
 //! mesh that folds back) or a piece still crosses the skin (two sheets of skin close together),
-//! the piece is split at a point lifted off the skin above where it is deepest (a bump's or a
-//! crest's top), recursively: a fallback, counted separately.
+//! the piece is split at a point on the skin out across it, near the top of the bump or crest
+//! it passes under, recursively: a fallback, counted separately.
 //!
 //! Inserted points carry the attributes of the segment they split: `course`, `wale` and
 //! `tension` are interpolated by arc length where they are continuous (not across the seam,
@@ -29,7 +29,7 @@
 
 use std::collections::HashMap;
 
-use nalgebra::Point3;
+use nalgebra::{Matrix2, Point3, Vector2};
 use rayon::prelude::*;
 use serde::Serialize;
 
@@ -40,8 +40,15 @@ use crate::leg::{Closest, Collider};
 const INTERPOLATED: [&str; 3] = ["course", "wale", "tension"];
 /// How many edges one segment's walk may cross before it gives up.
 const MAX_CROSSINGS: usize = 512;
-/// How many times a piece may be halved by the fallback.
+/// How many times the fallback may split a piece.
 const MAX_SPLIT_DEPTH: u32 = 8;
+/// How far out across a piece the fallback looks for the skin, in piece lengths: a crest whose
+/// flanks rise 3 in 1 stands 1.5 lengths above the middle of a chord under it.
+const ACROSS_REACH: f64 = 4.0;
+/// The least length, across the piece, of the sum of the skin's normals where a piece enters
+/// and leaves the leg, for the fallback to look out across it (0.05: normals 177° apart, as
+/// through a thin sheet).
+const MIN_ACROSS: f64 = 0.05;
 
 /// What the fix did, for the report.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -59,7 +66,7 @@ pub struct PenetrationStats {
     pub repaired: usize,
     /// Points inserted in all.
     pub points_inserted: usize,
-    /// Repaired segments that needed the midpoint fallback for some piece.
+    /// Repaired segments that needed the fallback for some piece.
     pub used_fallback: usize,
     /// Pieces that still cross the skin after the fix (0 unless the mesh is broken).
     pub still_crossing: usize,
@@ -270,14 +277,14 @@ impl<'a> SurfaceWalker<'a> {
                 .is_some()
     }
 
-    /// Splits the piece `a`–`b` at a point on the skin above where it is deepest ([`Self::
-    /// lifted_above`]), recursively while a part crosses and `depth` lasts, pushing the points
-    /// between `a` and `b` in order. Returns how many pieces still cross.
+    /// Splits the piece `a`–`b` at [`Self::split_point`], recursively while a part crosses
+    /// and `depth` lasts, pushing the points between `a` and `b` in order. Returns how many
+    /// pieces still cross.
     fn split(&self, a: &Vec3, b: &Vec3, depth: u32, points: &mut Vec<Vec3>) -> usize {
         if depth == 0 {
             return 1;
         }
-        let mid = self.lifted_above(a, b);
+        let mid = self.split_point(a, b);
         let mut left = 0;
         if self.crosses(a, &mid) {
             left = self.split(a, &mid, depth - 1, points);
@@ -290,36 +297,57 @@ impl<'a> SurfaceWalker<'a> {
         left + right
     }
 
-    /// Where the fallback splits the piece `a`–`b`: from the middle of its stretch inside the
-    /// leg (halfway between where it enters and last leaves the skin), out across the chord
-    /// along the mean of the two skin normals there to the skin, plus the offset. Over a bump
-    /// or a sharp crest that is its top, which both halves clear. The closest skin point of the
-    /// piece's midpoint would not do: under a crest it lies on a flank, and the halves straddle
-    /// the crest again, many halvings short of clearing it. That is kept where there is no
-    /// such direction (a piece through a thin sheet, or one whose middle is outside the leg).
-    fn lifted_above(&self, a: &Vec3, b: &Vec3) -> Vec3 {
-        let d = b - a;
-        let length = d.norm();
-        let mut middle = (a + b) / 2.0;
-        let mut across = None;
-        if length > 0.0 {
-            let dir = d / length;
-            let enters = self.collider.first_hit(&Point3::from(*a), &dir, length);
-            let leaves = self.collider.first_hit(&Point3::from(*b), &-dir, length);
-            if let (Some((enter, n_enter)), Some((leave, n_leave))) = (enters, leaves) {
-                middle = a + dir * ((enter + length - leave) / 2.0);
-                let n = n_enter + n_leave;
-                across = (n - dir * n.dot(&dir)).try_normalize(1e-9);
-            }
-        }
+    /// Where the fallback splits the piece `a`–`b`: near the top of the bump or crest it
+    /// passes under, so each part crosses less of it. From the middle of its stretch inside
+    /// the leg (halfway between where it enters and last leaves the skin) towards the apex,
+    /// where the skin's tangent planes at the entry and the exit meet above the piece, to the
+    /// skin, plus the offset. Over two flat flanks that is the crest itself, however lopsided
+    /// the piece. The closest skin point would not do: under a sharp crest it lies on a flank,
+    /// and the parts straddle the crest again, many splits short of clearing it. The closest
+    /// skin point (plus the offset) is used where the normals are nearly opposite (a thin
+    /// sheet), where that middle is not inside the leg, and where the point found is inside it
+    /// or beyond [`ACROSS_REACH`].
+    fn split_point(&self, a: &Vec3, b: &Vec3) -> Vec3 {
+        let middle = (a + b) / 2.0;
         let closest = self.collider.closest(&Point3::from(middle));
-        if let Some(n) = across.filter(|_| closest.signed_distance < 0.0) {
-            let out = self.collider.first_hit(&Point3::from(middle), &n, f64::MAX);
-            if let Some((t, _)) = out {
-                return middle + n * (t + self.offset);
+        let fallback = closest.point.coords + closest.outward * self.offset;
+        let length = (b - a).norm();
+        let Some(dir) = (b - a).try_normalize(0.0) else {
+            return fallback;
+        };
+        let enters = self.collider.first_hit(&Point3::from(*a), &dir, length);
+        let leaves = self.collider.first_hit(&Point3::from(*b), &-dir, length);
+        let (Some((enter, n_enter)), Some((leave, n_leave))) = (enters, leaves) else {
+            return fallback;
+        };
+        let (entry, exit) = (a + dir * enter, b - dir * leave);
+        let middle = (entry + exit) / 2.0;
+        let sum = n_enter + n_leave;
+        let Some(across) = (sum - dir * sum.dot(&dir)).try_normalize(MIN_ACROSS) else {
+            return fallback;
+        };
+        if self.collider.closest(&Point3::from(middle)).signed_distance >= 0.0 {
+            return fallback;
+        }
+        let towards = apex(
+            &middle,
+            &dir,
+            &across,
+            (&entry, &n_enter),
+            (&exit, &n_leave),
+        )
+        .and_then(|apex| (apex - middle).try_normalize(1e-12))
+        .unwrap_or(across);
+        let out = self
+            .collider
+            .first_hit(&Point3::from(middle), &towards, ACROSS_REACH * length);
+        if let Some((t, _)) = out {
+            let point = middle + towards * (t + self.offset);
+            if self.collider.closest(&Point3::from(point)).signed_distance > 0.0 {
+                return point;
             }
         }
-        closest.point.coords + closest.outward * self.offset
+        fallback
     }
 
     /// Walks over the skin from the closest point `start` to the closest point `goal`,
@@ -394,6 +422,28 @@ impl<'a> SurfaceWalker<'a> {
 
 fn edge_key(a: u32, b: u32) -> (u32, u32) {
     (a.min(b), a.max(b))
+}
+
+/// Where the planes through `entry` and `exit` with normals `n_entry` and `n_exit` meet in
+/// the plane through `origin` spanned by `dir` and `across`, if there on the `across` side
+/// (the planes are not nearly parallel there).
+fn apex(
+    origin: &Vec3,
+    dir: &Vec3,
+    across: &Vec3,
+    (entry, n_entry): (&Vec3, &Vec3),
+    (exit, n_exit): (&Vec3, &Vec3),
+) -> Option<Vec3> {
+    // origin + s·dir + t·across on both planes: two equations in (s, t).
+    let m = Matrix2::new(
+        dir.dot(n_entry),
+        across.dot(n_entry),
+        dir.dot(n_exit),
+        across.dot(n_exit),
+    );
+    let rhs = Vector2::new((entry - origin).dot(n_entry), (exit - origin).dot(n_exit));
+    let st = m.try_inverse().filter(|_| m.determinant().abs() > 1e-6)? * rhs;
+    (st.y > 0.0).then(|| origin + dir * st.x + across * st.y)
 }
 
 #[cfg(test)]
@@ -512,9 +562,10 @@ mod tests {
     }
 
     #[test]
-    fn the_fallback_clears_a_sharp_crest_in_one_split() {
+    fn the_fallback_clears_a_sharp_crest() {
         // Flanks rising 3 in 1: their normals 143° apart. A chord between points on them passes
-        // 24 mm under the crest; split at its midpoint, it took more halvings than the depth.
+        // 24 mm under the crest; split at its midpoint's closest skin point (on a flank), it
+        // took more splits than the depth allows.
         let (w, h, offset) = (0.01, 0.03, 0.00003);
         let collider = Collider::new(&ridge(w, h), ContactMethod::Bvh).unwrap();
         let walker = SurfaceWalker::new(&collider, offset);
@@ -531,6 +582,16 @@ mod tests {
         assert!(points[0].x.abs() < 1e-9 && (points[0].z - (w + h + offset)).abs() < 1e-9);
         let chain: Vec<Vec3> = [a].into_iter().chain(points).chain([b]).collect();
         assert!(chain.windows(2).all(|p| !walker.crosses(&p[0], &p[1])));
+        // Lopsided, the one point is on the crest too: the flanks' planes meet there.
+        let (a, b) = (on_flank(-0.008), on_flank(0.003));
+        let mut points = Vec::new();
+        assert_eq!(walker.split(&a, &b, MAX_SPLIT_DEPTH, &mut points), 0);
+        assert_eq!(points.len(), 1, "{points:?}");
+        assert!(points[0].x.abs() < 1e-4 && (points[0].z - (w + h)).abs() < 3.0 * offset);
+        let chain: Vec<Vec3> = [a].into_iter().chain(points).chain([b]).collect();
+        assert!(chain.windows(2).all(|p| !walker.crosses(&p[0], &p[1])));
+        let outside = |p: &Vec3| collider.closest(&Point3::from(*p)).signed_distance > 0.0;
+        assert!(chain.iter().all(outside));
     }
 
     #[test]
