@@ -677,10 +677,15 @@ mod tests {
         assert!(!Plan::fit(&scene).has(Stage::KnitTube));
         let why = fit_why(&scene);
         assert!(why.contains("38×39 → 75×76 → 150×150"), "{why}");
-        // A stocking to the toe starts at 60 a side, and the plan says so.
+        // A stocking to the toe coarsens to no fewer than 48 a side, and the plan says so.
         scene.tube.bottom = Some(TubeBottom::Toe);
         let why = fit_why(&scene);
         assert!(why.ends_with("on grids 75×76 → 150×150"), "{why}");
+        let (wales, courses) = (scene.tube.wales, scene.tube.courses);
+        (scene.tube.wales, scene.tube.courses) = (100, 100);
+        let why = fit_why(&scene);
+        assert!(why.ends_with("on grids 50×51 → 100×100"), "{why}");
+        (scene.tube.wales, scene.tube.courses) = (wales, courses);
         scene.tube.bottom = Some(TubeBottom::Ankle);
         let why = fit_why(&scene);
         assert!(why.ends_with("on grids 38×39 → 75×76 → 150×150"), "{why}");

@@ -41,6 +41,8 @@ def read_leg_ply(path):
             count, in_vertex = int(words[2]), True
         elif words[:2] == ["element", "face"]:
             faces, in_vertex = int(words[2]), False
+        elif words[:1] == ["element"]:
+            in_vertex = False
         elif in_vertex and words[:1] == ["property"]:
             props.append((words[2], PLY_TYPES[words[1]]))
     record = struct.Struct("<" + "".join(t for _, t in props))

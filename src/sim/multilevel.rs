@@ -31,8 +31,8 @@ use crate::knit::Knit;
 pub const COARSEST: usize = 24;
 /// Fewest wales or courses on the coarsest grid of a stocking to the toe: 24 courses over a
 /// leg and foot of 70 cm put rings 3 cm apart, coarser than the heel, and that level chattered.
-/// At 48 a 100×100 stocking still gets a 50×51 level, which carries the courses' slide along
-/// the leg that its finest level cannot see (decision 0060).
+/// At 48 a 100×100 stocking gets a 50×51 level, which removes the courses' slide along the
+/// leg that its finest level cannot see (decision 0061).
 pub const STOCKING_COARSEST: usize = 48;
 /// Iterations a coarser level may take at most: it only makes the starting point of the next,
 /// so one that has not converged by then hands on what it has. At the default tolerance the

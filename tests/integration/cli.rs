@@ -345,6 +345,17 @@ fn a_bad_units_up_axis_or_side_is_refused_naming_the_flag() {
 }
 
 #[test]
+fn a_stocking_to_the_toe_on_fewer_than_60_wales_or_courses_is_refused() {
+    // Its solver coarsens to 48 a side, but a stocking is not fitted on fewer than 60.
+    let leg = crate::support::sample("makehuman_leg_foot.glb");
+    let leg = leg.to_str().unwrap();
+    for grid in ["59x100", "100x59"] {
+        let args = ["fit", "--leg", leg, "--bottom", "toe", "--resolution", grid];
+        refused(&args, &[], "give at least 60×60 (--resolution");
+    }
+}
+
+#[test]
 fn units_up_axis_and_side_flags_reach_the_fit() {
     let leg = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/makehuman_hips_heavy.glb");
     let (_dir, r) = crate::support::fit(

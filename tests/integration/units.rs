@@ -83,19 +83,15 @@ fn a_whole_stockings_fields_are_the_same_on_the_default_grid_and_at_the_real_sti
     let a = leg_fields(&coarse_dir.path().join("out"));
     let b = leg_fields(&real_dir.path().join("out"));
     let above = above_the_ankle(&coarse_dir.path().join("out"), &coarse);
-    let on_the_leg = |fields: &[[f64; 3]]| -> Vec<[f64; 3]> {
-        let kept = fields.iter().zip(&above).filter(|(_, &up)| up);
-        kept.map(|(f, _)| *f).collect()
-    };
-    let (a_leg, b_leg) = (on_the_leg(&a), on_the_leg(&b));
-    // Above the ankle the grids agree as the issue asks (0.7 / 0.2 / 0.7 % measured). With the
+    let (a_leg, b_leg) = (kept(&a, &above), kept(&b, &above));
+    // Above the ankle the grids agree as the issue asks (0.5 / 0.1 / 0.6 % measured). With the
     // foot they do not yet: the foot's rest follows the solver's path, and the toes, stretched
-    // by 5–8 % around, turn a small difference of stretch into a large one of tension (3.0 /
-    // 1.0 / 8.4 % measured; issue 21, decisions 0059 and 0060); this holds what is reached.
+    // by 5–8 % around, turn a small difference of stretch into a large one of tension (2.2 /
+    // 0.8 / 6.3 % measured; issue 21, decisions 0059 to 0061); this holds what is reached.
     for (k, field, bound) in [
-        (0, "stitch_density", 0.035),
+        (0, "stitch_density", 0.03),
         (1, "coverage", 0.03),
-        (2, "pressure", 0.10),
+        (2, "pressure", 0.08),
     ] {
         let (whole, leg) = (relative_l2(&a, &b, k), relative_l2(&a_leg, &b_leg, k));
         eprintln!(
@@ -110,6 +106,33 @@ fn a_whole_stockings_fields_are_the_same_on_the_default_grid_and_at_the_real_sti
             100.0 * leg
         );
     }
+    // A 100×100 stocking is solved from 50×51 and agrees above the ankle too (0.4 / 0.2 / 1.2 %
+    // measured; decision 0061).
+    let (small_dir, small) = fit(&leg, "100x100", &[]);
+    let c = leg_fields(&small_dir.path().join("out"));
+    let above = above_the_ankle(&small_dir.path().join("out"), &small);
+    let (c_leg, b_leg) = (kept(&c, &above), kept(&b, &above));
+    for (k, field) in ["stitch_density", "coverage", "pressure"]
+        .iter()
+        .enumerate()
+    {
+        let leg = relative_l2(&c_leg, &b_leg, k);
+        eprintln!(
+            "{field}: 100x100 against 400x{courses} above the ankle: {:.2}%",
+            100.0 * leg
+        );
+        assert!(
+            leg < 0.03,
+            "{field}: 100x100 {:.2}% apart above the ankle",
+            100.0 * leg
+        );
+    }
+}
+
+/// The vertices' fields where `keep` is true.
+fn kept(fields: &[[f64; 3]], keep: &[bool]) -> Vec<[f64; 3]> {
+    let pairs = fields.iter().zip(keep).filter(|(_, &k)| k);
+    pairs.map(|(f, _)| *f).collect()
 }
 
 /// For each vertex of `out/leg.ply`, whether it lies above the ankle the report found.
