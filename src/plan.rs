@@ -448,8 +448,23 @@ impl Plan {
                     grids.join(" → ")
                 };
                 // A stocking to the toe coarsens less (its heel and toe need rings a few
-                // centimetres apart); without tube.bottom the leg decides, so name both.
-                let (tube, stocking) = (chain(COARSEST), chain(STOCKING_COARSEST));
+                // centimetres apart) and follows the real stitch count's levels, whose courses
+                // the leg's length decides; without tube.bottom the leg decides, so name both.
+                let own = format!("on grids {}", chain(STOCKING_COARSEST));
+                let mut real_wales = scene.fabric().real_count(1.0)[0];
+                while real_wales.div_ceil(2) >= STOCKING_COARSEST {
+                    real_wales = real_wales.div_ceil(2);
+                }
+                let stocking = if real_wales < wales {
+                    format!(
+                        "on the real stitch count's levels coarser than {wales}×{courses}, the \
+                         first {real_wales} around, then {wales}×{courses}; where it has none, \
+                         {own}"
+                    )
+                } else {
+                    own
+                };
+                let tube = format!("on grids {}", chain(COARSEST));
                 let grids = match scene.tube.bottom {
                     Some(TubeBottom::Ankle) => tube,
                     Some(TubeBottom::Toe) => stocking,
@@ -460,7 +475,7 @@ impl Plan {
                     Stage::Fit,
                     format!(
                         "{terms}; solver.method \"multilevel\": tubes knitted and relaxed \
-                         coarse to fine on grids {grids}"
+                         coarse to fine {grids}"
                     ),
                 );
             }
@@ -677,14 +692,29 @@ mod tests {
         assert!(!Plan::fit(&scene).has(Stage::KnitTube));
         let why = fit_why(&scene);
         assert!(why.contains("38×39 → 75×76 → 150×150"), "{why}");
-        // A stocking to the toe coarsens to no fewer than 48 a side, and the plan says so.
+        // A stocking to the toe follows the real stitch count's levels (400 needles: from 50
+        // around), or halves its own down to 48 a side, and the plan says so.
         scene.tube.bottom = Some(TubeBottom::Toe);
         let why = fit_why(&scene);
-        assert!(why.ends_with("on grids 75×76 → 150×150"), "{why}");
+        assert!(
+            why.ends_with(
+                "on the real stitch count's levels coarser than 150×150, the first 50 around, \
+                 then 150×150; where it has none, on grids 75×76 → 150×150"
+            ),
+            "{why}"
+        );
         let (wales, courses) = (scene.tube.wales, scene.tube.courses);
         (scene.tube.wales, scene.tube.courses) = (100, 100);
         let why = fit_why(&scene);
-        assert!(why.ends_with("on grids 50×51 → 100×100"), "{why}");
+        assert!(
+            why.ends_with("where it has none, on grids 50×51 → 100×100"),
+            "{why}"
+        );
+        (scene.tube.wales, scene.tube.courses) = (50, 60);
+        scene.knit.needles = 60;
+        let why = fit_why(&scene);
+        assert!(why.ends_with("coarse to fine on grids 50×60"), "{why}");
+        scene.knit.needles = 400;
         (scene.tube.wales, scene.tube.courses) = (wales, courses);
         scene.tube.bottom = Some(TubeBottom::Ankle);
         let why = fit_why(&scene);

@@ -49,7 +49,9 @@ use crate::report::{
 };
 use crate::scene::{LoadedScene, Scene, LEG_AXIS};
 use crate::sim::contact::{ContactCounters, LegContact};
-use crate::sim::multilevel::STOCKING_COARSEST;
+use crate::sim::multilevel::{
+    grid_sizes_down_to, grid_sizes_following, COARSEST, STOCKING_COARSEST,
+};
 use crate::sim::{
     relax_constrained, relax_multilevel, Constraints, ForceTerms, LevelStats, Levels,
     MultilevelStats, RelaxStats, SolverMethod,
@@ -522,6 +524,10 @@ pub fn solve_fit(
         collider: boxed_toes.as_ref().unwrap_or(&collider),
         offset,
         support_ratio: scene.yarns.support.stiffness / scene.yarns.nylon.stiffness,
+        real_count: {
+            let [wales, courses] = fabric.real_count(relaxed_length);
+            (wales, courses)
+        },
         contact: None,
         retired: ContactCounters::default(),
     };
@@ -805,6 +811,8 @@ struct TubeLevels<'a> {
     offset: f64,
     /// Support yarn's stiffness over nylon's, for the bunched refusal.
     support_ratio: f64,
+    /// The real stitch count (wales, courses), whose levels a stocking's grids follow.
+    real_count: (usize, usize),
     /// Contact of the level being solved.
     contact: Option<LegContact<'a>>,
     /// Counters of the levels solved before it.
@@ -839,12 +847,12 @@ impl<'a> Levels for TubeLevels<'a> {
         ))
     }
 
-    fn coarsest(&self) -> usize {
-        // A heel and a toe need rings a few centimetres apart at most.
-        if self.path.is_some() {
-            STOCKING_COARSEST
-        } else {
-            crate::sim::multilevel::COARSEST
+    fn grid_sizes(&self, wales: usize, courses: usize) -> Vec<(usize, usize)> {
+        // A heel and a toe need rings a few centimetres apart at most, and a foot rests where
+        // its coarse levels leave it: every grid starts where the real count does.
+        match self.path {
+            Some(_) => grid_sizes_following(self.real_count, wales, courses, STOCKING_COARSEST),
+            None => grid_sizes_down_to(wales, courses, COARSEST),
         }
     }
 

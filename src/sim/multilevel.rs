@@ -2,7 +2,9 @@
 //! (Brandt, "Multi-level adaptive solutions to boundary-value problems", 1977).
 //!
 //! The knit is first relaxed on a grid with about half the wales and half the courses of the
-//! one asked for (and that on a grid half as fine again, down to [`COARSEST`] points a side).
+//! one asked for (and that on a grid half as fine again, down to [`COARSEST`] points a side;
+//! a stocking to the toe on the real stitch count's own coarser levels instead,
+//! [`grid_sizes_following`]: its foot rests where the coarse levels leave it).
 //! A coarse grid stands for the same stocking: its rest lengths are twice as long, so the same
 //! relaxed circumference and length. Its rest state is interpolated (bilinearly, around the
 //! closed courses and along the wales) onto the next finer grid, the constraints put any
@@ -71,10 +73,11 @@ pub trait Levels {
     fn accept(&mut self, _knit: &Knit) -> Result<()> {
         Ok(())
     }
-    /// Fewest wales or courses a level may have (default [`COARSEST`]): a knit whose shape has
-    /// small features (a heel, a toe) needs a finer coarsest grid to resolve them.
-    fn coarsest(&self) -> usize {
-        COARSEST
+    /// The grids to solve on, coarsest first, ending at `wales × courses` (default: halving
+    /// down to [`COARSEST`], [`grid_sizes_down_to`]). A stocking to the toe follows the real
+    /// stitch count's own levels ([`grid_sizes_following`]).
+    fn grid_sizes(&self, wales: usize, courses: usize) -> Vec<(usize, usize)> {
+        grid_sizes_down_to(wales, courses, COARSEST)
     }
 }
 
@@ -126,6 +129,28 @@ pub fn grid_sizes_down_to(wales: usize, courses: usize, coarsest: usize) -> Vec<
     sizes
 }
 
+/// Grid sizes for a `wales × courses` stocking that follows the real stitch count's own path:
+/// the levels of the real count's chain ([`grid_sizes_down_to`] to `coarsest`) coarser than the
+/// grid both ways, then the grid; the grid's own chain where the real count has no such level.
+/// A stocking's foot rests where its coarse levels leave it, the real count's too (decision
+/// 0062), so every grid starts from the real count's coarsest rest (decision 0063).
+pub fn grid_sizes_following(
+    real: (usize, usize),
+    wales: usize,
+    courses: usize,
+    coarsest: usize,
+) -> Vec<(usize, usize)> {
+    let mut sizes: Vec<(usize, usize)> = grid_sizes_down_to(real.0, real.1, coarsest)
+        .into_iter()
+        .filter(|&(w, c)| w < wales && c < courses)
+        .collect();
+    if sizes.is_empty() {
+        return grid_sizes_down_to(wales, courses, coarsest);
+    }
+    sizes.push((wales, courses));
+    sizes
+}
+
 /// Relaxes a `wales × courses` knit coarse to fine (module docs); returns the fine knit at rest
 /// and each level's figures, or, where a level stopped as futile ([`LevelStats::stall`]), that
 /// level's knit and the figures so far. The finest level runs to `tolerance` or `max_iterations`; coarser
@@ -145,7 +170,7 @@ pub fn relax_multilevel(
 ) -> Result<(Knit, MultilevelStats)> {
     let mut stats = MultilevelStats::default();
     let mut coarser: Option<Knit> = None;
-    let sizes = grid_sizes_down_to(wales, courses, levels.coarsest());
+    let sizes = levels.grid_sizes(wales, courses);
     for (n, &(w, c)) in sizes.iter().enumerate() {
         let finest = n + 1 == sizes.len();
         let mut knit = levels.knit(w, c);
@@ -330,6 +355,17 @@ mod tests {
             grid_sizes_down_to(100, 100, STOCKING_COARSEST),
             vec![(50, 51), (100, 100)]
         );
+        // A stocking follows the real count's levels coarser than it, or halves its own.
+        let following = |w, c| grid_sizes_following((400, 701), w, c, STOCKING_COARSEST);
+        assert_eq!(following(150, 150), vec![(50, 89), (150, 150)]);
+        assert_eq!(following(300, 300), vec![(50, 89), (100, 176), (300, 300)]);
+        assert_eq!(
+            following(400, 701),
+            grid_sizes_down_to(400, 701, STOCKING_COARSEST)
+        );
+        assert_eq!(following(60, 60), vec![(60, 60)]);
+        let following = |w, c| grid_sizes_following((400, 805), w, c, STOCKING_COARSEST);
+        assert_eq!(following(100, 100), vec![(50, 51), (100, 100)]);
         let real = grid_sizes(400, 1600);
         assert_eq!(real.first(), Some(&(25, 101)));
         assert_eq!(real.last(), Some(&(400, 1600)));

@@ -84,31 +84,29 @@ fn a_whole_stockings_fields_are_the_same_on_the_default_grid_and_at_the_real_sti
     let b = leg_fields(&real_dir.path().join("out"));
     let above = above_the_ankle(&coarse_dir.path().join("out"), &coarse);
     let (a_leg, b_leg) = (kept(&a, &above), kept(&b, &above));
-    // Above the ankle the grids agree as the issue asks (0.5 / 0.1 / 0.6 % measured). With the
-    // foot they do not: the foot's rest follows the solver's path, the real count's own too,
-    // and the toes, stretched by 5–8 % around, turn a small difference of stretch into a large
-    // one of tension (2.2 / 0.8 / 6.3 % measured; issue 21, decisions 0059 to 0062); this
-    // holds what is reached.
-    for (k, field, bound) in [
-        (0, "stitch_density", 0.03),
-        (1, "coverage", 0.03),
-        (2, "pressure", 0.08),
-    ] {
+    // The grids follow the real count's coarse levels (decision 0063), so here they agree as
+    // the issue asks over the whole leg (1.2 / 0.3 / 2.4 % measured) and above the ankle (0.2 /
+    // 0.1 / 0.5 %). Not every sample's foot does at every grid: it rests where its solver's
+    // path leaves it, the real count's own too (issue 21, decision 0062).
+    for (k, field) in ["stitch_density", "coverage", "pressure"]
+        .iter()
+        .enumerate()
+    {
         let (whole, leg) = (relative_l2(&a, &b, k), relative_l2(&a_leg, &b_leg, k));
         eprintln!(
             "{field}: 150x150 against 400x{courses}: {:.2}% (above the ankle {:.2}%)",
             100.0 * whole,
             100.0 * leg
         );
-        assert!(whole < bound, "{field}: {:.2}% apart", 100.0 * whole);
+        assert!(whole < 0.03, "{field}: {:.2}% apart", 100.0 * whole);
         assert!(
             leg < 0.03,
             "{field}: {:.2}% apart above the ankle",
             100.0 * leg
         );
     }
-    // A 100×100 stocking is solved from 50×51 and agrees above the ankle too (0.4 / 0.2 / 1.2 %
-    // measured; decision 0061).
+    // A 100×100 stocking agrees above the ankle too (0.2 / 0.1 / 1.3 % measured; decisions 0061
+    // and 0063).
     let (small_dir, small) = fit(&leg, "100x100", &[]);
     let c = leg_fields(&small_dir.path().join("out"));
     let above = above_the_ankle(&small_dir.path().join("out"), &small);
