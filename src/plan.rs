@@ -451,15 +451,15 @@ impl Plan {
                 // centimetres apart) and follows the real stitch count's levels, whose courses
                 // the leg's length decides; without tube.bottom the leg decides, so name both.
                 let own = format!("on grids {}", chain(STOCKING_COARSEST));
-                let mut real_wales = scene.fabric().real_count(1.0)[0];
+                // The real count's wales (its courses need the leg), halved as far as they go.
+                let mut real_wales = scene.fabric().real_count(0.0)[0];
                 while real_wales.div_ceil(2) >= STOCKING_COARSEST {
                     real_wales = real_wales.div_ceil(2);
                 }
                 let stocking = if real_wales < wales {
                     format!(
-                        "on the real stitch count's levels coarser than {wales}×{courses}, the \
-                         first {real_wales} around, then {wales}×{courses}; where it has none, \
-                         {own}"
+                        "on the real stitch count's levels coarser than {wales}×{courses}, then \
+                         {wales}×{courses}; where it has none, {own}"
                     )
                 } else {
                     own
@@ -692,14 +692,14 @@ mod tests {
         assert!(!Plan::fit(&scene).has(Stage::KnitTube));
         let why = fit_why(&scene);
         assert!(why.contains("38×39 → 75×76 → 150×150"), "{why}");
-        // A stocking to the toe follows the real stitch count's levels (400 needles: from 50
-        // around), or halves its own down to 48 a side, and the plan says so.
+        // A stocking to the toe follows the real stitch count's levels coarser than it, or
+        // halves its own down to 48 a side, and the plan says so.
         scene.tube.bottom = Some(TubeBottom::Toe);
         let why = fit_why(&scene);
         assert!(
             why.ends_with(
-                "on the real stitch count's levels coarser than 150×150, the first 50 around, \
-                 then 150×150; where it has none, on grids 75×76 → 150×150"
+                "on the real stitch count's levels coarser than 150×150, then 150×150; where it \
+                 has none, on grids 75×76 → 150×150"
             ),
             "{why}"
         );

@@ -42,6 +42,9 @@ const INTERPOLATED: [&str; 3] = ["course", "wale", "tension"];
 const MAX_CROSSINGS: usize = 512;
 /// How many times the fallback may split a piece.
 const MAX_SPLIT_DEPTH: u32 = 8;
+/// The least determinant of the fallback's two planes, in the plane of the piece, for them to
+/// meet at an apex (about the sine of the angle between their traces; 1e-6: not parallel).
+const MIN_APEX_DETERMINANT: f64 = 1e-6;
 /// How far out across a piece the fallback looks for the skin, in piece lengths: a crest whose
 /// flanks rise 3 in 1 stands 1.5 lengths above the middle of a chord under it.
 const ACROSS_REACH: f64 = 4.0;
@@ -302,14 +305,16 @@ impl<'a> SurfaceWalker<'a> {
     /// the leg (halfway between where it enters and last leaves the skin) towards the apex,
     /// where the skin's tangent planes at the entry and the exit meet above the piece, to the
     /// skin, plus the offset. Over two flat flanks that is the crest itself, however lopsided
-    /// the piece. The closest skin point would not do: under a sharp crest it lies on a flank,
-    /// and the parts straddle the crest again, many splits short of clearing it. The closest
-    /// skin point (plus the offset) is used where the normals are nearly opposite (a thin
-    /// sheet), where that middle is not inside the leg, and where the point found is inside it
-    /// or beyond [`ACROSS_REACH`].
+    /// the piece. Where the planes meet nowhere above the piece, it looks out along the
+    /// normals' mean (less its part along the piece). The closest skin point would not do:
+    /// under a sharp crest it lies on a flank, and the parts straddle the crest again, many
+    /// splits short of clearing it. The closest skin point (plus the offset) is used where the
+    /// normals are nearly opposite (a thin sheet), where the stretch's middle is not inside the
+    /// leg, and where the point found is within half the offset of the skin or beyond
+    /// [`ACROSS_REACH`].
     fn split_point(&self, a: &Vec3, b: &Vec3) -> Vec3 {
-        let middle = (a + b) / 2.0;
-        let closest = self.collider.closest(&Point3::from(middle));
+        let midpoint = (a + b) / 2.0;
+        let closest = self.collider.closest(&Point3::from(midpoint));
         let fallback = closest.point.coords + closest.outward * self.offset;
         let length = (b - a).norm();
         let Some(dir) = (b - a).try_normalize(0.0) else {
@@ -321,29 +326,33 @@ impl<'a> SurfaceWalker<'a> {
             return fallback;
         };
         let (entry, exit) = (a + dir * enter, b - dir * leave);
-        let middle = (entry + exit) / 2.0;
+        let inside_middle = (entry + exit) / 2.0;
         let sum = n_enter + n_leave;
         let Some(across) = (sum - dir * sum.dot(&dir)).try_normalize(MIN_ACROSS) else {
             return fallback;
         };
-        if self.collider.closest(&Point3::from(middle)).signed_distance >= 0.0 {
+        if self
+            .collider
+            .closest(&Point3::from(inside_middle))
+            .signed_distance
+            >= 0.0
+        {
             return fallback;
         }
-        let towards = apex(
-            &middle,
-            &dir,
-            &across,
-            (&entry, &n_enter),
-            (&exit, &n_leave),
-        )
-        .and_then(|apex| (apex - middle).try_normalize(1e-12))
-        .unwrap_or(across);
-        let out = self
+        // The apex may lie beyond the stretch's ends along the piece (a crest high above a
+        // slanting piece does); the ray's reach bounds how far out it is looked for.
+        let planes = ((&entry, &n_enter), (&exit, &n_leave));
+        let towards = apex(&inside_middle, &dir, &across, planes.0, planes.1)
+            .and_then(|apex| (apex - inside_middle).try_normalize(1e-12))
+            .unwrap_or(across);
+        let from = Point3::from(inside_middle);
+        if let Some((t, _)) = self
             .collider
-            .first_hit(&Point3::from(middle), &towards, ACROSS_REACH * length);
-        if let Some((t, _)) = out {
-            let point = middle + towards * (t + self.offset);
-            if self.collider.closest(&Point3::from(point)).signed_distance > 0.0 {
+            .first_hit(&from, &towards, ACROSS_REACH * length)
+        {
+            let point = inside_middle + towards * (t + self.offset);
+            let clear = self.collider.closest(&Point3::from(point)).signed_distance;
+            if clear >= 0.5 * self.offset {
                 return point;
             }
         }
@@ -426,7 +435,7 @@ fn edge_key(a: u32, b: u32) -> (u32, u32) {
 
 /// Where the planes through `entry` and `exit` with normals `n_entry` and `n_exit` meet in
 /// the plane through `origin` spanned by `dir` and `across`, if there on the `across` side
-/// (the planes are not nearly parallel there).
+/// (and the planes not nearly parallel there, [`MIN_APEX_DETERMINANT`]).
 fn apex(
     origin: &Vec3,
     dir: &Vec3,
@@ -442,7 +451,10 @@ fn apex(
         across.dot(n_exit),
     );
     let rhs = Vector2::new((entry - origin).dot(n_entry), (exit - origin).dot(n_exit));
-    let st = m.try_inverse().filter(|_| m.determinant().abs() > 1e-6)? * rhs;
+    if m.determinant().abs() <= MIN_APEX_DETERMINANT {
+        return None;
+    }
+    let st = m.try_inverse()? * rhs;
     (st.y > 0.0).then(|| origin + dir * st.x + across * st.y)
 }
 

@@ -524,10 +524,7 @@ pub fn solve_fit(
         collider: boxed_toes.as_ref().unwrap_or(&collider),
         offset,
         support_ratio: scene.yarns.support.stiffness / scene.yarns.nylon.stiffness,
-        real_count: {
-            let [wales, courses] = fabric.real_count(relaxed_length);
-            (wales, courses)
-        },
+        real_count: fabric.real_count(relaxed_length),
         contact: None,
         retired: ContactCounters::default(),
     };
@@ -812,7 +809,7 @@ struct TubeLevels<'a> {
     /// Support yarn's stiffness over nylon's, for the bunched refusal.
     support_ratio: f64,
     /// The real stitch count (wales, courses), whose levels a stocking's grids follow.
-    real_count: (usize, usize),
+    real_count: [usize; 2],
     /// Contact of the level being solved.
     contact: Option<LegContact<'a>>,
     /// Counters of the levels solved before it.
@@ -849,7 +846,7 @@ impl<'a> Levels for TubeLevels<'a> {
 
     fn grid_sizes(&self, wales: usize, courses: usize) -> Vec<(usize, usize)> {
         // A heel and a toe need rings a few centimetres apart at most, and a foot rests where
-        // its coarse levels leave it: every grid starts where the real count does.
+        // its coarse levels leave it: a grid starts where the real count does, where it can.
         match self.path {
             Some(_) => grid_sizes_following(self.real_count, wales, courses, STOCKING_COARSEST),
             None => grid_sizes_down_to(wales, courses, COARSEST),

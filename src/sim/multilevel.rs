@@ -3,7 +3,7 @@
 //!
 //! The knit is first relaxed on a grid with about half the wales and half the courses of the
 //! one asked for (and that on a grid half as fine again, down to [`COARSEST`] points a side;
-//! a stocking to the toe on the real stitch count's own coarser levels instead,
+//! a stocking to the toe on the real stitch count's own coarser levels where it has them,
 //! [`grid_sizes_following`]: its foot rests where the coarse levels leave it).
 //! A coarse grid stands for the same stocking: its rest lengths are twice as long, so the same
 //! relaxed circumference and length. Its rest state is interpolated (bilinearly, around the
@@ -33,7 +33,7 @@ use crate::knit::Knit;
 pub const COARSEST: usize = 24;
 /// Fewest wales or courses on the coarsest grid of a stocking to the toe: 24 courses over a
 /// leg and foot of 70 cm put rings 3 cm apart, coarser than the heel, and that level chattered.
-/// At 48 a 100×100 stocking gets a 50×51 level, which removes the courses' slide along the
+/// At 48 a 100×100 stocking gets a 50-wale level, which removes the courses' slide along the
 /// leg that its finest level cannot see (decision 0061).
 pub const STOCKING_COARSEST: usize = 48;
 /// Iterations a coarser level may take at most: it only makes the starting point of the next,
@@ -131,18 +131,19 @@ pub fn grid_sizes_down_to(wales: usize, courses: usize, coarsest: usize) -> Vec<
 
 /// Grid sizes for a `wales × courses` stocking that follows the real stitch count's own path:
 /// the levels of the real count's chain ([`grid_sizes_down_to`] to `coarsest`) coarser than the
-/// grid both ways, then the grid; the grid's own chain where the real count has no such level.
-/// A stocking's foot rests where its coarse levels leave it, the real count's too (decision
-/// 0062), so every grid starts from the real count's coarsest rest (decision 0063).
+/// grid both ways and no smaller than `coarsest`, then the grid; the grid's own chain where the
+/// real count has no such level. A stocking's foot rests where its coarse levels leave it, the
+/// real count's too (decision 0062), so a grid with such a level starts from the real count's
+/// coarsest rest (decision 0063).
 pub fn grid_sizes_following(
-    real: (usize, usize),
+    [real_wales, real_courses]: [usize; 2],
     wales: usize,
     courses: usize,
     coarsest: usize,
 ) -> Vec<(usize, usize)> {
-    let mut sizes: Vec<(usize, usize)> = grid_sizes_down_to(real.0, real.1, coarsest)
+    let mut sizes: Vec<(usize, usize)> = grid_sizes_down_to(real_wales, real_courses, coarsest)
         .into_iter()
-        .filter(|&(w, c)| w < wales && c < courses)
+        .filter(|&(w, c)| w < wales && c < courses && w.min(c) >= coarsest)
         .collect();
     if sizes.is_empty() {
         return grid_sizes_down_to(wales, courses, coarsest);
@@ -356,7 +357,7 @@ mod tests {
             vec![(50, 51), (100, 100)]
         );
         // A stocking follows the real count's levels coarser than it, or halves its own.
-        let following = |w, c| grid_sizes_following((400, 701), w, c, STOCKING_COARSEST);
+        let following = |w, c| grid_sizes_following([400, 701], w, c, STOCKING_COARSEST);
         assert_eq!(following(150, 150), vec![(50, 89), (150, 150)]);
         assert_eq!(following(300, 300), vec![(50, 89), (100, 176), (300, 300)]);
         assert_eq!(
@@ -364,8 +365,11 @@ mod tests {
             grid_sizes_down_to(400, 701, STOCKING_COARSEST)
         );
         assert_eq!(following(60, 60), vec![(60, 60)]);
-        let following = |w, c| grid_sizes_following((400, 805), w, c, STOCKING_COARSEST);
+        let following = |w, c| grid_sizes_following([400, 805], w, c, STOCKING_COARSEST);
         assert_eq!(following(100, 100), vec![(50, 51), (100, 100)]);
+        // A real count too small to halve is no level below the coarsest.
+        let following = |w, c| grid_sizes_following([40, 701], w, c, STOCKING_COARSEST);
+        assert_eq!(following(60, 800), vec![(60, 800)]);
         let real = grid_sizes(400, 1600);
         assert_eq!(real.first(), Some(&(25, 101)));
         assert_eq!(real.last(), Some(&(400, 1600)));
