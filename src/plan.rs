@@ -450,20 +450,11 @@ impl Plan {
                 // A stocking to the toe coarsens less (its heel and toe need rings a few
                 // centimetres apart) and follows the real stitch count's levels, whose courses
                 // the leg's length decides; without tube.bottom the leg decides, so name both.
-                let own = format!("on grids {}", chain(STOCKING_COARSEST));
-                // The real count's wales (its courses need the leg), halved as far as they go.
-                let mut real_wales = scene.fabric().real_count(0.0)[0];
-                while real_wales.div_ceil(2) >= STOCKING_COARSEST {
-                    real_wales = real_wales.div_ceil(2);
-                }
-                let stocking = if real_wales < wales {
-                    format!(
-                        "on the real stitch count's levels coarser than {wales}×{courses}, then \
-                         {wales}×{courses}; where it has none, {own}"
-                    )
-                } else {
-                    own
-                };
+                let stocking = format!(
+                    "on the real stitch count's levels coarser than {wales}×{courses}, then \
+                     {wales}×{courses}; where it has none, on grids {}",
+                    chain(STOCKING_COARSEST)
+                );
                 let tube = format!("on grids {}", chain(COARSEST));
                 let grids = match scene.tube.bottom {
                     Some(TubeBottom::Ankle) => tube,
@@ -710,11 +701,6 @@ mod tests {
             why.ends_with("where it has none, on grids 50×51 → 100×100"),
             "{why}"
         );
-        (scene.tube.wales, scene.tube.courses) = (50, 60);
-        scene.knit.needles = 60;
-        let why = fit_why(&scene);
-        assert!(why.ends_with("coarse to fine on grids 50×60"), "{why}");
-        scene.knit.needles = 400;
         (scene.tube.wales, scene.tube.courses) = (wales, courses);
         scene.tube.bottom = Some(TubeBottom::Ankle);
         let why = fit_why(&scene);
