@@ -322,6 +322,22 @@ pub struct TubeDetails {
     /// Where the courses lie closer than knitted (surplus fabric that would wrinkle): never
     /// refused; per point, the `slack` attribute.
     pub slack: SlackDetails,
+    /// Where the fabric rested on the toes boxed (bridging the gaps between them) rather than
+    /// on the skin: a stocking to the toe of a foot with toes; `null` otherwise.
+    pub toe_box: Option<ToeBoxDetails>,
+}
+
+/// The toe box of a stocking to the toe ([`crate::knit::TubePath::box_the_toes`]): the skin
+/// beyond its rim's plane, towards the toe, was the convex hull of the toes' sections during
+/// the fit. Its fields on the leg come from fabric that bridged the toes' clefts there.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct ToeBoxDetails {
+    /// Centre of the box's open rim, on the foot's section there, metres.
+    pub rim_centre_m: [f64; 3],
+    /// Unit normal of the rim's plane, towards the toe.
+    pub towards_toe: [f64; 3],
+    /// From the rim's plane to just past the toe tip, metres.
+    pub length_m: f64,
 }
 
 /// A value per knit direction.

@@ -382,6 +382,17 @@ fn add_toe_cap(stations: &mut Vec<Station>, toe_tip: Point3<f64>) -> Vec<Station
 }
 
 impl TubePath {
+    /// The toe box's open rim ([`TubePath::box_the_toes`]): its centre, its plane's normal
+    /// towards the toe, and the box's length from that plane to just past the tip, metres;
+    /// `None` where the path has no toes.
+    pub fn toe_box_rim(&self) -> Option<(Point3<f64>, Vector3<f64>, f64)> {
+        let [first, .., last] = &self.toes[..] else {
+            return None;
+        };
+        let length = (last.centre - first.centre).dot(&first.t) + TOE_END_M + TOE_BOX_PAST_M;
+        Some((first.centre, first.t, length))
+    }
+
     /// The leg `positions`/`triangles` with its toes boxed: the skin from a little before the
     /// toes' clefts on replaced by the convex hull of the sections there, closed just past the
     /// tip. This is the leg the stocking's contact sees: fabric bridges the gaps between toes,

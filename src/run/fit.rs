@@ -45,7 +45,7 @@ use crate::preview::{PreviewInput, PreviewStats};
 use crate::report::{
     Bounds, ContactDetails, DensityRange, FieldRange, FitDetails, KnitDetails, LandmarkDetails,
     LegDetails, MemoryDetails, Metrics, PerDirection, SolverDetails, StageClock,
-    StockingSurfaceDetails, TubeDetails, YarnValues, YarnsDetails,
+    StockingSurfaceDetails, ToeBoxDetails, TubeDetails, YarnValues, YarnsDetails,
 };
 use crate::scene::{LoadedScene, Scene, LEG_AXIS};
 use crate::sim::contact::{ContactCounters, LegContact};
@@ -364,6 +364,13 @@ fn fit_details(
             axial_range_m: fit.axial_range_m,
             bunched_courses: fit.bunched_courses,
             slack,
+            toe_box: fit.path.as_ref().and_then(|path| path.toe_box_rim()).map(
+                |(centre, towards_toe, length_m)| ToeBoxDetails {
+                    rim_centre_m: centre.coords.into(),
+                    towards_toe: towards_toe.into(),
+                    length_m,
+                },
+            ),
         },
         solver: fit.solver.details(scene),
         contact: ContactDetails {

@@ -101,6 +101,12 @@ fn fit_checked(name: &str, leg: &Path, leg_extra: Value) -> Fit {
     let m = &report["metrics"];
     assert_eq!(m["converged"], true, "{name}: {m}");
     assert_eq!(m["max_penetration_m"], 0.0, "{name}: {m}");
+    // An open tube rests on the skin itself, toes or not.
+    let toe_box = &report["details"]["tube"]["toe_box"];
+    assert!(
+        toe_box.is_null(),
+        "{name}: an open tube with a toe box {toe_box}"
+    );
     let bits = |v: &ply_rs_bw::ply::DefaultElement| {
         ["x", "y", "z"].map(|k| (float(v, k) as f32).to_bits())
     };

@@ -202,6 +202,15 @@ fn measure_whole_stocking(leg: &std::path::Path, heel: &str) -> WholeStocking {
         .iter()
         .map(crate::support::point)
         .collect();
+    // The report says where the fabric rested on the toes boxed: the toe tip lies in the box.
+    let toe_box = &r["details"]["tube"]["toe_box"];
+    let rim = Point3::from(v3(&toe_box["rim_centre_m"]));
+    let tip_beyond_rim = (tip - rim).dot(&v3(&toe_box["towards_toe"]));
+    let box_length = toe_box["length_m"].as_f64().unwrap();
+    assert!(
+        0.03 < tip_beyond_rim && tip_beyond_rim < box_length,
+        "{name}: toe tip {tip_beyond_rim} m beyond the rim, box {box_length} m long"
+    );
     let grid = Grid::of(&points, 0.01);
     let toe_gap_m = grid.nearest(&tip, &points);
     // Two course spacings: the mean distance between courses along the wales on the foot.
@@ -419,10 +428,23 @@ fn the_toe_box_is_convex_and_holds_every_toe() {
             valley <= 1e-7,
             "{foot}: a corner {valley} m in front of a face"
         );
+        // The rim the report gives (`details.tube.toe_box`): the box lies between its plane and
+        // the length it gives, and holds the toes, 3 cm and more of them.
+        let (rim, t, length) = path.toe_box_rim().expect("a foot with toes has a toe box");
+        let along = corners.iter().map(|p| (p - rim).dot(&t));
+        let (nearest, furthest) = along.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        });
+        assert!(
+            nearest.abs() < 1e-9,
+            "{foot}: box starts {nearest} m from its rim"
+        );
+        assert!(
+            (furthest - length).abs() < 1e-9 && length > 0.03,
+            "{foot}: box reaches {furthest} m, length {length} m"
+        );
         // Every skin vertex of the toes (ahead of the box's rim, not the other foot) is inside
         // the box.
-        let rim = path.toes[0].centre;
-        let t = path.toes[0].t;
         let outside = leg
             .positions
             .iter()
