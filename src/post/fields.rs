@@ -31,10 +31,14 @@
 //!   (a hollow the fabric bridges) it presses nothing: 0; off the skin (beyond the toes, over a
 //!   toe's cleft) 0 too. The skin is the one the fabric rests on, the toes boxed. Only a tube
 //!   has it.
-//! * **On the leg**, a vertex takes the kernel-weighted mean of the yarn points within a bandwidth
-//!   (a biweight kernel, compactly supported, so far-away yarn has no say): smooth where the fit is
-//!   smooth, and 0 where no yarn is near (uncovered skin). Pressure is the stress carried over so,
-//!   pressed on the skin's curvature at the vertex itself.
+//! * **On the leg**, a vertex takes the kernel-weighted mean of the fabric within 16 mm (a
+//!   biweight kernel, compactly supported, so far-away yarn has no say), the same on every grid:
+//!   a grid whose points lie further apart than a third of that is sampled inside its cells
+//!   (bilinear, area-weighted), so a coarse grid's heel is not blurred more than a fine one's;
+//!   skin with no fabric that near takes the mean of the grid's points within three grid
+//!   spacings (a loose stocking round a thin ankle), and 0 where no yarn is near even so
+//!   (uncovered skin). Pressure is the stress carried over so, pressed on the skin's curvature
+//!   at the vertex itself.
 
 use nalgebra::{Matrix3, Point3};
 use rayon::prelude::*;
@@ -54,6 +58,18 @@ const M2_PER_CM2: f64 = 1e-4;
 /// same fabric; an arc through the ends and the point keeps a ring's curve (a fitted ankle is
 /// some 35 mm around its centre).
 pub const MEASURE_SPAN_M: f64 = 0.008;
+
+/// Radius of the kernel that carries the fields to the leg's vertices, metres: the same on every
+/// grid ([`measure_fields`]), and the fabric each point's fields are measured over.
+pub const TRANSFER_BANDWIDTH_M: f64 = 2.0 * MEASURE_SPAN_M;
+
+/// Samples the transfer's kernel holds across its radius at least: a grid coarser than that is
+/// sampled inside its cells.
+const SAMPLES_ACROSS_KERNEL: f64 = 3.0;
+
+/// At most this many samples along each side of a cell (a leg at absurd scale widens the
+/// kernel instead of sampling millions).
+const MAX_SAMPLES_PER_CELL_SIDE: usize = 4;
 
 /// How much further than the yarn's own offset skin may lie from the fabric and still be pressed
 /// by it, metres: the fit leaves the fabric on the skin to well under a millimetre; a toe's
@@ -527,30 +543,48 @@ impl KnitFields {
         ]
     }
 
-    /// The fields carried over to leg vertices by [`transfer_to_leg`] (0 where no yarn is near),
-    /// but for pressure: the stress is carried over, and pressed on the skin at each vertex
-    /// (its curvature there, not the yarn's, whatever the grid; see the module docs).
-    pub fn transfer_to_leg(
-        &self,
-        yarn_points: &[Vec3],
+    /// The fields carried over to leg vertices (0 where no yarn is near): each vertex takes them
+    /// from the first of `carriers` with fabric within its kernel (see [`Carrier`]), pressure
+    /// apart: the stress is carried over, and pressed on the skin at each vertex (its curvature
+    /// there, not the yarn's, whatever the grid; see the module docs).
+    pub fn carried_to_leg(
+        carriers: &[Carrier],
         leg_vertices: &[Point3<f64>],
-        bandwidth: f64,
         skin: &SkinCurvature,
     ) -> KnitFields {
         // The stress's six components, (0,0) (0,1) (0,2) (1,1) (1,2) (2,2).
         const UPPER: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
-        let components: Vec<Vec<f64>> = UPPER
-            .iter()
-            .map(|&(r, c)| self.stress.iter().map(|s| s[(r, c)]).collect())
-            .collect();
-        let fields: Vec<&[f64]> = self
-            .named()
-            .iter()
-            .take(5)
-            .map(|(_, values)| *values)
-            .chain(components.iter().map(|c| &c[..]))
-            .collect();
-        let mut moved = transfer_to_leg(yarn_points, &fields, leg_vertices, bandwidth);
+        let mut moved = vec![vec![0.0; leg_vertices.len()]; 5 + UPPER.len()];
+        let mut found = vec![false; leg_vertices.len()];
+        for carrier in carriers {
+            let per_point = carrier.fields;
+            let components: Vec<Vec<f64>> = UPPER
+                .iter()
+                .map(|&(r, c)| per_point.stress.iter().map(|s| s[(r, c)]).collect())
+                .collect();
+            let fields: Vec<&[f64]> = per_point
+                .named()
+                .iter()
+                .take(5)
+                .map(|(_, values)| *values)
+                .chain(components.iter().map(|c| &c[..]))
+                .collect();
+            let (means, near) = kernel_means(
+                carrier.at,
+                carrier.weights,
+                &fields,
+                leg_vertices,
+                carrier.bandwidth,
+            );
+            for (v, found) in found.iter_mut().enumerate() {
+                if near[v] && !*found {
+                    *found = true;
+                    for (out, mean) in moved.iter_mut().zip(&means) {
+                        out[v] = mean[v];
+                    }
+                }
+            }
+        }
         let components = moved.split_off(5);
         let stress: Vec<Matrix3<f64>> = (0..leg_vertices.len())
             .map(|v| {
@@ -581,17 +615,43 @@ impl KnitFields {
     }
 }
 
+/// Fields on the fabric, where they are, and the kernel that carries them to the leg.
+pub struct Carrier<'a> {
+    /// The fields, one per point of `at`.
+    pub fields: &'a KnitFields,
+    /// The points.
+    pub at: &'a [Vec3],
+    /// The fabric area each point stands for (`None`: all alike).
+    pub weights: Option<&'a [f64]>,
+    /// The kernel's radius, metres.
+    pub bandwidth: f64,
+}
+
 /// Transfers per-yarn-point fields to leg vertices with a biweight kernel of radius `bandwidth`
-/// metres; vertices with no yarn point within the bandwidth get 0. Returns one vector per
-/// field, in order.
+/// metres, each point weighted by `weights` where given (the fabric area a sample stands for);
+/// vertices with no yarn point within the bandwidth get 0. Returns one vector per field, in
+/// order.
 pub fn transfer_to_leg(
     yarn_points: &[Vec3],
+    weights: Option<&[f64]>,
     fields: &[&[f64]],
     leg_vertices: &[Point3<f64>],
     bandwidth: f64,
 ) -> Vec<Vec<f64>> {
+    kernel_means(yarn_points, weights, fields, leg_vertices, bandwidth).0
+}
+
+/// [`transfer_to_leg`], and per vertex whether any yarn point lay within the bandwidth.
+fn kernel_means(
+    yarn_points: &[Vec3],
+    weights: Option<&[f64]>,
+    fields: &[&[f64]],
+    leg_vertices: &[Point3<f64>],
+    bandwidth: f64,
+) -> (Vec<Vec<f64>>, Vec<bool>) {
     let grid = PointGrid::new(yarn_points.iter().copied(), bandwidth);
     let mut out = vec![Vec::with_capacity(leg_vertices.len()); fields.len()];
+    let mut near = Vec::with_capacity(leg_vertices.len());
     let mut sums = vec![0.0; fields.len()];
     for v in leg_vertices {
         let mut weight_sum = 0.0;
@@ -599,7 +659,7 @@ pub fn transfer_to_leg(
         grid.for_each_within(&v.coords, bandwidth, |i| {
             let d2 = (yarn_points[i] - v.coords).norm_squared() / (bandwidth * bandwidth);
             if d2 < 1.0 {
-                let w = (1.0 - d2) * (1.0 - d2);
+                let w = (1.0 - d2) * (1.0 - d2) * weights.map_or(1.0, |weights| weights[i]);
                 weight_sum += w;
                 for (sum, field) in sums.iter_mut().zip(fields) {
                     *sum += w * field[i];
@@ -613,8 +673,9 @@ pub fn transfer_to_leg(
                 0.0
             });
         }
+        near.push(weight_sum > 0.0);
     }
-    out
+    (out, near)
 }
 
 /// Per-point stitch fields of `knit` and their transfer to the leg's vertices, pressing on
@@ -628,14 +689,159 @@ pub fn measure_fields(
     terms: &ForceTerms,
 ) -> (KnitFields, KnitFields) {
     let per_point = KnitFields::measure(knit, fabric, terms, skin, offset);
-    // Wide enough to hold several grid points whichever way the knit runs, and never narrower
-    // than the fabric the fields were measured over, so every grid hands the leg the same
-    // fields.
-    let bandwidth = (3.0
-        * mean_spacing(knit, Direction::Course).max(mean_spacing(knit, Direction::Wale)))
-    .max(2.0 * MEASURE_SPAN_M);
-    let on_leg = per_point.transfer_to_leg(&knit.particles.x, &leg.positions, bandwidth, skin);
+    // The kernel must hold several points whichever way the knit runs: three grid spacings.
+    let spacing = mean_spacing(knit, Direction::Course).max(mean_spacing(knit, Direction::Wale));
+    let points = Carrier {
+        fields: &per_point,
+        at: &knit.particles.x,
+        weights: None,
+        bandwidth: (SAMPLES_ACROSS_KERNEL * spacing).max(TRANSFER_BANDWIDTH_M),
+    };
+    // A grid coarser than that is sampled inside its cells, so that where its fabric lies on
+    // the skin every grid hands the leg the same kernel's mean (three spacings blurred a
+    // coarse grid's heel). Its points under the wider kernel still reach skin the fabric
+    // hangs further off (a loose stocking round a thin ankle).
+    let per_cell = (SAMPLES_ACROSS_KERNEL * spacing / TRANSFER_BANDWIDTH_M)
+        .ceil()
+        .clamp(1.0, MAX_SAMPLES_PER_CELL_SIDE as f64);
+    let on_leg = if per_cell > 1.0 {
+        let samples = CellSamples::of(knit, per_cell as usize);
+        let sampled = samples.of_fields(&per_point);
+        let inside_cells = Carrier {
+            fields: &sampled,
+            at: &samples.positions,
+            weights: Some(&samples.weights),
+            bandwidth: (SAMPLES_ACROSS_KERNEL * spacing / per_cell).max(TRANSFER_BANDWIDTH_M),
+        };
+        KnitFields::carried_to_leg(&[inside_cells, points], &leg.positions, skin)
+    } else {
+        KnitFields::carried_to_leg(&[points], &leg.positions, skin)
+    };
     (per_point, on_leg)
+}
+
+/// Points on a knit's faces, each a weighted mean of its face's corners, with the fabric area
+/// it stands for: `(n + 1) × (n + 1)` per grid cell (bilinear, its corners and edges included,
+/// weighted by the trapezoid rule), `n × n` per triangle of any other face fanned from its
+/// centroid (the heel pocket's, the toe seam's folds).
+struct CellSamples {
+    positions: Vec<Vec3>,
+    /// Fabric area each sample stands for, square metres.
+    weights: Vec<f64>,
+    /// Each sample's corners and their weights: `terms[starts[k]..starts[k + 1]]`.
+    starts: Vec<usize>,
+    terms: Vec<(PointId, f64)>,
+}
+
+impl CellSamples {
+    fn of(knit: &Knit, n: usize) -> CellSamples {
+        let x = &knit.particles.x;
+        let mut samples = CellSamples {
+            positions: Vec::new(),
+            weights: Vec::new(),
+            starts: vec![0],
+            terms: Vec::new(),
+        };
+        // The trapezoid rule on an `(n + 1) × (n + 1)` lattice: a cell's corners and edges are
+        // its neighbours' too (their weights add up), and the fabric's edge rows are sampled.
+        let lattice = (0..=n).map(|i| {
+            let end = i == 0 || i == n;
+            (i as f64 / n as f64, if end { 0.5 } else { 1.0 })
+        });
+        let cells: Vec<(f64, f64, f64)> = lattice
+            .clone()
+            .flat_map(|(u, wu)| lattice.clone().map(move |(v, wv)| (u, v, wu * wv)))
+            .collect();
+        for face in knit.faces() {
+            let c = &face.corners;
+            let at = |k: usize| x[c[k].index()];
+            if let [a, b, cc, d] = c[..] {
+                // Corners in order round the cell: a → b along the course, d above a.
+                let area = 0.5
+                    * ((at(1) - at(0)).cross(&(at(2) - at(0))).norm()
+                        + (at(2) - at(0)).cross(&(at(3) - at(0))).norm());
+                for &(u, v, share) in &cells {
+                    let terms = [
+                        (a, (1.0 - u) * (1.0 - v)),
+                        (b, u * (1.0 - v)),
+                        (cc, u * v),
+                        (d, (1.0 - u) * v),
+                    ];
+                    samples.push(x, &terms, share * area / (n * n) as f64);
+                }
+                continue;
+            }
+            // A fan from the centroid: sub-triangle centroids of an `n`-fold subdivision.
+            let share = 1.0 / c.len() as f64;
+            let centroid = c.iter().map(|p| x[p.index()]).sum::<Vec3>() * share;
+            for k in 0..c.len() {
+                let (p, q) = (c[k], c[(k + 1) % c.len()]);
+                let area = 0.5
+                    * (x[p.index()] - centroid)
+                        .cross(&(x[q.index()] - centroid))
+                        .norm();
+                for (bp, bq) in sub_triangle_centroids(n) {
+                    let mut terms: Vec<(PointId, f64)> =
+                        c.iter().map(|&r| (r, (1.0 - bp - bq) * share)).collect();
+                    terms.extend([(p, bp), (q, bq)]);
+                    samples.push(x, &terms, area / (n * n) as f64);
+                }
+            }
+        }
+        samples
+    }
+
+    fn push(&mut self, x: &[Vec3], terms: &[(PointId, f64)], weight: f64) {
+        self.positions
+            .push(terms.iter().map(|&(p, w)| x[p.index()] * w).sum());
+        self.weights.push(weight);
+        self.terms.extend_from_slice(terms);
+        self.starts.push(self.terms.len());
+    }
+
+    /// `values` (one per point) at every sample.
+    fn interpolate<T>(&self, values: &[T]) -> Vec<T>
+    where
+        T: Copy + std::ops::Mul<f64, Output = T> + std::iter::Sum<T>,
+    {
+        self.starts
+            .windows(2)
+            .map(|span| {
+                let terms = &self.terms[span[0]..span[1]];
+                terms.iter().map(|&(p, w)| values[p.index()] * w).sum()
+            })
+            .collect()
+    }
+
+    /// Every field of `fields` (per point) at every sample.
+    fn of_fields(&self, fields: &KnitFields) -> KnitFields {
+        KnitFields {
+            stitch_density: self.interpolate(&fields.stitch_density),
+            stretch_course: self.interpolate(&fields.stretch_course),
+            stretch_wale: self.interpolate(&fields.stretch_wale),
+            coverage: self.interpolate(&fields.coverage),
+            tension: self.interpolate(&fields.tension),
+            pressure: self.interpolate(&fields.pressure),
+            stress: self.interpolate(&fields.stress),
+        }
+    }
+}
+
+/// Barycentric weights `(b, c)` of the corners other than the first of the `n × n`
+/// sub-triangles' centroids of a triangle divided `n` times along each side.
+fn sub_triangle_centroids(n: usize) -> Vec<(f64, f64)> {
+    let n_f = n as f64;
+    let mut out = Vec::with_capacity(n * n);
+    for i in 0..n {
+        for j in 0..n - i {
+            // The upright sub-triangle at (i, j), and the inverted one beside it.
+            out.push(((i as f64 + 1.0 / 3.0) / n_f, (j as f64 + 1.0 / 3.0) / n_f));
+            if i + j + 1 < n {
+                out.push(((i as f64 + 2.0 / 3.0) / n_f, (j as f64 + 2.0 / 3.0) / n_f));
+            }
+        }
+    }
+    out
 }
 
 /// Mean length of the springs along `direction`, metres.
@@ -975,11 +1181,98 @@ mod tests {
     }
 
     #[test]
+    fn a_cells_samples_cover_it_and_carry_a_linear_field_exactly() {
+        // A flat 4×4 grid of 6 mm cells (3 × 3 cells, 324 mm²), sampled 3 times along each side.
+        let knit = flat(Pattern::Plain, 4, 0.006, 1.0, 1.0);
+        let samples = CellSamples::of(&knit, 3);
+        let area: f64 = samples.weights.iter().sum();
+        assert!((area - 324e-6).abs() < 1e-15, "{area}");
+        // The fabric's edge rows and corners are sampled, not only the cells' insides.
+        let x = &knit.particles.x;
+        for corner in [x[0], x[15]] {
+            let nearest = samples.positions.iter().map(|p| (p - corner).norm());
+            assert!(nearest.fold(f64::INFINITY, f64::min) < 1e-15);
+        }
+        // A field linear in position is the same at each sample as at its position.
+        let field = |p: &Vec3| 3.0 + 2.0 * p.x - 5.0 * p.y;
+        let at_points: Vec<f64> = x.iter().map(field).collect();
+        for (value, p) in samples
+            .interpolate(&at_points)
+            .iter()
+            .zip(&samples.positions)
+        {
+            assert!((value - field(p)).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn sub_triangles_centroids_are_inside_and_centred() {
+        for n in 1..5 {
+            let centroids = sub_triangle_centroids(n);
+            assert_eq!(centroids.len(), n * n);
+            assert!(centroids
+                .iter()
+                .all(|&(b, c)| b > 0.0 && c > 0.0 && b + c < 1.0));
+            let mean_b = centroids.iter().map(|c| c.0).sum::<f64>() / (n * n) as f64;
+            assert!((mean_b - 1.0 / 3.0).abs() < 1e-12, "{n}: {mean_b}");
+        }
+    }
+
+    #[test]
+    fn a_coarse_and_a_fine_grid_hand_the_leg_the_same_kernels_mean() {
+        // A curved field (x² across 6 cm of flat fabric) on 1 mm and 8 mm grids: each leg vertex
+        // takes the mean of the same 16 mm kernel over it, so they agree but for the coarse
+        // grid's linear interpolation; a kernel three coarse spacings wide (24 mm), as the
+        // coarse grid's points alone would need, blurs it twice as much.
+        let field = |p: &Vec3| 1e4 * p.x * p.x;
+        let leg: Vec<Point3<f64>> = (0..5)
+            .map(|k| Point3::new(0.022 + 0.004 * k as f64, 0.03, 0.001))
+            .collect();
+        let on_leg = |spacing: f64| {
+            let n = (0.06 / spacing).round() as usize + 1;
+            let knit = flat(Pattern::Plain, n, spacing, 1.0, 1.0);
+            let per_cell = (SAMPLES_ACROSS_KERNEL * spacing / TRANSFER_BANDWIDTH_M).ceil() as usize;
+            let x = &knit.particles.x;
+            let at_points: Vec<f64> = x.iter().map(field).collect();
+            if per_cell > 1 {
+                let samples = CellSamples::of(&knit, per_cell);
+                let values = samples.interpolate(&at_points);
+                let (at, w) = (&samples.positions, Some(&samples.weights[..]));
+                transfer_to_leg(at, w, &[&values], &leg, TRANSFER_BANDWIDTH_M).remove(0)
+            } else {
+                transfer_to_leg(x, None, &[&at_points], &leg, TRANSFER_BANDWIDTH_M).remove(0)
+            }
+        };
+        let (fine, coarse) = (on_leg(0.001), on_leg(0.008));
+        let points_alone = {
+            let knit = flat(Pattern::Plain, 8, 0.008, 1.0, 1.0);
+            let x = &knit.particles.x;
+            let values: Vec<f64> = x.iter().map(field).collect();
+            transfer_to_leg(x, None, &[&values], &leg, 0.024).remove(0)
+        };
+        for (k, (f, c)) in fine.iter().zip(&coarse).enumerate() {
+            let exact = field(&leg[k].coords);
+            // The wider kernel adds 1e4 (24² − 16²) mm² / 8 = 0.4; the coarse grid's linear
+            // interpolation adds a quarter of that.
+            assert!((c - f).abs() < 0.15, "vertex {k}: fine {f}, coarse {c}");
+            let wide = points_alone[k];
+            assert!(wide - f > 0.3, "vertex {k}: fine {f}, wide {wide}");
+            // The kernel's own blur, what every grid adds alike: the biweight's variance along
+            // x over a disc, R²/8, times the field's 1e4.
+            let blur = 1e4 * TRANSFER_BANDWIDTH_M.powi(2) / 8.0;
+            assert!(
+                (f - exact - blur).abs() < 0.1 * blur,
+                "vertex {k}: {f} against {exact}"
+            );
+        }
+    }
+
+    #[test]
     fn transfer_is_zero_far_from_yarn_and_exact_for_a_constant_field() {
         let points = vec![Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.001, 0.0, 0.0)];
         let values = vec![7.0, 7.0];
         let leg = vec![Point3::new(0.0005, 0.0, 0.0), Point3::new(1.0, 0.0, 0.0)];
-        let out = transfer_to_leg(&points, &[&values], &leg, 0.002);
+        let out = transfer_to_leg(&points, None, &[&values], &leg, 0.002);
         assert!((out[0][0] - 7.0).abs() < 1e-12);
         assert_eq!(out[0][1], 0.0);
     }
