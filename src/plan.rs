@@ -452,7 +452,8 @@ impl Plan {
                 // the leg's length decides; without tube.bottom the leg decides, so name both.
                 let stocking = format!(
                     "on the real stitch count's levels coarser than {wales}×{courses}, then \
-                     {wales}×{courses}; where it has none, on grids {}",
+                     {wales}×{courses}; where it has none, from its coarsest level if that is \
+                     the coarser grid, else on grids {}",
                     chain(STOCKING_COARSEST)
                 );
                 let tube = format!("on grids {}", chain(COARSEST));
@@ -683,14 +684,15 @@ mod tests {
         assert!(!Plan::fit(&scene).has(Stage::KnitTube));
         let why = fit_why(&scene);
         assert!(why.contains("38×39 → 75×76 → 150×150"), "{why}");
-        // A stocking to the toe follows the real stitch count's levels coarser than it, or
-        // halves its own down to 48 a side, and the plan says so.
+        // A stocking to the toe follows the real stitch count's levels coarser than it, or its
+        // coarsest, or halves its own down to 48 a side, and the plan says so.
         scene.tube.bottom = Some(TubeBottom::Toe);
         let why = fit_why(&scene);
         assert!(
             why.ends_with(
                 "on the real stitch count's levels coarser than 150×150, then 150×150; where it \
-                 has none, on grids 75×76 → 150×150"
+                 has none, from its coarsest level if that is the coarser grid, else on grids \
+                 75×76 → 150×150"
             ),
             "{why}"
         );
@@ -698,7 +700,7 @@ mod tests {
         (scene.tube.wales, scene.tube.courses) = (100, 100);
         let why = fit_why(&scene);
         assert!(
-            why.ends_with("where it has none, on grids 50×51 → 100×100"),
+            why.ends_with("the coarser grid, else on grids 50×51 → 100×100"),
             "{why}"
         );
         (scene.tube.wales, scene.tube.courses) = (wales, courses);

@@ -131,22 +131,30 @@ pub fn grid_sizes_down_to(wales: usize, courses: usize, coarsest: usize) -> Vec<
 
 /// Grid sizes for a `wales × courses` stocking that follows the real stitch count's own path:
 /// the levels of the real count's chain ([`grid_sizes_down_to`] to `coarsest`) coarser than the
-/// grid both ways and no smaller than `coarsest`, then the grid; the grid's own chain where the
-/// real count has no such level. A stocking's foot rests where its coarse levels leave it, the
-/// real count's too (decision 0062), so a grid with such a level starts from the real count's
-/// coarsest rest (decision 0063).
+/// grid both ways and no smaller than `coarsest`, then the grid. Where it has none, its
+/// coarsest level if that is still the coarser grid (fewer wales, fewer points: 50×102 for a
+/// 100×100 stocking on a leg whose real count has 805 courses), else the grid's own chain. A
+/// stocking's foot rests where its coarse levels leave it, the real count's too (decision
+/// 0062), so a grid starts from the real count's coarsest rest where it can (decisions 0063
+/// and 0066).
 pub fn grid_sizes_following(
     [real_wales, real_courses]: [usize; 2],
     wales: usize,
     courses: usize,
     coarsest: usize,
 ) -> Vec<(usize, usize)> {
-    let mut sizes: Vec<(usize, usize)> = grid_sizes_down_to(real_wales, real_courses, coarsest)
-        .into_iter()
-        .filter(|&(w, c)| w < wales && c < courses && w.min(c) >= coarsest)
+    let chain = grid_sizes_down_to(real_wales, real_courses, coarsest);
+    let usable = |&(w, c): &(usize, usize)| w.min(c) >= coarsest && w < wales;
+    let mut sizes: Vec<(usize, usize)> = chain
+        .iter()
+        .copied()
+        .filter(|&(w, c)| usable(&(w, c)) && c < courses)
         .collect();
     if sizes.is_empty() {
-        return grid_sizes_down_to(wales, courses, coarsest);
+        match chain.first().copied() {
+            Some((w, c)) if usable(&(w, c)) && w * c < wales * courses => sizes.push((w, c)),
+            _ => return grid_sizes_down_to(wales, courses, coarsest),
+        }
     }
     sizes.push((wales, courses));
     sizes
@@ -365,8 +373,10 @@ mod tests {
             grid_sizes_down_to(400, 701, STOCKING_COARSEST)
         );
         assert_eq!(following(60, 60), vec![(60, 60)]);
+        // Where it has no level coarser both ways, its coarsest if that has fewer points.
         let following = |w, c| grid_sizes_following([400, 805], w, c, STOCKING_COARSEST);
-        assert_eq!(following(100, 100), vec![(50, 51), (100, 100)]);
+        assert_eq!(following(100, 100), vec![(50, 102), (100, 100)]);
+        assert_eq!(following(60, 80), vec![(60, 80)]);
         // A real count too small to halve is no level below the coarsest.
         let following = |w, c| grid_sizes_following([40, 701], w, c, STOCKING_COARSEST);
         assert_eq!(following(60, 800), vec![(60, 800)]);
