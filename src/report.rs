@@ -323,11 +323,11 @@ pub struct TubeDetails {
     /// refused; per point, the `slack` attribute.
     pub slack: SlackDetails,
     /// Where the fabric rested on the toes boxed (bridging the gaps between them) rather than
-    /// on the skin: a stocking to the toe of a foot with toes; `null` otherwise.
+    /// on the skin: every stocking to the toe whose box could be built; `null` on an open tube.
     pub toe_box: Option<ToeBoxDetails>,
 }
 
-/// The toe box of a stocking to the toe ([`crate::knit::TubePath::box_the_toes`]): the skin
+/// The toe box of a stocking to the toe ([`crate::knit::path::TubePath::box_the_toes`]): the skin
 /// beyond its rim's plane, towards the toe, was the convex hull of the toes' sections during
 /// the fit. Its fields on the leg come from fabric that bridged the toes' clefts there.
 #[derive(Clone, Debug, PartialEq, Serialize)]

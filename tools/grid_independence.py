@@ -4,7 +4,7 @@ several grids and prints, per grid, the relative L2 difference of `_STITCH_DENSI
 and `_PRESSURE` on the covered leg vertices against a reference fit (the real stitch count, by
 default at a tight tolerance): over the whole leg; over the vertices above the ankle; over the
 whole leg but the toe box (beyond the rim the report gives in `details.tube.toe_box`, where the
-fabric rests on the toes boxed: on a MakeHuman foot ~40 % of the covered vertices; decision 0064);
+fabric rests on the toes boxed: on the samples' feet 57-63 % of the covered vertices; decision 0064);
 and over the whole leg with each vertex weighted by its share of the skin's area (per vertex, a
 finely meshed foot's toes weigh more than the rest of the leg).
 

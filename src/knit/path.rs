@@ -381,6 +381,9 @@ fn add_toe_cap(stations: &mut Vec<Station>, toe_tip: Point3<f64>) -> Vec<Station
     toes
 }
 
+/// A leg's positions and triangles with its toes boxed ([`TubePath::box_the_toes`]).
+pub type BoxedLeg = (Vec<Point3<f64>>, Vec<[u32; 3]>);
+
 impl TubePath {
     /// The toe box's open rim ([`TubePath::box_the_toes`]): its centre, its plane's normal
     /// towards the toe, and the box's length from that plane to just past the tip, metres;
@@ -398,28 +401,24 @@ impl TubePath {
     /// tip. This is the leg the stocking's contact sees: fabric bridges the gaps between toes,
     /// and a point let into one chatters between its two sides (the futility watch stopped the
     /// whole body's fit there). The box holds the toes to within the sections' sampling (under a
-    /// millimetre), which the exact contact pass after the fit settles. Unchanged where the path
-    /// has no toes.
+    /// millimetre), which the exact contact pass after the fit settles. `None` where the path
+    /// has no toes or their hull cannot be built: the fit's contact sees the skin itself.
     pub fn box_the_toes(
         &self,
         positions: &[Point3<f64>],
         triangles: &[[u32; 3]],
-    ) -> (Vec<Point3<f64>>, Vec<[u32; 3]>) {
+    ) -> Option<BoxedLeg> {
         let toes = &self.toes;
-        if toes.len() < 2 {
-            return (positions.to_vec(), triangles.to_vec());
-        }
-        let (first, last) = (&toes[0], &toes[toes.len() - 1]);
-        let t = first.t;
-        let along = |p: &Point3<f64>| (p - first.centre).dot(&t);
-        let length = along(&last.centre);
+        let (rim, t, box_length) = self.toe_box_rim()?;
+        let last = &toes[toes.len() - 1];
+        let along = |p: &Point3<f64>| (p - rim).dot(&t);
         // In the box or within a few millimetres of it (it is interpolated between sections):
         // skin the box replaces must not be left overlapping it, where the closest surface
         // would flip between the two. What little of it the box misses, the exact pass after
         // the fit settles against the real skin.
         let inside = |p: &Point3<f64>| {
             let x = along(p);
-            if x <= 0.001 || x > length + TOE_END_M + TOE_BOX_PAST_M + TOE_BOX_SLACK_M {
+            if x <= 0.001 || x > box_length + TOE_BOX_SLACK_M {
                 return false;
             }
             let k = toes
@@ -464,9 +463,7 @@ impl TubePath {
                 .into_iter()
                 .map(|p| last.centre + beyond + last.u * p[0] + last.v * p[1]),
         );
-        let Ok((corners, faces)) = parry3d_f64::transformation::try_convex_hull(&outlines) else {
-            return (positions.to_vec(), triangles.to_vec());
-        };
+        let (corners, faces) = parry3d_f64::transformation::try_convex_hull(&outlines).ok()?;
         let middle =
             corners.iter().fold(Vector3::zeros(), |m, c| m + c.coords) / corners.len() as f64;
         let base = out_positions.len() as u32;
@@ -481,7 +478,7 @@ impl TubePath {
             out_triangles.push(if outward { [i, j, k] } else { [i, k, j] });
         }
         out_positions.extend(corners);
-        (out_positions, out_triangles)
+        Some((out_positions, out_triangles))
     }
 }
 

@@ -34,7 +34,8 @@
 //! * **On the leg**, a vertex takes the kernel-weighted mean of the fabric within 16 mm (a
 //!   biweight kernel, compactly supported, so far-away yarn has no say), the same on every grid:
 //!   a grid whose points lie further apart than a third of that is sampled inside its cells
-//!   (bilinear, area-weighted), so a coarse grid's heel is not blurred more than a fine one's;
+//!   (bilinear, each sample weighted by the stitches it stands for, as each point is on a
+//!   finer grid), so a coarse grid's heel is not blurred more than a fine one's;
 //!   skin with no fabric that near takes the mean of the grid's points within three grid
 //!   spacings (a loose stocking round a thin ankle), and 0 where no yarn is near even so
 //!   (uncovered skin). Pressure is the stress carried over so, pressed on the skin's curvature
@@ -63,9 +64,10 @@ pub const MEASURE_SPAN_M: f64 = 0.008;
 /// grid ([`measure_fields`]), and the fabric each point's fields are measured over.
 pub const TRANSFER_BANDWIDTH_M: f64 = 2.0 * MEASURE_SPAN_M;
 
-/// Samples the transfer's kernel holds across its radius at least: a grid coarser than that is
-/// sampled inside its cells.
-const SAMPLES_ACROSS_KERNEL: f64 = 3.0;
+/// A kernel is at least this many spacings of what it averages wide: of the samples inside a
+/// coarse grid's cells under [`TRANSFER_BANDWIDTH_M`], of a grid's own points under the wider
+/// kernel that reaches skin the fabric hangs further off.
+const SPACINGS_PER_KERNEL: f64 = 3.0;
 
 /// At most this many samples along each side of a cell (a leg at absurd scale widens the
 /// kernel instead of sampling millions).
@@ -621,14 +623,14 @@ pub struct Carrier<'a> {
     pub fields: &'a KnitFields,
     /// The points.
     pub at: &'a [Vec3],
-    /// The fabric area each point stands for (`None`: all alike).
+    /// The stitches each point stands for, in grid cells (`None`: one each).
     pub weights: Option<&'a [f64]>,
     /// The kernel's radius, metres.
     pub bandwidth: f64,
 }
 
 /// Transfers per-yarn-point fields to leg vertices with a biweight kernel of radius `bandwidth`
-/// metres, each point weighted by `weights` where given (the fabric area a sample stands for);
+/// metres, each point weighted by `weights` where given (the stitches a sample stands for);
 /// vertices with no yarn point within the bandwidth get 0. Returns one vector per field, in
 /// order.
 pub fn transfer_to_leg(
@@ -689,44 +691,61 @@ pub fn measure_fields(
     terms: &ForceTerms,
 ) -> (KnitFields, KnitFields) {
     let per_point = KnitFields::measure(knit, fabric, terms, skin, offset);
-    // The kernel must hold several points whichever way the knit runs: three grid spacings.
-    let spacing = mean_spacing(knit, Direction::Course).max(mean_spacing(knit, Direction::Wale));
-    let points = Carrier {
-        fields: &per_point,
-        at: &knit.particles.x,
-        weights: None,
-        bandwidth: (SAMPLES_ACROSS_KERNEL * spacing).max(TRANSFER_BANDWIDTH_M),
-    };
-    // A grid coarser than that is sampled inside its cells, so that where its fabric lies on
-    // the skin every grid hands the leg the same kernel's mean (three spacings blurred a
-    // coarse grid's heel). Its points under the wider kernel still reach skin the fabric
-    // hangs further off (a loose stocking round a thin ankle).
-    let per_cell = (SAMPLES_ACROSS_KERNEL * spacing / TRANSFER_BANDWIDTH_M)
-        .ceil()
-        .clamp(1.0, MAX_SAMPLES_PER_CELL_SIDE as f64);
-    let on_leg = if per_cell > 1.0 {
-        let samples = CellSamples::of(knit, per_cell as usize);
-        let sampled = samples.of_fields(&per_point);
-        let inside_cells = Carrier {
-            fields: &sampled,
-            at: &samples.positions,
-            weights: Some(&samples.weights),
-            bandwidth: (SAMPLES_ACROSS_KERNEL * spacing / per_cell).max(TRANSFER_BANDWIDTH_M),
-        };
-        KnitFields::carried_to_leg(&[inside_cells, points], &leg.positions, skin)
-    } else {
-        KnitFields::carried_to_leg(&[points], &leg.positions, skin)
-    };
+    let on_leg = carry_to_leg(knit, &per_point, &leg.positions, skin);
     (per_point, on_leg)
 }
 
-/// Points on a knit's faces, each a weighted mean of its face's corners, with the fabric area
-/// it stands for: `(n + 1) × (n + 1)` per grid cell (bilinear, its corners and edges included,
-/// weighted by the trapezoid rule), `n × n` per triangle of any other face fanned from its
-/// centroid (the heel pocket's, the toe seam's folds).
+/// `per_point`, the fields at the points of `knit`, carried to `leg_vertices` (module docs): by
+/// the 16 mm kernel over samples inside the grid's cells where its points lie further apart
+/// than a third of that, over its points where they do not; skin with no
+/// fabric that near, by the grid's points within three grid spacings.
+pub fn carry_to_leg(
+    knit: &Knit,
+    per_point: &KnitFields,
+    leg_vertices: &[Point3<f64>],
+    skin: &SkinCurvature,
+) -> KnitFields {
+    let spacing = mean_spacing(knit, Direction::Course).max(mean_spacing(knit, Direction::Wale));
+    let points = Carrier {
+        fields: per_point,
+        at: &knit.particles.x,
+        weights: None,
+        bandwidth: (SPACINGS_PER_KERNEL * spacing).max(TRANSFER_BANDWIDTH_M),
+    };
+    let n = samples_per_side(spacing);
+    if n == 1 {
+        return KnitFields::carried_to_leg(&[points], leg_vertices, skin);
+    }
+    let samples = CellSamples::of(knit, n);
+    let sampled = samples.of_fields(per_point);
+    let inside_cells = Carrier {
+        fields: &sampled,
+        at: &samples.positions,
+        weights: Some(&samples.weights),
+        // 16 mm, wider only where `n` is at its cap (a leg at an absurd scale).
+        bandwidth: (SPACINGS_PER_KERNEL * spacing / n as f64).max(TRANSFER_BANDWIDTH_M),
+    };
+    KnitFields::carried_to_leg(&[inside_cells, points], leg_vertices, skin)
+}
+
+/// Samples along each side of a grid cell whose points lie `spacing` metres apart: enough that
+/// [`TRANSFER_BANDWIDTH_M`] spans [`SPACINGS_PER_KERNEL`] of them, at most
+/// [`MAX_SAMPLES_PER_CELL_SIDE`]; 1 (the points alone) for a grid that fine already.
+fn samples_per_side(spacing: f64) -> usize {
+    let n = (SPACINGS_PER_KERNEL * spacing / TRANSFER_BANDWIDTH_M).ceil();
+    n.clamp(1.0, MAX_SAMPLES_PER_CELL_SIDE as f64) as usize
+}
+
+/// Points on a knit's faces, each a weighted mean of its face's corners, with the knitted
+/// fabric it stands for: `(n + 1) × (n + 1)` per four-cornered face (bilinear, its corners and
+/// edges included, weighted by the trapezoid rule), `n × n` per triangle of any other face
+/// fanned from its centroid (the heel pocket's wider faces, the toe seam's folds).
 struct CellSamples {
     positions: Vec<Vec3>,
-    /// Fabric area each sample stands for, square metres.
+    /// The stitches each sample stands for, in grid cells: a face's samples share its
+    /// [`Face::stitches`] (a toe seam's face, sewn, counts as a cell), as a grid point stands
+    /// for one cell where the points are carried alone. Not fitted area: that would weigh
+    /// stretched fabric more on a coarse grid than on a fine one, where every point counts once.
     weights: Vec<f64>,
     /// Each sample's corners and their weights: `terms[starts[k]..starts[k + 1]]`.
     starts: Vec<usize>,
@@ -735,6 +754,7 @@ struct CellSamples {
 
 impl CellSamples {
     fn of(knit: &Knit, n: usize) -> CellSamples {
+        assert!(n >= 1, "at least one sample along a cell's side");
         let x = &knit.particles.x;
         let mut samples = CellSamples {
             positions: Vec::new(),
@@ -752,14 +772,12 @@ impl CellSamples {
             .clone()
             .flat_map(|(u, wu)| lattice.clone().map(move |(v, wv)| (u, v, wu * wv)))
             .collect();
+        let per_sample = 1.0 / (n * n) as f64;
         for face in knit.faces() {
             let c = &face.corners;
-            let at = |k: usize| x[c[k].index()];
+            let stitches = face.stitches.max(1.0);
             if let [a, b, cc, d] = c[..] {
-                // Corners in order round the cell: a → b along the course, d above a.
-                let area = 0.5
-                    * ((at(1) - at(0)).cross(&(at(2) - at(0))).norm()
-                        + (at(2) - at(0)).cross(&(at(3) - at(0))).norm());
+                // Corners in order round the face (`Knit::faces`), so the map is bilinear.
                 for &(u, v, share) in &cells {
                     let terms = [
                         (a, (1.0 - u) * (1.0 - v)),
@@ -767,24 +785,36 @@ impl CellSamples {
                         (cc, u * v),
                         (d, (1.0 - u) * v),
                     ];
-                    samples.push(x, &terms, share * area / (n * n) as f64);
+                    samples.push(x, &terms, stitches * share * per_sample);
                 }
                 continue;
             }
-            // A fan from the centroid: sub-triangle centroids of an `n`-fold subdivision.
-            let share = 1.0 / c.len() as f64;
-            let centroid = c.iter().map(|p| x[p.index()]).sum::<Vec3>() * share;
-            for k in 0..c.len() {
-                let (p, q) = (c[k], c[(k + 1) % c.len()]);
-                let area = 0.5
-                    * (x[p.index()] - centroid)
-                        .cross(&(x[q.index()] - centroid))
-                        .norm();
+            // A fan from the centroid, each triangle its share of the face's stitches by area
+            // (alike where the face has none), sampled at the centroids of an `n`-fold
+            // subdivision.
+            let corner_share = 1.0 / c.len() as f64;
+            let centroid = c.iter().map(|p| x[p.index()]).sum::<Vec3>() * corner_share;
+            let fan: Vec<(PointId, PointId, f64)> = (0..c.len())
+                .map(|k| {
+                    let (p, q) = (c[k], c[(k + 1) % c.len()]);
+                    let (xp, xq) = (x[p.index()] - centroid, x[q.index()] - centroid);
+                    (p, q, 0.5 * xp.cross(&xq).norm())
+                })
+                .collect();
+            let area: f64 = fan.iter().map(|t| t.2).sum();
+            for (p, q, triangle) in fan {
+                let share = if area > 0.0 {
+                    triangle / area
+                } else {
+                    corner_share
+                };
                 for (bp, bq) in sub_triangle_centroids(n) {
-                    let mut terms: Vec<(PointId, f64)> =
-                        c.iter().map(|&r| (r, (1.0 - bp - bq) * share)).collect();
+                    let mut terms: Vec<(PointId, f64)> = c
+                        .iter()
+                        .map(|&r| (r, (1.0 - bp - bq) * corner_share))
+                        .collect();
                     terms.extend([(p, bp), (q, bq)]);
-                    samples.push(x, &terms, area / (n * n) as f64);
+                    samples.push(x, &terms, stitches * share * per_sample);
                 }
             }
         }
@@ -896,22 +926,27 @@ mod tests {
         }
     }
 
-    #[test]
-    fn a_heel_pockets_short_rows_add_stitches_to_their_wales() {
-        // A flat 4×3 grid of the real stitch, 2 mm across a wale and 1 mm along it, with one
-        // short row each way over wales 1 and 2, laid between courses 0 and 1: those wales hold
-        // four stitches' length of fabric where the others hold two, so twice the stitches.
-        let (a, b) = (0.002, 0.001);
+    /// A flat 4×3 grid of the real stitch, `a` across a wale and `b` along it, with one short
+    /// row each way over wales 1 and 2, laid between courses 0 and 1.
+    fn pocket_knit(a: f64, b: f64) -> Knit {
         let tile = Tile::of(Pattern::Plain);
         let at = |w: usize, c: f64| Vec3::new(w as f64 * a, c * b, 0.0);
-        let knit = Knit::grid(4, 3, false, &tile, a, b, |w, c| at(w, c as f64)).with_short_rows(
+        Knit::grid(4, 3, false, &tile, a, b, |w, c| at(w, c as f64)).with_short_rows(
             0,
             vec![0, 1, 1, 0],
             &tile,
             a,
             b,
             at,
-        );
+        )
+    }
+
+    #[test]
+    fn a_heel_pockets_short_rows_add_stitches_to_their_wales() {
+        // Wales 1 and 2 of the pocket knit hold four stitches' length of fabric where the
+        // others hold two, so twice the stitches.
+        let (a, b) = (0.002, 0.001);
+        let knit = pocket_knit(a, b);
         let density = stitch_density(&fabric([a, b]), &stretch(&knit));
         let relaxed = M2_PER_CM2 / (a * b);
         for c in 0..3 {
@@ -1181,27 +1216,49 @@ mod tests {
     }
 
     #[test]
-    fn a_cells_samples_cover_it_and_carry_a_linear_field_exactly() {
-        // A flat 4×4 grid of 6 mm cells (3 × 3 cells, 324 mm²), sampled 3 times along each side.
+    fn a_grids_samples_are_the_trapezoid_rules_lattice_over_it() {
+        // A flat 4×4 grid of 6 mm cells sampled 3 times along each side: together its 9 cells'
+        // samples are the 10 × 10 lattice at 2 mm (edges shared between cells add up), each
+        // weighted by the trapezoid rule, a cell's worth in all.
         let knit = flat(Pattern::Plain, 4, 0.006, 1.0, 1.0);
         let samples = CellSamples::of(&knit, 3);
-        let area: f64 = samples.weights.iter().sum();
-        assert!((area - 324e-6).abs() < 1e-15, "{area}");
-        // The fabric's edge rows and corners are sampled, not only the cells' insides.
-        let x = &knit.particles.x;
-        for corner in [x[0], x[15]] {
-            let nearest = samples.positions.iter().map(|p| (p - corner).norm());
-            assert!(nearest.fold(f64::INFINITY, f64::min) < 1e-15);
+        let mut lattice = std::collections::BTreeMap::new();
+        for (p, w) in samples.positions.iter().zip(&samples.weights) {
+            let at = [p.x, p.y].map(|v| (v / 0.002).round() as i64);
+            assert!((p.x - at[0] as f64 * 0.002).abs() < 1e-12, "{p}");
+            assert!((p.y - at[1] as f64 * 0.002).abs() < 1e-12, "{p}");
+            *lattice.entry(at).or_insert(0.0) += w;
         }
-        // A field linear in position is the same at each sample as at its position.
-        let field = |p: &Vec3| 3.0 + 2.0 * p.x - 5.0 * p.y;
-        let at_points: Vec<f64> = x.iter().map(field).collect();
-        for (value, p) in samples
-            .interpolate(&at_points)
-            .iter()
-            .zip(&samples.positions)
-        {
-            assert!((value - field(p)).abs() < 1e-12);
+        assert_eq!(lattice.len(), 100);
+        for ([i, j], w) in lattice {
+            let edge = |k: i64| if k == 0 || k == 9 { 0.5 } else { 1.0 };
+            let want = edge(i) * edge(j) / 9.0;
+            assert!((w - want).abs() < 1e-12, "({i}, {j}): {w} against {want}");
+        }
+    }
+
+    #[test]
+    fn a_heel_pockets_faces_are_sampled_by_their_stitches() {
+        // Its faces of five and more corners are fanned from their centroid, and every face's
+        // samples share its stitches.
+        let knit = pocket_knit(0.002, 0.001);
+        let faces = knit.faces();
+        assert!(faces.iter().any(|f| f.corners.len() > 4), "a fanned face");
+        let stitches: f64 = faces.iter().map(|f| f.stitches.max(1.0)).sum();
+        for n in 1..=4 {
+            let samples = CellSamples::of(&knit, n);
+            let total: f64 = samples.weights.iter().sum();
+            assert!(
+                (total - stitches).abs() < 1e-12,
+                "{n}: {total} against {stitches}"
+            );
+            for span in samples.starts.windows(2) {
+                let terms = &samples.terms[span[0]..span[1]];
+                let sum: f64 = terms.iter().map(|t| t.1).sum();
+                assert!((sum - 1.0).abs() < 1e-12 && terms.iter().all(|t| t.1 >= 0.0));
+            }
+            let finite = |p: &Vec3| p.iter().all(|v| v.is_finite());
+            assert!(samples.positions.iter().all(finite));
         }
     }
 
@@ -1218,37 +1275,47 @@ mod tests {
         }
     }
 
+    /// Fields on a flat `spacing` grid 6 cm across: `density(x)` as the stitch density, the
+    /// rest 1, no stress.
+    fn flat_fields(spacing: f64, density: impl Fn(&Vec3) -> f64) -> (Knit, KnitFields) {
+        let n = (0.06 / spacing).round() as usize + 1;
+        let knit = flat(Pattern::Plain, n, spacing, 1.0, 1.0);
+        let x = &knit.particles.x;
+        let ones = vec![1.0; x.len()];
+        let fields = KnitFields {
+            stitch_density: x.iter().map(density).collect(),
+            stretch_course: ones.clone(),
+            stretch_wale: ones.clone(),
+            coverage: ones.clone(),
+            tension: ones.clone(),
+            pressure: ones,
+            stress: vec![Matrix3::zeros(); x.len()],
+        };
+        (knit, fields)
+    }
+
     #[test]
     fn a_coarse_and_a_fine_grid_hand_the_leg_the_same_kernels_mean() {
         // A curved field (x² across 6 cm of flat fabric) on 1 mm and 8 mm grids: each leg vertex
         // takes the mean of the same 16 mm kernel over it, so they agree but for the coarse
         // grid's linear interpolation; a kernel three coarse spacings wide (24 mm), as the
         // coarse grid's points alone would need, blurs it twice as much.
+        assert_eq!((samples_per_side(0.001), samples_per_side(0.008)), (1, 2));
         let field = |p: &Vec3| 1e4 * p.x * p.x;
         let leg: Vec<Point3<f64>> = (0..5)
             .map(|k| Point3::new(0.022 + 0.004 * k as f64, 0.03, 0.001))
             .collect();
+        let surface = round_skin(0.04);
+        let skin = SkinCurvature::of(&surface, MEASURE_SPAN_M);
         let on_leg = |spacing: f64| {
-            let n = (0.06 / spacing).round() as usize + 1;
-            let knit = flat(Pattern::Plain, n, spacing, 1.0, 1.0);
-            let per_cell = (SAMPLES_ACROSS_KERNEL * spacing / TRANSFER_BANDWIDTH_M).ceil() as usize;
-            let x = &knit.particles.x;
-            let at_points: Vec<f64> = x.iter().map(field).collect();
-            if per_cell > 1 {
-                let samples = CellSamples::of(&knit, per_cell);
-                let values = samples.interpolate(&at_points);
-                let (at, w) = (&samples.positions, Some(&samples.weights[..]));
-                transfer_to_leg(at, w, &[&values], &leg, TRANSFER_BANDWIDTH_M).remove(0)
-            } else {
-                transfer_to_leg(x, None, &[&at_points], &leg, TRANSFER_BANDWIDTH_M).remove(0)
-            }
+            let (knit, fields) = flat_fields(spacing, field);
+            carry_to_leg(&knit, &fields, &leg, &skin).stitch_density
         };
         let (fine, coarse) = (on_leg(0.001), on_leg(0.008));
         let points_alone = {
-            let knit = flat(Pattern::Plain, 8, 0.008, 1.0, 1.0);
-            let x = &knit.particles.x;
-            let values: Vec<f64> = x.iter().map(field).collect();
-            transfer_to_leg(x, None, &[&values], &leg, 0.024).remove(0)
+            let (knit, fields) = flat_fields(0.008, field);
+            let values = &fields.stitch_density;
+            transfer_to_leg(&knit.particles.x, None, &[values], &leg, 0.024).remove(0)
         };
         for (k, (f, c)) in fine.iter().zip(&coarse).enumerate() {
             let exact = field(&leg[k].coords);
@@ -1265,6 +1332,19 @@ mod tests {
                 "vertex {k}: {f} against {exact}"
             );
         }
+    }
+
+    #[test]
+    fn skin_the_fabric_hangs_further_off_takes_the_grids_points() {
+        // An 8 mm grid of density 5: skin 2 cm under it has no sample within 16 mm, but the
+        // grid's points within three spacings (24 mm) reach it; skin 3 cm under, nothing.
+        let (knit, fields) = flat_fields(0.008, |_| 5.0);
+        let surface = round_skin(0.04);
+        let skin = SkinCurvature::of(&surface, MEASURE_SPAN_M);
+        let leg = [0.0, -0.02, -0.03].map(|z| Point3::new(0.03, 0.03, z));
+        let density = carry_to_leg(&knit, &fields, &leg, &skin).stitch_density;
+        assert!((density[0] - 5.0).abs() < 1e-12 && (density[1] - 5.0).abs() < 1e-12);
+        assert_eq!(density[2], 0.0);
     }
 
     #[test]

@@ -364,13 +364,15 @@ fn fit_details(
             axial_range_m: fit.axial_range_m,
             bunched_courses: fit.bunched_courses,
             slack,
-            toe_box: fit.path.as_ref().and_then(|path| path.toe_box_rim()).map(
-                |(centre, towards_toe, length_m)| ToeBoxDetails {
+            // Only where the fit's contact saw the toes boxed.
+            toe_box: (fit.path.as_ref())
+                .filter(|_| fit.toe_box.is_some())
+                .and_then(|path| path.toe_box_rim())
+                .map(|(centre, towards_toe, length_m)| ToeBoxDetails {
                     rim_centre_m: centre.coords.into(),
                     towards_toe: towards_toe.into(),
                     length_m,
-                },
-            ),
+                }),
         },
         solver: fit.solver.details(scene),
         contact: ContactDetails {
@@ -494,11 +496,13 @@ pub fn solve_fit(
     let (collider, boxed_toes) = clock.time(Stage::BuildCollider, || -> Result<_> {
         let collider = Collider::new(&leg, scene.contact.method)?;
         // The fit's contact sees the toes boxed (TubePath::box_the_toes).
-        let boxed_toes = match &path {
-            Some(path) => {
+        let boxed = path
+            .as_ref()
+            .and_then(|path| path.box_the_toes(&leg.positions, &leg.triangles));
+        let boxed_toes = match boxed {
+            Some((positions, triangles)) => {
                 let mut boxed = leg.clone();
-                (boxed.positions, boxed.triangles) =
-                    path.box_the_toes(&leg.positions, &leg.triangles);
+                (boxed.positions, boxed.triangles) = (positions, triangles);
                 Some(Collider::new(&boxed, scene.contact.method)?)
             }
             None => None,

@@ -398,7 +398,9 @@ fn the_toe_box_is_convex_and_holds_every_toe() {
             knitfit::run::fit::place_axis(&scene, &inputs, &leg, &mut StageClock::new(&plan))
                 .unwrap();
         let path = placed.path.expect("a path to the toe");
-        let (positions, triangles) = path.box_the_toes(&leg.positions, &leg.triangles);
+        let (positions, triangles) = path
+            .box_the_toes(&leg.positions, &leg.triangles)
+            .expect("a foot with toes is boxed");
         // The box's own faces are those on the points it added.
         let first_added = leg.positions.len() as u32;
         let box_faces: Vec<[Point3<f64>; 3]> = triangles

@@ -900,8 +900,8 @@ fn axis_points_pick_one_leg_of_a_file_with_both_legs_and_the_pelvis() {
     }
     assert!(got.ankle_density > 1.5 * got.thigh_density, "{got:?}");
     // And none covers the right leg. (Its inner thigh, a few centimetres from the left leg's
-    // yarn, does get density: the transfer to leg vertices looks three stitch spacings round
-    // every vertex, whichever surface the vertex is on.)
+    // yarn, does get density: the transfer to leg vertices looks 16 mm round every vertex, and
+    // three grid spacings where no fabric is that near, whichever surface the vertex is on.)
     let legply = read_ply(&run.path().join("out/leg.ply"));
     for v in &legply.payload["vertex"] {
         let p = point(v);
