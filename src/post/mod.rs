@@ -9,5 +9,6 @@ pub mod penetration;
 pub mod regions;
 pub mod stitches;
 pub mod surfaces;
+pub mod transfer;
 
 pub use stitches::{anisotropy, measure_stitches, StitchStats};
