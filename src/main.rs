@@ -28,7 +28,7 @@ use cli::{
     print_written, Bar, BenchArgs, Cli, Command, FitArgs, PatchArgs, PlanArgs, PlanOf, RenderArgs,
 };
 use knitfit::export::YarnsWritten;
-use knitfit::report::stocking_extent;
+use knitfit::report::{stocking_extent, SolverDetails};
 use knitfit::run::{
     plan_fit, plan_patch, run_bench, run_fit, run_patch, run_render, run_spp_sweep, BenchOptions,
 };
@@ -131,7 +131,7 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
         print_next(&args.out_dir(), &outcome.written);
     }
     // Damping shapes only the paper solver's steps; the multilevel solver has none to tune.
-    let hint = match scene.solver.method {
+    let advice = match scene.solver.method {
         SolverMethod::Multilevel => {
             "raise solver.max_steps, or loosen solver.tolerance (--tolerance)"
         }
@@ -139,7 +139,23 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
             "raise solver.max_steps, or solver.damping if the residual oscillates"
         }
     };
-    Ok(finish(m.converged, scene, hint))
+    // The multilevel solver says where the grid was still moving.
+    let hint = match &report.details.solver {
+        SolverDetails::Multilevel {
+            still_moving: Some(place),
+            ..
+        } if m.residual < scene.solver.tolerance => format!(
+            "{place} (the residual, {:.1e}, met the tolerance: only these points had not \
+             settled); {advice}",
+            m.residual
+        ),
+        SolverDetails::Multilevel {
+            still_moving: Some(place),
+            ..
+        } => format!("{place}; {advice}"),
+        _ => advice.to_string(),
+    };
+    Ok(finish(m.converged, scene, &hint))
 }
 
 /// What to open next, from what a fit wrote.

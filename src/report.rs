@@ -372,6 +372,10 @@ pub enum SolverDetails {
         fine_grid_equivalent_iterations: f64,
         /// Each level, coarsest first.
         levels: Vec<LevelStats>,
+        /// Where the grid asked for was still moving when the solver ran out of steps, in
+        /// words: its courses, how far along the stocking, the nearest landmark; `null` when
+        /// it converged.
+        still_moving: Option<String>,
     },
 }
 

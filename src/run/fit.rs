@@ -48,6 +48,7 @@ use crate::report::{
     StockingSurfaceDetails, ToeBoxDetails, TubeDetails, YarnValues, YarnsDetails,
 };
 use crate::scene::{LoadedScene, Scene, LEG_AXIS};
+use crate::sim::accelerated::OutOfBalance;
 use crate::sim::contact::{ContactCounters, LegContact};
 use crate::sim::multilevel::{
     grid_sizes_down_to, grid_sizes_following, COARSEST, STOCKING_COARSEST,
@@ -374,7 +375,7 @@ fn fit_details(
                     length_m,
                 }),
         },
-        solver: fit.solver.details(scene),
+        solver: fit.solver.details(scene, fit.still_moving.clone()),
         contact: ContactDetails {
             method: scene.contact.method,
             offset_m: fit.offset,
@@ -450,6 +451,9 @@ pub struct SolvedFit {
     pub knit: Knit,
     /// What the solver did.
     pub solver: SolverRun,
+    /// Where the grid asked for was still moving when the solver ran out of steps, in words
+    /// (multilevel only); `None` when it converged.
+    pub still_moving: Option<String>,
     /// Contact counters over all levels.
     pub counters: ContactCounters,
     /// Deepest yarn point inside the leg against the exact triangles, metres (0 when none is).
@@ -587,6 +591,11 @@ pub fn solve_fit(
             level,
         ));
     }
+    // A fit that ran out of steps is written, and says where it was still moving.
+    let still_moving = solver.unsettled().map(|(courses, at)| {
+        let at = Whereabouts::of(&axis, &centreline, landmarks.as_ref(), courses, at);
+        format!("{} were still moving{}", at.courses, at.worst)
+    });
     let mut contact = levels
         .contact
         .take()
@@ -638,6 +647,7 @@ pub fn solve_fit(
         offset,
         knit,
         solver,
+        still_moving,
         counters,
         max_penetration_m,
         axial_range_m,
@@ -924,6 +934,18 @@ impl SolverRun {
         }
     }
 
+    /// Where the grid asked for was still unsettled when it ran out of steps, with its number
+    /// of courses (multilevel only).
+    pub fn unsettled(&self) -> Option<(usize, &OutOfBalance)> {
+        match self {
+            SolverRun::Paper(_) => None,
+            SolverRun::Multilevel(s) => {
+                let fine = s.fine();
+                fine.unsettled.as_ref().map(|at| (fine.courses, at))
+            }
+        }
+    }
+
     /// True when the grid asked for converged.
     pub fn converged(&self) -> bool {
         match self {
@@ -933,7 +955,7 @@ impl SolverRun {
     }
 
     /// The report's `details.solver`.
-    pub fn details(&self, scene: &Scene) -> SolverDetails {
+    pub fn details(&self, scene: &Scene, still_moving: Option<String>) -> SolverDetails {
         match self {
             SolverRun::Paper(stats) => SolverDetails::Paper {
                 tolerance: scene.solver.tolerance,
@@ -945,6 +967,7 @@ impl SolverRun {
                 tolerance: scene.solver.tolerance,
                 fine_grid_equivalent_iterations: stats.fine_grid_equivalent_iterations(),
                 levels: stats.levels.clone(),
+                still_moving,
             },
         }
     }
@@ -998,46 +1021,52 @@ fn choose_axis(
 /// (a heavy knee is about 40 cm around: 1.6 cm a side at 24).
 const COARSE_GRID_WALES: usize = 40;
 
-/// The error of a fit stopped as futile on `level`: where along the stocking its courses are out
-/// of balance, near which landmark, and what to change.
-fn stalled(
-    scene: &Scene,
-    leg: &Leg,
-    axis: &Axis,
-    centreline: &Centreline,
-    landmarks: Option<&Landmarks>,
-    level: &LevelStats,
-) -> Error {
-    let stall = level.stall.expect("a stalled level says where");
-    let last = level.courses.saturating_sub(1).max(1) as f64;
-    let [from, to] = stall.courses.map(|c| c as f64 / last * centreline.length());
-    // A stocking to the toe is knitted from its welt down: course 0 is its top.
-    let to_the_toe = centreline.length() > axis.length() + 1e-9;
-    // Landmarks name the place; a given axis has none yet, so they are looked for here.
-    let found;
-    let landmarks = match landmarks {
-        Some(l) => Some(l),
-        None => {
-            found = find_landmarks(&leg.positions, &leg.triangles, leg.up, scene.leg.side).ok();
-            found.as_ref()
-        }
-    };
-    let worst = Point3::from(stall.worst_point);
-    let mut at_foot = landmarks.is_none();
-    let mut place = format!(
-        "courses {}–{} of {} ({:.0}–{:.0} cm {}) are out of balance",
-        stall.courses[0],
-        stall.courses[1],
-        level.courses,
-        100.0 * from,
-        100.0 * to,
-        if to_the_toe {
-            "down the stocking from its top"
-        } else {
-            "up the stocking from its bottom end"
-        }
-    );
-    if let Some(l) = landmarks {
+/// Where on the stocking a level's courses stopped out of balance, in words.
+struct Whereabouts {
+    /// The courses, and how far along the stocking they lie: "courses 140–148 of 150 (70–75 cm
+    /// down the stocking from its top)".
+    courses: String,
+    /// The worst point's height and nearest landmark (", worst 2 cm above the sole, at the
+    /// foot"); empty without landmarks.
+    worst: String,
+    /// True for a stocking to the toe (knitted from its welt down: course 0 is its top).
+    to_the_toe: bool,
+    /// True where the worst point is nearest the foot, or no landmark names it.
+    at_foot: bool,
+}
+
+impl Whereabouts {
+    fn of(
+        axis: &Axis,
+        centreline: &Centreline,
+        landmarks: Option<&Landmarks>,
+        courses: usize,
+        at: &OutOfBalance,
+    ) -> Whereabouts {
+        let last = courses.saturating_sub(1).max(1) as f64;
+        let [from, to] = at.courses.map(|c| c as f64 / last * centreline.length());
+        let to_the_toe = centreline.length() > axis.length() + 1e-9;
+        let along = format!(
+            "courses {}–{} of {courses} ({:.0}–{:.0} cm {})",
+            at.courses[0],
+            at.courses[1],
+            100.0 * from,
+            100.0 * to,
+            if to_the_toe {
+                "down the stocking from its top"
+            } else {
+                "up the stocking from its bottom end"
+            }
+        );
+        let Some(l) = landmarks else {
+            return Whereabouts {
+                courses: along,
+                worst: String::new(),
+                to_the_toe,
+                at_foot: true,
+            };
+        };
+        let worst = Point3::from(at.worst_point);
         let up = Vector3::from(l.up);
         let height = worst.coords.dot(&up) - l.sole_s();
         let named = [
@@ -1053,9 +1082,38 @@ fn stalled(
                 d(a.1).total_cmp(&d(b.1))
             })
             .expect("four landmarks");
-        place += &format!(", worst {:.0} cm above the sole, at {name}", 100.0 * height);
-        at_foot = *name == "the foot";
+        Whereabouts {
+            courses: along,
+            worst: format!(", worst {:.0} cm above the sole, at {name}", 100.0 * height),
+            to_the_toe,
+            at_foot: *name == "the foot",
+        }
     }
+}
+
+/// The error of a fit stopped as futile on `level`: where along the stocking its courses are out
+/// of balance, near which landmark, and what to change.
+fn stalled(
+    scene: &Scene,
+    leg: &Leg,
+    axis: &Axis,
+    centreline: &Centreline,
+    landmarks: Option<&Landmarks>,
+    level: &LevelStats,
+) -> Error {
+    let stall = level.stall.expect("a stalled level says where");
+    // Landmarks name the place; a given axis has none yet, so they are looked for here.
+    let found;
+    let landmarks = match landmarks {
+        Some(l) => Some(l),
+        None => {
+            found = find_landmarks(&leg.positions, &leg.triangles, leg.up, scene.leg.side).ok();
+            found.as_ref()
+        }
+    };
+    let at = Whereabouts::of(axis, centreline, landmarks, level.courses, &stall);
+    let place = format!("{} are out of balance{}", at.courses, at.worst);
+    let (to_the_toe, at_foot) = (at.to_the_toe, at.at_foot);
     let circumference = scene.fabric().relaxed_circumference_m();
     let advice = match (landmarks, axis.source) {
         (Some(l), _) if circumference < 0.5 * l.ankle.girth_m => format!(
@@ -1283,7 +1341,6 @@ impl FitProducts<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::accelerated::Stall;
 
     #[test]
     fn a_stocking_to_the_toe_stopped_at_the_foot_counts_from_its_top_and_offers_the_ankle() {
@@ -1320,11 +1377,12 @@ mod tests {
             force_step: 0.1,
             max_move: 0.1,
             converged: false,
-            stall: Some(Stall {
+            stall: Some(OutOfBalance {
                 courses: [140, 148],
                 worst_point: tip,
                 worst_force_step: 0.1,
             }),
+            unsettled: None,
             seconds: 1.0,
         };
         let message = stalled(

@@ -39,7 +39,7 @@
 //!
 //! **The futility watch.** Two windows of 100 iterations in a row with restarts on 80 % of them
 //! and no 10 % gain on the best residual (a tube that cannot pass a foot), or ten with a quarter
-//! restarted and no gain, stop it with the courses out of balance ([`Stall`]; decisions/0049).
+//! restarted and no gain, stop it, saying where ([`OutOfBalance`]; decisions/0049).
 //!
 //! **Convergence.** The relative residual is the paper solver's (RMS unheld net force over RMS
 //! spring force); with it, the *force step* must be below the tolerance: the largest move the
@@ -137,9 +137,10 @@ impl FutilityWatch {
     }
 }
 
-/// Where an iteration stopped as futile: the courses still far from balance.
+/// Where a level stopped short of balance (as futile, or at its iteration cap): the courses
+/// still out of balance and the worst point.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
-pub struct Stall {
+pub struct OutOfBalance {
     /// Lowest and highest course (0 = the bottom ring) whose force step is above the tolerance.
     pub courses: [usize; 2],
     /// The point with the largest force step, world space.
@@ -214,7 +215,12 @@ pub struct LevelStats {
     pub converged: bool,
     /// Where the iteration stopped early because it was going nowhere (module docs); `null`
     /// when it did not.
-    pub stall: Option<Stall>,
+    pub stall: Option<OutOfBalance>,
+    /// Where the level was still unsettled when it reached its iteration cap: the courses whose
+    /// force step was above the tolerance, and the worst point; `null` when it converged or
+    /// stalled. A run that ends unconverged says where, so that its user can tell a slow
+    /// corner (raise the cap) from a whole grid out of balance.
+    pub unsettled: Option<OutOfBalance>,
     /// Wall-clock seconds the level took.
     pub seconds: f64,
 }
@@ -280,6 +286,10 @@ pub fn relax_accelerated(
         }
         let converged = residual < tolerance && force_step < tolerance;
         if converged || iteration >= max_iterations || stall.is_some() {
+            // A level that converged on the iteration after the watch fired is no stall.
+            let stall = stall.filter(|_| !converged);
+            let unsettled = (!converged && stall.is_none())
+                .then(|| out_of_balance(knit, terms, &mut ws, &*constraints, tolerance));
             return Ok(LevelStats {
                 wales: knit.wales,
                 courses: knit.courses,
@@ -291,15 +301,15 @@ pub fn relax_accelerated(
                 force_step,
                 max_move,
                 converged,
-                // A level that converged on the iteration after the watch fired is no stall.
-                stall: stall.filter(|_| !converged),
+                stall,
+                unsettled,
                 seconds: started.elapsed().as_secs_f64(),
             });
         }
 
         let restart = rules.observe(sums.power, sums.unsettled_power);
         if watch.observe(residual, restart.is_some()) {
-            stall = Some(where_stalled(
+            stall = Some(out_of_balance(
                 knit,
                 terms,
                 &mut ws,
@@ -328,13 +338,13 @@ pub fn relax_accelerated(
 }
 
 /// The courses whose force step is above `tolerance`, and the worst point.
-fn where_stalled(
+fn out_of_balance(
     knit: &Knit,
     terms: &ForceTerms,
     ws: &mut Workspace,
     constraints: &dyn Constraints,
     tolerance: f64,
-) -> Stall {
+) -> OutOfBalance {
     evaluate(knit, terms, ws);
     unheld_forces(knit, ws, constraints);
     let shortest = shortest_rest(knit);
@@ -362,7 +372,7 @@ fn where_stalled(
         let c = course_of(knit, worst.0);
         courses = [c, c];
     }
-    Stall {
+    OutOfBalance {
         courses,
         worst_point: knit.particles.x[worst.0].into(),
         worst_force_step: worst.1,
@@ -377,6 +387,57 @@ fn course_of(knit: &Knit, i: usize) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::base::Vec3;
+    use crate::knit::{Pattern, Tile};
+    use crate::sim::Unconstrained;
+
+    /// A 6×9 tube at rest (rest lengths 1, its first ring pinned) but for course `pulled`,
+    /// whose points are pulled 0.3 outwards.
+    fn tube_pulled_at(pulled: usize) -> Knit {
+        let (wales, courses) = (6, 9);
+        // Chords of rest length 1 around.
+        let radius = 0.5 / (std::f64::consts::PI / wales as f64).sin();
+        let mut knit = Knit::grid(
+            wales,
+            courses,
+            true,
+            &Tile::of(Pattern::Alternating),
+            1.0,
+            1.0,
+            |w, c| {
+                let t = std::f64::consts::TAU * w as f64 / wales as f64;
+                let r = radius + if c == pulled { 0.3 } else { 0.0 };
+                Vec3::new(r * t.cos(), c as f64, r * t.sin())
+            },
+        );
+        for w in 0..wales {
+            let i = knit.point(w, 0).index();
+            knit.particles.inv_mass[i] = 0.0;
+        }
+        knit
+    }
+
+    #[test]
+    fn a_level_that_runs_out_of_iterations_says_where_it_was_still_moving() {
+        let terms = ForceTerms {
+            stiffness: [1.0; 3],
+            connection_factor: None,
+        };
+        let mut knit = tube_pulled_at(6);
+        let relax = |knit: &mut Knit, tolerance, cap| {
+            relax_accelerated(knit, &terms, tolerance, cap, &mut Unconstrained, &mut (), 0).unwrap()
+        };
+        let capped = relax(&mut knit, 1e-3, 2);
+        assert!(!capped.converged && capped.stall.is_none());
+        let at = capped.unsettled.expect("a capped level says where");
+        // The pulled course and its neighbours, not the pinned ring; worst on the pulled one.
+        assert!(at.courses[0] >= 4 && at.courses[1] <= 8, "{at:?}");
+        assert!((at.worst_point[1] - 6.0).abs() < 0.5, "{at:?}");
+        assert!(at.worst_force_step > 1e-3);
+        let settled = relax(&mut knit, 1e-3, 100_000);
+        assert!(settled.converged, "{settled:?}");
+        assert_eq!(settled.unsettled, None);
+    }
 
     #[test]
     fn the_stall_test_restarts_on_the_twelfth_negative_unsettled_power_in_a_row() {

@@ -626,3 +626,51 @@ fn a_fit_without_its_preview_says_how_to_render_it() {
         "{text}"
     );
 }
+
+#[test]
+fn a_fit_out_of_steps_is_written_and_says_where_it_was_still_moving() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = write(
+        dir.path(),
+        "s.json",
+        r#"{"outputs": ["ply"], "solver": {"max_steps": 20}}"#,
+    );
+    let out = knitfit(
+        dir.path(),
+        &[
+            "fit",
+            scene.to_str().unwrap(),
+            "--leg",
+            procedural_leg().to_str().unwrap(),
+            "--resolution",
+            "40x40",
+            "-q",
+        ],
+    );
+    // Exit 3: written, not converged; the warning and the report say where it was moving.
+    assert_eq!(out.status.code(), Some(3), "{}", stderr(&out));
+    let text = stderr(&out);
+    assert!(
+        text.contains("did not converge within solver.max_steps = 20"),
+        "{text}"
+    );
+    assert!(text.contains("were still moving"), "{text}");
+    assert!(
+        text.contains("up the stocking from its bottom end"),
+        "{text}"
+    );
+    let r = report(&dir.path().join("out"));
+    assert_eq!(r["metrics"]["converged"], false);
+    let place = r["details"]["solver"]["still_moving"].as_str().unwrap();
+    assert!(
+        place.starts_with("courses ") && text.contains(place),
+        "{place}"
+    );
+    let fine = r["details"]["solver"]["levels"]
+        .as_array()
+        .unwrap()
+        .last()
+        .unwrap();
+    assert!(fine["unsettled"]["worst_force_step"].as_f64().unwrap() > 1e-3);
+    assert!(dir.path().join("out/stocking.ply").exists());
+}
