@@ -139,18 +139,10 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
             "raise solver.max_steps, or solver.damping if the residual oscillates"
         }
     };
-    // The multilevel solver says where the grid was still moving.
+    // The multilevel solver says where the grid had not settled.
     let hint = match &report.details.solver {
         SolverDetails::Multilevel {
-            still_moving: Some(place),
-            ..
-        } if m.residual < scene.solver.tolerance => format!(
-            "{place} (the residual, {:.1e}, met the tolerance: only these points had not \
-             settled); {advice}",
-            m.residual
-        ),
-        SolverDetails::Multilevel {
-            still_moving: Some(place),
+            unsettled_at: Some(place),
             ..
         } => format!("{place}; {advice}"),
         _ => advice.to_string(),

@@ -176,6 +176,10 @@ pub struct LandmarkRing {
 pub struct LandmarkDetails {
     /// Unit vector up the body, world space.
     pub up: [f64; 3],
+    /// Unit vector where the character faces, square to up, world space: where its standing
+    /// feet point, on average, or +Z without a foot. The pictures are seen from it (from +Z
+    /// where that is within 20°, as glTF characters face).
+    pub facing: [f64; 3],
     /// Legs found at the bottom of the mesh.
     pub legs_found: usize,
     /// The dressed leg's side (`left`, `right`); `null` when the file holds one leg.
@@ -211,6 +215,7 @@ impl LandmarkDetails {
         };
         LandmarkDetails {
             up: landmarks.up,
+            facing: landmarks.facing,
             legs_found: landmarks.legs_found,
             side: landmarks.side,
             sole: point(landmarks.sole),
@@ -372,10 +377,10 @@ pub enum SolverDetails {
         fine_grid_equivalent_iterations: f64,
         /// Each level, coarsest first.
         levels: Vec<LevelStats>,
-        /// Where the grid asked for was still moving when the solver ran out of steps, in
-        /// words: its courses, how far along the stocking, the nearest landmark; `null` when
-        /// it converged.
-        still_moving: Option<String>,
+        /// Where the grid asked for had not settled when the solver ran out of steps, in
+        /// words: its courses, how far along the stocking, the nearest landmark, and whether
+        /// the residual was within the tolerance; `null` when it converged.
+        unsettled_at: Option<String>,
     },
 }
 

@@ -10,6 +10,7 @@
 
 use std::path::PathBuf;
 
+use knitfit::base::Stance;
 use knitfit::export::gltf::read::read_stocking_glb;
 use knitfit::preview::{render_preview, PreviewBuffers, PreviewInput};
 use knitfit::scene::Scene;
@@ -56,7 +57,12 @@ fn main() {
         .fold((f32::MAX, f32::MIN), |(lo, hi), p| {
             (lo.min(p[1] as f32), hi.max(p[1] as f32))
         });
-    let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
+    let input = PreviewInput::new(
+        &stocking.leg,
+        &stocking.yarns,
+        &scene.yarns,
+        Stance::default(),
+    );
     let preview = match render_preview(input, &scene.render, "preview") {
         Ok(p) => p,
         Err(e) => {

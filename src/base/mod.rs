@@ -8,7 +8,7 @@ pub mod near;
 pub mod settings;
 pub mod yarn;
 
-pub use frame::{perpendicular_frame, Vec3};
+pub use frame::{perpendicular_frame, Stance, Vec3};
 pub use mesh::{area_weighted_normals, vertex_normals, Material, SurfaceMesh};
 pub use near::PointGrid;
 pub use yarn::{Direction, PerYarn, Segment, YarnGeometry, YarnKind};

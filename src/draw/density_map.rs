@@ -29,6 +29,7 @@
 use super::canvas::{Anchor, Canvas, Font, LinearImage};
 use super::colour_bar::{draw_bar, BarPlace, ColourScale, HeatLut, UNCOVERED, UNIT_LABEL};
 use crate::base::colour::linear_to_srgb8;
+use crate::base::Stance;
 use image::RgbImage;
 
 /// How the density picture looks.
@@ -81,26 +82,28 @@ struct ViewFrame {
     toward_viewer: [f64; 3],
 }
 
-const UP: [f64; 3] = [0.0, 1.0, 0.0];
-
-/// The two views, left to right.
-const VIEWS: [ViewFrame; 2] = [
-    ViewFrame {
-        label: "front",
-        right: [1.0, 0.0, 0.0],
-        toward_viewer: [0.0, 0.0, 1.0],
-    },
-    ViewFrame {
-        label: "side",
-        right: [0.0, 0.0, -1.0],
-        toward_viewer: [1.0, 0.0, 0.0],
-    },
-];
+/// The two views of a character standing in `stance`, left to right: the front looks at its
+/// face (its left on the image's right), the side at its left (its front on the left).
+fn views(stance: &Stance) -> [ViewFrame; 2] {
+    let (facing, left) = (stance.facing, stance.left());
+    [
+        ViewFrame {
+            label: "front",
+            right: left.into(),
+            toward_viewer: facing.into(),
+        },
+        ViewFrame {
+            label: "side",
+            right: (-facing).into(),
+            toward_viewer: left.into(),
+        },
+    ]
+}
 
 /// Draws the density picture: the front view, the side view, then the colour bar, left to right.
 ///
-/// `positions`: leg vertices, metres, world space, +Y up, glTF's orientation (the character faces
-/// +Z). `triangles`: vertex indices, counter-clockwise seen from outside; a triangle naming a
+/// `positions`: leg vertices, metres, world space, seen as the character stands in `stance`
+/// (glTF's: +Y up, facing +Z, by default). `triangles`: vertex indices, counter-clockwise seen from outside; a triangle naming a
 /// vertex that does not exist or has a non-finite coordinate is skipped. `density`: per vertex,
 /// stitches per cm²; 0, negative or non-finite means no yarn there (drawn grey); a vertex beyond
 /// the end of `density` has none.
@@ -111,31 +114,30 @@ pub fn draw_density(
     positions: &[[f64; 3]],
     triangles: &[[u32; 3]],
     density: &[f64],
+    stance: &Stance,
     style: &DensityPictureStyle,
 ) -> RgbImage {
     let mesh = PreparedMesh::new(positions, triangles);
     let scale = ColourScale::of(density);
-    let layout = Layout::new(&mesh, &scale, style);
+    let layout = Layout::new(&mesh, &scale, stance, style);
     let shading = VertexColouring::new(positions.len(), density, &scale);
     let mut canvas = Canvas::new(layout.width, layout.height, BACKGROUND.map(linear_to_srgb8));
     let lut = HeatLut::new();
-    for (frame, rect) in VIEWS.iter().zip(&layout.views) {
-        draw_view(&mut canvas, &mesh, &shading, &lut, frame, rect, &layout);
+    for view in 0..2 {
+        draw_view(&mut canvas, &mesh, &shading, &lut, view, &layout);
     }
     draw_bar(&mut canvas, layout.bar, &scale, &lut, layout.font);
     draw_labels(&mut canvas, &layout);
     canvas.into_image()
 }
 
-/// The triangles that can be drawn, with per-vertex normals and the bounding box.
+/// The triangles that can be drawn, with per-vertex normals.
 struct PreparedMesh<'a> {
     positions: &'a [[f64; 3]],
     /// Triangles whose indices exist and whose corners are finite.
     triangles: Vec<[usize; 3]>,
     /// Per vertex: unit area-weighted normal, or zero where no drawable triangle gives one.
     normals: Vec<[f64; 3]>,
-    /// Corners of the bounding box of the drawable triangles, if any.
-    bounds: Option<([f64; 3], [f64; 3])>,
 }
 
 impl<'a> PreparedMesh<'a> {
@@ -150,20 +152,11 @@ impl<'a> PreparedMesh<'a> {
             .filter(|t| t.iter().all(|&i| finite.get(i).copied().unwrap_or(false)))
             .collect();
         let mut normals = vec![[0.0; 3]; positions.len()];
-        let mut bounds: Option<([f64; 3], [f64; 3])> = None;
         for t in &drawable {
             // The cross product's length is twice the area: larger faces weigh more.
             let n = face_normal(positions, *t);
             for &i in t {
                 normals[i] = add(normals[i], n);
-                let p = positions[i];
-                bounds = Some(match bounds {
-                    None => (p, p),
-                    Some((lo, hi)) => (
-                        std::array::from_fn(|c| lo[c].min(p[c])),
-                        std::array::from_fn(|c| hi[c].max(p[c])),
-                    ),
-                });
             }
         }
         for n in &mut normals {
@@ -173,8 +166,21 @@ impl<'a> PreparedMesh<'a> {
             positions,
             triangles: drawable,
             normals,
-            bounds,
         }
+    }
+
+    /// The least and greatest `axis · p` over the drawable triangles' corners; `(0, 0)` for
+    /// none.
+    fn range(&self, axis: [f64; 3]) -> (f64, f64) {
+        self.triangles
+            .iter()
+            .flatten()
+            .map(|&i| dot(self.positions[i], axis))
+            .fold(None, |range, x| match range {
+                None => Some((x, x)),
+                Some((lo, hi)) => Some((f64::min(lo, x), f64::max(hi, x))),
+            })
+            .unwrap_or((0.0, 0.0))
     }
 }
 
@@ -217,10 +223,14 @@ struct Layout {
     view_px: usize,
     supersample: usize,
     views: [ViewRect; 2],
+    /// Each view's directions (see [`views`]).
+    frames: [ViewFrame; 2],
+    /// Up in both views: the character's.
+    up: [f64; 3],
     /// Pixels per metre, both views.
     px_per_m: f64,
     /// The point drawn at each view's centre, metres.
-    centre_m: [f64; 3],
+    centres_m: [[f64; 3]; 2],
     font: Font,
     /// The colour bar.
     bar: BarPlace,
@@ -230,7 +240,12 @@ struct Layout {
 }
 
 impl Layout {
-    fn new(mesh: &PreparedMesh, scale: &ColourScale, style: &DensityPictureStyle) -> Self {
+    fn new(
+        mesh: &PreparedMesh,
+        scale: &ColourScale,
+        stance: &Stance,
+        style: &DensityPictureStyle,
+    ) -> Self {
         let view_px = style.view_px.clamp(VIEW_PX_RANGE.0, VIEW_PX_RANGE.1) as usize;
         let supersample = style
             .supersample
@@ -241,14 +256,13 @@ impl Layout {
         let band = 2 * char_h;
         let margin_px = (MARGIN * view_px as f64).round();
 
-        let (lo, hi) = mesh.bounds.unwrap_or(([0.0; 3], [0.0; 3]));
+        let (frames, up) = (views(stance), stance.up.into());
         let extent = |axis: [f64; 3]| {
-            let a = dot(lo, axis);
-            let b = dot(hi, axis);
-            (a - b).abs()
+            let (lo, hi) = mesh.range(axis);
+            hi - lo
         };
-        let height_m = extent(UP);
-        let widths_m = VIEWS.map(|v| extent(v.right));
+        let height_m = extent(up);
+        let widths_m = frames.map(|v| extent(v.right));
         let inner_h = view_px as f64 - 2.0 * margin_px;
         let inner_w = MAX_VIEW_ASPECT * view_px as f64 - 2.0 * margin_px;
         let px_per_m = [
@@ -260,7 +274,12 @@ impl Layout {
         .filter(|s| s.is_finite() && *s > 0.0)
         .fold(f64::INFINITY, f64::min);
         let px_per_m = if px_per_m.is_finite() { px_per_m } else { 1.0 };
-        let centre_m = std::array::from_fn(|c| (lo[c] + hi[c]) / 2.0);
+        // Each view centred on the mesh's extent along its three directions.
+        let mid = |axis: [f64; 3]| {
+            let (lo, hi) = mesh.range(axis);
+            scaled(axis, (lo + hi) / 2.0)
+        };
+        let centres_m = frames.map(|f| add(add(mid(f.right), mid(up)), mid(f.toward_viewer)));
 
         let min_view_w = (view_px / 5).max(font.text_width("front") + 2 * char_w);
         let mut x = 0;
@@ -295,8 +314,10 @@ impl Layout {
             view_px,
             supersample,
             views,
+            frames,
+            up,
             px_per_m,
-            centre_m,
+            centres_m,
             font,
             bar,
             panel_x0,
@@ -306,12 +327,13 @@ impl Layout {
 
     /// A world point in a view's supersampled buffer: x right, y down, samples; and its depth
     /// towards the viewer, metres.
-    fn project_samples(&self, frame: &ViewFrame, rect: &ViewRect, p: [f64; 3]) -> [f64; 3] {
-        let d = sub(p, self.centre_m);
+    fn project_samples(&self, view: usize, p: [f64; 3]) -> [f64; 3] {
+        let (frame, rect) = (&self.frames[view], &self.views[view]);
+        let d = sub(p, self.centres_m[view]);
         let s = self.supersample as f64;
         [
             (rect.width as f64 / 2.0 + dot(d, frame.right) * self.px_per_m) * s,
-            (self.view_px as f64 / 2.0 - dot(d, UP) * self.px_per_m) * s,
+            (self.view_px as f64 / 2.0 - dot(d, self.up) * self.px_per_m) * s,
             dot(d, frame.toward_viewer),
         ]
     }
@@ -320,7 +342,7 @@ impl Layout {
     #[cfg(test)]
     fn project_image(&self, view: usize, p: [f64; 3]) -> [f64; 2] {
         let rect = &self.views[view];
-        let q = self.project_samples(&VIEWS[view], rect, p);
+        let q = self.project_samples(view, p);
         let s = self.supersample as f64;
         [rect.x0 as f64 + q[0] / s, self.band as f64 + q[1] / s]
     }
@@ -332,16 +354,16 @@ fn draw_view(
     mesh: &PreparedMesh,
     colouring: &VertexColouring,
     lut: &HeatLut,
-    frame: &ViewFrame,
-    rect: &ViewRect,
+    view: usize,
     layout: &Layout,
 ) {
+    let (frame, rect) = (&layout.frames[view], &layout.views[view]);
     let ss = layout.supersample;
     let (w, h) = (rect.width * ss, layout.view_px * ss);
     let light = normalised(add(
         add(
             scaled(frame.right, LIGHT_CAMERA[0]),
-            scaled(UP, LIGHT_CAMERA[1]),
+            scaled(layout.up, LIGHT_CAMERA[1]),
         ),
         scaled(frame.toward_viewer, LIGHT_CAMERA[2]),
     ))
@@ -350,7 +372,7 @@ fn draw_view(
     let projected: Vec<[f64; 3]> = mesh
         .positions
         .iter()
-        .map(|&p| layout.project_samples(frame, rect, p))
+        .map(|&p| layout.project_samples(view, p))
         .collect();
     let vertex_shade: Vec<f32> = mesh
         .normals
@@ -433,7 +455,7 @@ fn draw_view(
 /// The views' labels and the bar's caption, in the band above them.
 fn draw_labels(canvas: &mut Canvas, layout: &Layout) {
     let band_mid = layout.band / 2;
-    for (frame, rect) in VIEWS.iter().zip(&layout.views) {
+    for (frame, rect) in layout.frames.iter().zip(&layout.views) {
         let x = rect.x0 + rect.width / 2;
         canvas.text(frame.label, x, band_mid, Anchor::Centre, layout.font);
     }
@@ -551,7 +573,7 @@ mod tests {
         style: &DensityPictureStyle,
     ) -> Layout {
         let mesh = PreparedMesh::new(positions, triangles);
-        Layout::new(&mesh, &ColourScale::of(density), style)
+        Layout::new(&mesh, &ColourScale::of(density), &Stance::default(), style)
     }
 
     #[test]
@@ -559,7 +581,7 @@ mod tests {
         let (positions, triangles) = cylinder(48, 40);
         let density = rising_density(&positions);
         let style = DensityPictureStyle::default();
-        let image = draw_density(&positions, &triangles, &density, &style);
+        let image = draw_density(&positions, &triangles, &density, &Stance::default(), &style);
         let layout = layout_for(&positions, &triangles, &density, &style);
         let hot = heat(1.0).map(linear_to_srgb8);
         // The column facing the camera, 5 cm in from each end.
@@ -583,7 +605,7 @@ mod tests {
             .map(|p| if p[1] < 0.2 { 20.0 + p[1] } else { 0.0 })
             .collect();
         let style = DensityPictureStyle::default();
-        let image = draw_density(&positions, &triangles, &density, &style);
+        let image = draw_density(&positions, &triangles, &density, &Stance::default(), &style);
         let layout = layout_for(&positions, &triangles, &density, &style);
         let background = BACKGROUND.map(linear_to_srgb8);
         for view in 0..2 {
@@ -608,7 +630,7 @@ mod tests {
         let (positions, triangles) = cylinder(24, 10);
         let density = rising_density(&positions);
         let style = DensityPictureStyle::default();
-        let image = draw_density(&positions, &triangles, &density, &style);
+        let image = draw_density(&positions, &triangles, &density, &Stance::default(), &style);
         let layout = layout_for(&positions, &triangles, &density, &style);
         let x = (layout.bar.x0 + layout.bar.width / 2) as u32;
         let samples = 9;
@@ -635,12 +657,12 @@ mod tests {
         let density = rising_density(&positions);
         let style = DensityPictureStyle::default();
         let a = encode_png(
-            &draw_density(&positions, &triangles, &density, &style),
+            &draw_density(&positions, &triangles, &density, &Stance::default(), &style),
             "density.png",
         )
         .unwrap();
         let b = encode_png(
-            &draw_density(&positions, &triangles, &density, &style),
+            &draw_density(&positions, &triangles, &density, &Stance::default(), &style),
             "density.png",
         )
         .unwrap();
@@ -697,7 +719,7 @@ mod tests {
                 if style.view_px == u32::MAX && i > 0 {
                     continue; // the largest size is slow; the empty mesh shows it clamps
                 }
-                let image = draw_density(p, t, d, &style);
+                let image = draw_density(p, t, d, &Stance::default(), &style);
                 assert!(image.width() > 0 && image.height() > 0, "case {i}");
                 assert!(encode_png(&image, "density.png").is_ok(), "case {i}");
             }
@@ -709,7 +731,7 @@ mod tests {
         let (positions, triangles) = cylinder(24, 10);
         let density = vec![0.0; positions.len()];
         let style = DensityPictureStyle::default();
-        let image = draw_density(&positions, &triangles, &density, &style);
+        let image = draw_density(&positions, &triangles, &density, &Stance::default(), &style);
         let layout = layout_for(&positions, &triangles, &density, &style);
         let x = (layout.bar.x0 + layout.bar.width / 2) as u32;
         let grey = UNCOVERED.map(linear_to_srgb8);
@@ -718,5 +740,46 @@ mod tests {
         }
         let skin = pixel_at(&image, layout.project_image(0, [0.0, 0.25, RADIUS_M]));
         assert!(skin[0] == skin[1] && skin[1] == skin[2], "{skin:?}");
+    }
+
+    /// A character turned in its file is drawn as it stands: an oval cylinder (twice as wide
+    /// as deep, density rising with height and towards its front) turned 40° about up, drawn
+    /// in the stance turned with it, gives the upright picture; drawn along the file's axes,
+    /// another.
+    #[test]
+    fn a_turned_mesh_drawn_in_its_stance_gives_the_upright_picture() {
+        let (cylinder, triangles) = cylinder(48, 20);
+        let oval: Vec<[f64; 3]> = cylinder.iter().map(|p| [2.0 * p[0], p[1], p[2]]).collect();
+        let density: Vec<f64> = oval
+            .iter()
+            .map(|p| 10.0 + 100.0 * p[2] + 30.0 * p[1])
+            .collect();
+        let turn = nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::y_axis(), 0.7);
+        let turned: Vec<[f64; 3]> = oval
+            .iter()
+            .map(|&p| (turn * nalgebra::Vector3::from(p)).into())
+            .collect();
+        let style = DensityPictureStyle {
+            view_px: 160,
+            supersample: 2,
+        };
+        let upright = draw_density(&oval, &triangles, &density, &Stance::default(), &style);
+        let stance = Stance::new(nalgebra::Vector3::y(), turn * nalgebra::Vector3::z());
+        let seen = draw_density(&turned, &triangles, &density, &stance, &style);
+        assert_eq!(seen.dimensions(), upright.dimensions());
+        let differing = |image: &RgbImage| {
+            image
+                .pixels()
+                .zip(upright.pixels())
+                .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b[c]) > 8))
+                .count()
+        };
+        assert!(differing(&seen) * 1000 < seen.len(), "{}", differing(&seen));
+        let along_axes = draw_density(&turned, &triangles, &density, &Stance::default(), &style);
+        assert!(
+            along_axes.dimensions() != upright.dimensions()
+                || differing(&along_axes) * 20 > along_axes.len(),
+            "the file's axes draw the same picture"
+        );
     }
 }

@@ -14,8 +14,9 @@
 //!   followed up and down from slice to slice: the loop that encloses the last centre, or else
 //!   the nearest within [`MAX_STEP_M`]. Following stops where the mesh is cut, or where two legs'
 //!   loops become one (the crotch).
-//! - **Side**: the character faces where its feet point; its left is `up × forward`. A file
-//!   with no foot is taken to face +Z, as glTF characters do.
+//! - **Facing and side**: the character faces where its standing feet point, on average; its
+//!   left is `up × facing`. With no foot it faces +Z, as glTF characters do. The pictures'
+//!   views are taken from it ([`Landmarks::stance`]).
 //! - **Ankle**: the smallest girth between the foot and a third of the way up; **knee**: the
 //!   smallest between 35 % and 70 % of the way from ankle to thigh top; **toe**: the foot's
 //!   vertex furthest from the ankle's centre line; a foot is there when that reaches more than
@@ -35,6 +36,7 @@ use serde::Serialize;
 
 use super::slice::{Loop, Slicer};
 use super::Side;
+use crate::base::Stance;
 
 /// Height above the lowest point where the legs are first looked for, metres (above a foot's
 /// toes, at or below the ankle).
@@ -62,6 +64,9 @@ pub const FOOT_REACH: f64 = 2.0;
 pub const HOLE_PROBE_M: f64 = 0.15;
 /// Furthest a vertex of the foot may be from the ankle's centre line, metres.
 pub const FOOT_MAX_M: f64 = 0.4;
+/// Feet whose lowest section lies within this of the lowest one's stand, metres: their mean
+/// direction is where the character faces (a foot lifted higher may point anywhere).
+pub const STANDING_M: f64 = 0.03;
 
 /// One section of a followed leg.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -103,6 +108,9 @@ pub struct Foot {
 pub struct Landmarks {
     /// Unit vector pointing up the body.
     pub up: [f64; 3],
+    /// Unit vector where the character faces, square to up (module docs): what its left and
+    /// right, and the pictures' front and side, are taken from.
+    pub facing: [f64; 3],
     /// Legs found at the bottom of the mesh.
     pub legs_found: usize,
     /// The dressed leg's side, where the file holds both.
@@ -125,6 +133,11 @@ pub struct Landmarks {
 }
 
 impl Landmarks {
+    /// The stance the character is pictured in ([`Stance::pictured`]).
+    pub fn stance(&self) -> Stance {
+        Stance::pictured(Vector3::from(self.up), Vector3::from(self.facing))
+    }
+
     /// The section of the profile nearest height `s`.
     pub fn ring_at(&self, s: f64) -> Ring {
         let k = self.profile.partition_point(|r| r.s < s);
@@ -239,6 +252,17 @@ fn signed_by_slimmer_end(
     }
 }
 
+/// How the character in a world-space mesh stands (up from [`anatomical_up`], facing from
+/// its landmarks): what a picture of a finished fit is seen from, where only the leg mesh is
+/// at hand. glTF's stance where neither is found.
+pub fn stance_of(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Stance {
+    let Some(up) = anatomical_up(positions, triangles) else {
+        return Stance::default();
+    };
+    find_landmarks(positions, triangles, up, Side::Left)
+        .map_or_else(|_| Stance::pictured(up, Vector3::z()), |l| l.stance())
+}
+
 /// Finds the landmarks of the leg on `side` (see module docs) of the cleaned mesh, with `up`
 /// the unit vector up the body. The error says what is missing, in a sentence.
 pub fn find_landmarks(
@@ -292,20 +316,9 @@ pub fn find_landmarks(
             foot(positions, &up, &low, &seeds, i)
         })
         .collect();
-    // Forward: where the foot standing lowest points (a lifted foot may point anywhere);
-    // otherwise +Z, glTF's facing.
-    let forward = feet
-        .iter()
-        .zip(&down.rings)
-        .filter_map(|(f, rings)| Some((f.as_ref()?, rings.last()?.s)))
-        .min_by(|a, b| a.1.total_cmp(&b.1))
-        .map_or(Vector3::zeros(), |(f, _)| Vector3::from(f.direction));
-    let forward = if forward.norm() > 1e-9 {
-        forward
-    } else {
-        Vector3::z() - up * up.z
-    };
-    let left = up.cross(&forward);
+    let soles: Vec<Option<f64>> = down.rings.iter().map(|r| Some(r.last()?.s)).collect();
+    let facing = facing(&feet, &soles, &up);
+    let left = up.cross(&facing);
 
     let leftness = |r: &Ring| Vector3::from(r.centre).dot(&left);
     let chosen =
@@ -387,6 +400,7 @@ pub fn find_landmarks(
     profile.retain(|r| r.s >= ankle.s);
     Ok(Landmarks {
         up: up.into(),
+        facing: facing.into(),
         legs_found: seeds.len(),
         side: (seeds.len() > 1).then_some(side),
         sole: sole.coords.into(),
@@ -397,6 +411,26 @@ pub fn find_landmarks(
         thigh_top_kind,
         profile,
     })
+}
+
+/// Where the character faces, square to `up` (module docs): the mean direction of the feet
+/// standing within [`STANDING_M`] of the lowest (`soles[i]`: leg `i`'s lowest section), or +Z
+/// (as square to `up` as it goes) where no foot stands.
+fn facing(feet: &[Option<Foot>], soles: &[Option<f64>], up: &Vector3<f64>) -> Vector3<f64> {
+    let standing: Vec<(Vector3<f64>, f64)> = feet
+        .iter()
+        .zip(soles)
+        .filter_map(|(f, s)| Some((Vector3::from(f.as_ref()?.direction), (*s)?)))
+        .collect();
+    let lowest = standing.iter().map(|f| f.1).fold(f64::INFINITY, f64::min);
+    let feet_point: Vector3<f64> = standing
+        .iter()
+        .filter(|f| f.1 <= lowest + STANDING_M)
+        .map(|f| f.0)
+        .sum();
+    (feet_point - up * up.dot(&feet_point))
+        .try_normalize(1e-9)
+        .unwrap_or_else(|| Stance::upright(*up).facing)
 }
 
 /// Where a followed leg ends without joining another at `last`: a cut, unless its skin goes on
@@ -694,6 +728,49 @@ mod tests {
             assert!((l.ankle.centre[0] - x).abs() < 1e-9, "{side:?}: {l:?}");
             assert_eq!(l.sole[1], y, "{side:?}: sole {:?}", l.sole);
             assert!(l.sole[0] * x > 0.0, "{side:?}: sole {:?}", l.sole);
+        }
+    }
+
+    #[test]
+    fn a_body_turned_about_its_up_faces_where_its_feet_point_and_keeps_its_left() {
+        // Two legs with feet forward (+Z), standing level, the left one at +X; then the same
+        // turned 40° about up.
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        for x in [0.15, -0.15] {
+            add_box(
+                &mut positions,
+                &mut triangles,
+                [x - 0.05, 0.0, -0.05],
+                [x + 0.05, 0.8, 0.05],
+            );
+            add_box(
+                &mut positions,
+                &mut triangles,
+                [x - 0.05, 0.0, 0.06],
+                [x + 0.05, 0.04, 0.25],
+            );
+        }
+        for degrees in [0.0, 40.0] {
+            let turn =
+                nalgebra::Rotation3::from_axis_angle(&Vector3::y_axis(), f64::to_radians(degrees));
+            let turned: Vec<Point3<f64>> = positions.iter().map(|p| turn * p).collect();
+            let l = find_landmarks(&turned, &triangles, Vector3::y(), Side::Left).unwrap();
+            let forward = turn * Vector3::z();
+            let facing = Vector3::from(l.facing);
+            // Within the boxes' toe tips' 11° (a corner of each box is its tip).
+            assert!(facing.dot(&forward) > 0.97, "{degrees}°: facing {facing}");
+            assert!(facing.dot(&Vector3::y()).abs() < 1e-9);
+            let left_leg = turn * Vector3::new(0.15, 0.0, 0.0);
+            assert!(
+                Vector3::from(l.ankle.centre).dot(&left_leg) > 0.0,
+                "{degrees}°"
+            );
+            let stance = l.stance();
+            if degrees == 0.0 {
+                assert_eq!(stance, Stance::default());
+            } else {
+                assert!(stance.facing.dot(&forward) > 0.97, "{stance:?}");
+            }
         }
     }
 }

@@ -9,6 +9,7 @@
 
 use nalgebra::{Point3, Vector3};
 
+use crate::base::Stance;
 use crate::preview::{CameraSettings, View};
 
 /// Vertical field of view of the auto-framed camera, degrees.
@@ -42,6 +43,18 @@ impl Camera {
         } else {
             Vector3::y()
         };
+        Camera::looking(eye, target, world_up, fov_deg, aspect)
+    }
+
+    /// A camera at `eye` looking at `target`, `world_up` roughly up (not along the view).
+    fn looking(
+        eye: Point3<f64>,
+        target: Point3<f64>,
+        world_up: Vector3<f64>,
+        fov_deg: f64,
+        aspect: f64,
+    ) -> Camera {
+        let forward = (target - eye).normalize();
         let right = forward.cross(&world_up).normalize();
         let up = right.cross(&forward);
         Camera {
@@ -64,17 +77,25 @@ impl Camera {
         )
     }
 
-    /// The camera that frames the box `lo..hi` (metres) seen from `view`.
-    pub fn framing(lo: [f64; 3], hi: [f64; 3], view: View, aspect: f64) -> Camera {
+    /// The camera that frames the box `lo..hi` (metres) seen from `view` of a character
+    /// standing in `stance`: its front, its left side, its back, or between front and left.
+    pub fn framing(lo: [f64; 3], hi: [f64; 3], view: View, stance: &Stance, aspect: f64) -> Camera {
         let s = std::f64::consts::FRAC_1_SQRT_2;
+        let (facing, left) = (stance.facing, stance.left());
         let toward_viewer = match view {
-            View::Front => Vector3::z(),
-            View::Side => Vector3::x(),
-            View::Back => -Vector3::z(),
-            View::ThreeQuarter => Vector3::new(s, 0.0, s),
+            View::Front => facing,
+            View::Side => left,
+            View::Back => -facing,
+            View::ThreeQuarter => (facing + left) * s,
         };
         let centre = Point3::from(std::array::from_fn(|k| (lo[k] + hi[k]) / 2.0));
-        let cam = Camera::look_at(centre + toward_viewer, centre, AUTO_FOV_DEG, aspect);
+        let cam = Camera::looking(
+            centre + toward_viewer,
+            centre,
+            stance.up,
+            AUTO_FOV_DEG,
+            aspect,
+        );
         let tan_y = cam.tan_half_fov;
         let tan_x = tan_y * aspect;
         // For each corner: the eye distance from the centre at which it just fits.
@@ -123,7 +144,7 @@ mod tests {
     fn framing_keeps_every_corner_inside_the_picture() {
         let (lo, hi) = ([-0.1, 0.0, -0.08], [0.1, 0.9, 0.12]);
         for view in View::ALL {
-            let cam = Camera::framing(lo, hi, view, 0.75);
+            let cam = Camera::framing(lo, hi, view, &Stance::default(), 0.75);
             for corner in 0..8 {
                 let d = box_corner(lo, hi, corner) - cam.eye;
                 let z = d.dot(&cam.forward);
@@ -142,5 +163,27 @@ mod tests {
         assert!((d - Vector3::new(0.0, 0.0, -1.0)).norm() < 1e-12);
         assert!(cam.direction(0.5, 0.0).y > 0.0, "v = 0 is the top");
         assert!(cam.direction(1.0, 0.5).x > 0.0, "u = 1 is the right");
+    }
+
+    #[test]
+    fn an_auto_framed_camera_looks_at_the_character_as_it_stands() {
+        let facing = Vector3::new(0.6, 0.0, 0.8);
+        let stance = Stance::new(Vector3::y(), facing);
+        let (lo, hi) = ([-0.1, 0.0, -0.08], [0.1, 0.9, 0.12]);
+        let front = Camera::framing(lo, hi, View::Front, &stance, 0.75);
+        assert!(
+            (front.forward + facing).norm() < 1e-9,
+            "{:?}",
+            front.forward
+        );
+        assert!((front.up - Vector3::y()).norm() < 1e-9);
+        // Its left on the image's right, as a person facing it sees it.
+        assert!(
+            (front.right - stance.left()).norm() < 1e-9,
+            "{:?}",
+            front.right
+        );
+        let side = Camera::framing(lo, hi, View::Side, &stance, 0.75);
+        assert!((side.forward + stance.left()).norm() < 1e-9);
     }
 }

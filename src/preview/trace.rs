@@ -31,7 +31,7 @@ use super::screen_bins::{Entry, ScreenBins, ScreenView, SubPixel};
 use super::shading::{self, Lights};
 use super::yarn_lookup::{self, grid_cell, ray_capsule, Capsule, YarnHit, YarnIndex};
 use crate::base::colour::{heat, linear_to_srgb8};
-use crate::base::{PerYarn, SurfaceMesh, YarnGeometry, YarnKind};
+use crate::base::{PerYarn, Stance, SurfaceMesh, YarnGeometry, YarnKind};
 use crate::error::{Error, Result};
 use crate::knit::Yarns;
 use crate::preview::{PreviewSettings, RenderMode};
@@ -51,20 +51,25 @@ pub struct PreviewInput<'a> {
     pub radius_m: PerYarn<f64>,
     /// Linear-RGB yarn colour per kind.
     pub yarn_colour: PerYarn<[f64; 3]>,
+    /// How the character stands: what an auto-framed camera's views are taken from.
+    pub stance: Stance,
 }
 
 impl<'a> PreviewInput<'a> {
-    /// The input for `leg` and `yarns` with the radii and colours of `materials`.
+    /// The input for `leg` and `yarns` with the radii and colours of `materials`, the
+    /// character standing in `stance`.
     pub fn new(
         leg: &'a SurfaceMesh,
         yarns: &'a YarnGeometry,
         materials: &Yarns,
+        stance: Stance,
     ) -> PreviewInput<'a> {
         PreviewInput {
             leg,
             yarns,
             radius_m: YarnKind::ALL.map(|k| materials.get(k).radius_m()),
             yarn_colour: YarnKind::ALL.map(|k| materials.get(k).colour),
+            stance,
         }
     }
 }
@@ -254,7 +259,13 @@ impl<'a> PreparedScene<'a> {
         let aspect = settings.width as f64 / settings.height as f64;
         match &settings.camera {
             Some(c) => Camera::from_settings(c, aspect),
-            None => Camera::framing(self.bounds.0, self.bounds.1, settings.view, aspect),
+            None => Camera::framing(
+                self.bounds.0,
+                self.bounds.1,
+                settings.view,
+                &self.input.stance,
+                aspect,
+            ),
         }
     }
 }
@@ -975,6 +986,7 @@ mod tests {
             yarns: &yarns,
             radius_m: [3e-5, 4e-5, 3e-5],
             yarn_colour: [[0.16, 0.11, 0.09], [0.08, 0.07, 0.10], [0.5; 3]],
+            stance: Stance::default(),
         };
         let scene = PreparedScene::new(input, "test").unwrap();
         let outside = PreviewSettings {

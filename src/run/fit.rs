@@ -3,13 +3,14 @@
 //! measure it, and write the leg with stitch-density attributes, the yarns and the stocking
 //! surface.
 
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 
 use nalgebra::{Point3, Vector3};
 
 use super::{Outcome, Progress, Run, StepProgress};
 use crate::base::settings::number;
-use crate::base::{Material, SurfaceMesh, YarnGeometry, YarnKind};
+use crate::base::{Material, Stance, SurfaceMesh, YarnGeometry, YarnKind};
 use crate::draw;
 use crate::draw::density_map::{self, DensityPictureStyle};
 use crate::error::{Error, Result};
@@ -24,6 +25,7 @@ use crate::knit::tube::{
 };
 use crate::knit::Fabric;
 use crate::knit::{Knit, TubeBottom, TubeHeel, RELAXED_LENGTH_FRACTION};
+use crate::leg::landmarks::stance_of;
 use crate::leg::{
     decode_leg, find_landmarks, leaves_mesh, read_leg_file, Axis, AxisSource, Collider, Landmarks,
     Leg, SkinCurvature,
@@ -164,8 +166,18 @@ pub fn run_fit(
             (surface, dipping)
         })
     });
+    // The pictures are seen from the character's front: its stance, where one is drawn from it
+    // (a leg placed by a given axis has no landmarks yet; they are found for this).
+    let pictured = plan.has(Stage::Encode(File::Fit(FitFile::DensityPicture)))
+        || plan.has(Stage::RenderPreview) && scene.render.camera.is_none();
+    let stance = match (&fit.landmarks, pictured) {
+        (_, false) => Stance::default(),
+        (Some(landmarks), true) => landmarks.stance(),
+        (None, true) => stance_of(&fit.leg.positions, &fit.leg.triangles),
+    };
     let products = FitProducts {
         scene,
+        stance,
         yarns: &yarns,
         leg_mesh: leg_surface(&fit.leg, &leg_fields),
         leg_material: fit.leg.material.clone().unwrap_or_else(Material::skin),
@@ -183,7 +195,7 @@ pub fn run_fit(
             // The real loops (those of the files where they hold loops); a density preview
             // draws no yarn.
             let drawn = preview_loops.as_ref().unwrap_or(&yarns);
-            let input = PreviewInput::new(&products.leg_mesh, drawn, &scene.yarns);
+            let input = PreviewInput::new(&products.leg_mesh, drawn, &scene.yarns, stance);
             crate::preview::encode_preview(input, &scene.render, PREVIEW_FILE)
         })?;
         run.keep(PREVIEW_FILE, bytes);
@@ -375,7 +387,7 @@ fn fit_details(
                     length_m,
                 }),
         },
-        solver: fit.solver.details(scene, fit.still_moving.clone()),
+        solver: fit.solver.details(scene, fit.unsettled_at.clone()),
         contact: ContactDetails {
             method: scene.contact.method,
             offset_m: fit.offset,
@@ -451,9 +463,9 @@ pub struct SolvedFit {
     pub knit: Knit,
     /// What the solver did.
     pub solver: SolverRun,
-    /// Where the grid asked for was still moving when the solver ran out of steps, in words
-    /// (multilevel only); `None` when it converged.
-    pub still_moving: Option<String>,
+    /// Where the grid asked for had not settled when the solver ran out of steps, in words
+    /// ([`unsettled_words`]; multilevel only); `None` when it converged.
+    pub unsettled_at: Option<String>,
     /// Contact counters over all levels.
     pub counters: ContactCounters,
     /// Deepest yarn point inside the leg against the exact triangles, metres (0 when none is).
@@ -591,10 +603,17 @@ pub fn solve_fit(
             level,
         ));
     }
-    // A fit that ran out of steps is written, and says where it was still moving.
-    let still_moving = solver.unsettled().map(|(courses, at)| {
-        let at = Whereabouts::of(&axis, &centreline, landmarks.as_ref(), courses, at);
-        format!("{} were still moving{}", at.courses, at.worst)
+    // A fit that ran out of steps is written, and says where it had not settled.
+    let unsettled_at = solver.unsettled().map(|(level, unsettled)| {
+        let named = landmarks_or_found(scene, &leg, landmarks.as_ref());
+        let at = Whereabouts::of(
+            &axis,
+            &centreline,
+            named.as_deref(),
+            level.courses,
+            unsettled,
+        );
+        unsettled_words(&at, unsettled, level, scene.solver.tolerance)
     });
     let mut contact = levels
         .contact
@@ -647,7 +666,7 @@ pub fn solve_fit(
         offset,
         knit,
         solver,
-        still_moving,
+        unsettled_at,
         counters,
         max_penetration_m,
         axial_range_m,
@@ -934,14 +953,14 @@ impl SolverRun {
         }
     }
 
-    /// Where the grid asked for was still unsettled when it ran out of steps, with its number
-    /// of courses (multilevel only).
-    pub fn unsettled(&self) -> Option<(usize, &OutOfBalance)> {
+    /// The grid asked for, and where it had not settled when it ran out of steps (multilevel
+    /// only).
+    pub fn unsettled(&self) -> Option<(&LevelStats, &OutOfBalance)> {
         match self {
             SolverRun::Paper(_) => None,
             SolverRun::Multilevel(s) => {
                 let fine = s.fine();
-                fine.unsettled.as_ref().map(|at| (fine.courses, at))
+                fine.unsettled.as_ref().map(|at| (fine, at))
             }
         }
     }
@@ -955,7 +974,7 @@ impl SolverRun {
     }
 
     /// The report's `details.solver`.
-    pub fn details(&self, scene: &Scene, still_moving: Option<String>) -> SolverDetails {
+    pub fn details(&self, scene: &Scene, unsettled_at: Option<String>) -> SolverDetails {
         match self {
             SolverRun::Paper(stats) => SolverDetails::Paper {
                 tolerance: scene.solver.tolerance,
@@ -967,7 +986,7 @@ impl SolverRun {
                 tolerance: scene.solver.tolerance,
                 fine_grid_equivalent_iterations: stats.fine_grid_equivalent_iterations(),
                 levels: stats.levels.clone(),
-                still_moving,
+                unsettled_at,
             },
         }
     }
@@ -1046,10 +1065,14 @@ impl Whereabouts {
         let last = courses.saturating_sub(1).max(1) as f64;
         let [from, to] = at.courses.map(|c| c as f64 / last * centreline.length());
         let to_the_toe = centreline.length() > axis.length() + 1e-9;
+        let [first, last] = at.courses;
         let along = format!(
-            "courses {}–{} of {courses} ({:.0}–{:.0} cm {})",
-            at.courses[0],
-            at.courses[1],
+            "{} of {courses} ({:.0}–{:.0} cm {})",
+            if first == last {
+                format!("course {first}")
+            } else {
+                format!("courses {first}–{last}")
+            },
             100.0 * from,
             100.0 * to,
             if to_the_toe {
@@ -1084,11 +1107,56 @@ impl Whereabouts {
             .expect("four landmarks");
         Whereabouts {
             courses: along,
-            worst: format!(", worst {:.0} cm above the sole, at {name}", 100.0 * height),
+            worst: format!(
+                ", worst {:.0} cm above the sole, at {name}",
+                (100.0 * height).max(0.0)
+            ),
             to_the_toe,
             at_foot: *name == "the foot",
         }
     }
+}
+
+/// `landmarks`, or where a given axis left the fit none, the leg's own: what names a place.
+fn landmarks_or_found<'a>(
+    scene: &Scene,
+    leg: &Leg,
+    landmarks: Option<&'a Landmarks>,
+) -> Option<Cow<'a, Landmarks>> {
+    match landmarks {
+        Some(l) => Some(Cow::Borrowed(l)),
+        None => find_landmarks(&leg.positions, &leg.triangles, leg.up, scene.leg.side)
+            .ok()
+            .map(Cow::Owned),
+    }
+}
+
+/// Where a `level` that ran out of steps had not settled, in words, `at` the place of
+/// `unsettled`: the courses whose force step was above the `tolerance`, and whether the residual
+/// was within it (only those courses had not settled); or the grid as a whole, where no point
+/// was above it and only the residual was.
+fn unsettled_words(
+    at: &Whereabouts,
+    unsettled: &OutOfBalance,
+    level: &LevelStats,
+    tolerance: f64,
+) -> String {
+    if unsettled.worst_force_step <= tolerance {
+        return format!(
+            "no course stood out: the residual over the whole grid, {:.1e}, was above the \
+             tolerance",
+            level.residual
+        );
+    }
+    let residual = match level.residual < tolerance {
+        true => format!(
+            "; the residual, {:.1e}, was within the tolerance, their largest force step, {:.1e}, \
+             was not",
+            level.residual, unsettled.worst_force_step
+        ),
+        false => String::new(),
+    };
+    format!("{} had not settled{}{residual}", at.courses, at.worst)
 }
 
 /// The error of a fit stopped as futile on `level`: where along the stocking its courses are out
@@ -1102,15 +1170,8 @@ fn stalled(
     level: &LevelStats,
 ) -> Error {
     let stall = level.stall.expect("a stalled level says where");
-    // Landmarks name the place; a given axis has none yet, so they are looked for here.
-    let found;
-    let landmarks = match landmarks {
-        Some(l) => Some(l),
-        None => {
-            found = find_landmarks(&leg.positions, &leg.triangles, leg.up, scene.leg.side).ok();
-            found.as_ref()
-        }
-    };
+    let named = landmarks_or_found(scene, leg, landmarks);
+    let landmarks = named.as_deref();
     let at = Whereabouts::of(axis, centreline, landmarks, level.courses, &stall);
     let place = format!("{} are out of balance{}", at.courses, at.worst);
     let (to_the_toe, at_foot) = (at.to_the_toe, at.at_foot);
@@ -1268,6 +1329,8 @@ fn axial_range(knit: &Knit, centreline: &Centreline) -> [f64; 2] {
 /// What a fit's files are encoded from.
 struct FitProducts<'a> {
     scene: &'a Scene,
+    /// How the character stands: what the density picture's views are taken from.
+    stance: Stance,
     yarns: &'a YarnGeometry,
     leg_mesh: SurfaceMesh,
     /// The leg's look in `stocking.glb`: its file's material, or skin.
@@ -1330,6 +1393,7 @@ impl FitProducts<'_> {
                     &self.leg_mesh.positions,
                     &self.leg_mesh.triangles,
                     &density,
+                    &self.stance,
                     &DensityPictureStyle::default(),
                 );
                 draw::encode_png(&picture, file.name())
@@ -1407,5 +1471,54 @@ mod tests {
             );
         }
         assert_eq!(message.lines().count(), 1, "{message}");
+    }
+
+    #[test]
+    fn a_grid_out_of_steps_says_which_courses_had_not_settled_and_whether_the_residual_did() {
+        let at = Whereabouts {
+            courses: "courses 297–299 of 300 (73–74 cm down the stocking from its top)".into(),
+            worst: ", worst 1 cm above the sole, at the foot".into(),
+            to_the_toe: true,
+            at_foot: true,
+        };
+        let unsettled = OutOfBalance {
+            courses: [297, 299],
+            worst_point: [0.0; 3],
+            worst_force_step: 1.5e-3,
+        };
+        let level = |residual: f64| LevelStats {
+            wales: 300,
+            courses: 300,
+            iterations: 15_000,
+            restarts: 30,
+            stall_restarts: 0,
+            start_residual: 0.2,
+            residual,
+            force_step: 1.5e-3,
+            max_move: 0.01,
+            converged: false,
+            stall: None,
+            unsettled: Some(unsettled),
+            seconds: 20.0,
+        };
+        let corner = unsettled_words(&at, &unsettled, &level(3.8e-5), 1e-4);
+        assert_eq!(
+            corner,
+            "courses 297–299 of 300 (73–74 cm down the stocking from its top) had not settled, \
+             worst 1 cm above the sole, at the foot; the residual, 3.8e-5, was within the \
+             tolerance, their largest force step, 1.5e-3, was not"
+        );
+        let both = unsettled_words(&at, &unsettled, &level(2e-4), 1e-4);
+        assert!(both.ends_with("at the foot"), "{both}");
+        // No point above the tolerance: the grid as a whole, not the worst point's course.
+        let calm = OutOfBalance {
+            worst_force_step: 5e-5,
+            ..unsettled
+        };
+        let whole = unsettled_words(&at, &calm, &level(2e-4), 1e-4);
+        assert!(
+            whole.starts_with("no course stood out") && !whole.contains("297"),
+            "{whole}"
+        );
     }
 }

@@ -7,9 +7,13 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use nalgebra::Point3;
+
 use super::{Outcome, Run};
+use crate::base::{Stance, SurfaceMesh};
 use crate::error::{Error, Result};
 use crate::export::gltf::read::read_stocking_glb;
+use crate::leg::landmarks::stance_of;
 use crate::plan::{Plan, Stage};
 use crate::preview::{render_prepared, PreparedScene, PreviewInput};
 use crate::report::{Metrics, RenderDetails};
@@ -86,8 +90,9 @@ pub fn run_render(
     // Read first: a bad input must fail before any directory is made.
     let stocking = run.stage(Stage::ReadStocking, || read_stocking_glb(&glb))?;
     run.prepare()?;
-    let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
     let (bytes, stats) = run.stage(Stage::RenderPreview, || -> Result<_> {
+        let stance = stance(&stocking.leg, scene);
+        let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns, stance);
         let prepared = PreparedScene::new(input, &name)?;
         let preview = render_prepared(&prepared, &scene.render);
         let bytes = crate::draw::encode_png(&preview.image, &name)?;
@@ -116,6 +121,16 @@ pub fn run_render(
     run.finish(&loaded.name, metrics, details)
 }
 
+/// How the character in a fit's `leg` stands, for a camera framed from its front; the default
+/// where the scene places the camera itself (the stance would go unused).
+fn stance(leg: &SurfaceMesh, scene: &Scene) -> Stance {
+    if scene.render.camera.is_some() {
+        return Stance::default();
+    }
+    let positions: Vec<Point3<f64>> = leg.positions.iter().map(|&p| Point3::from(p)).collect();
+    stance_of(&positions, &leg.triangles)
+}
+
 /// Renders the input at 1, 4 and 16 samples per pixel and at a 64-sample reference, timing
 /// each, and measures each against the reference. Writes nothing.
 ///
@@ -132,7 +147,12 @@ pub fn run_spp_sweep(scene: &Scene, input: &Path) -> Result<Sweep> {
     let start = Instant::now();
     let stocking = read_stocking_glb(&glb)?;
     let prepared = PreparedScene::new(
-        PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns),
+        PreviewInput::new(
+            &stocking.leg,
+            &stocking.yarns,
+            &scene.yarns,
+            stance(&stocking.leg, scene),
+        ),
         "preview",
     )?;
     let prepare_seconds = start.elapsed().as_secs_f64();

@@ -141,7 +141,8 @@ impl FutilityWatch {
 /// still out of balance and the worst point.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub struct OutOfBalance {
-    /// Lowest and highest course (0 = the bottom ring) whose force step is above the tolerance.
+    /// Lowest and highest course (0 = the first knitted: a stocking's top, an open tube's bottom
+    /// end) whose force step is above the tolerance; the worst point's alone where none is.
     pub courses: [usize; 2],
     /// The point with the largest force step, world space.
     pub worst_point: [f64; 3],
@@ -418,7 +419,7 @@ mod tests {
     }
 
     #[test]
-    fn a_level_that_runs_out_of_iterations_says_where_it_was_still_moving() {
+    fn a_level_that_runs_out_of_iterations_says_where_it_had_not_settled() {
         let terms = ForceTerms {
             stiffness: [1.0; 3],
             connection_factor: None,
@@ -434,6 +435,8 @@ mod tests {
         assert!(at.courses[0] >= 4 && at.courses[1] <= 8, "{at:?}");
         assert!((at.worst_point[1] - 6.0).abs() < 0.5, "{at:?}");
         assert!(at.worst_force_step > 1e-3);
+        // Of the state handed back.
+        assert_eq!(at.worst_force_step, capped.force_step);
         let settled = relax(&mut knit, 1e-3, 100_000);
         assert!(settled.converged, "{settled:?}");
         assert_eq!(settled.unsettled, None);

@@ -15,7 +15,7 @@ use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, Unit, Vector
 use serde_json::{json, Value};
 
 use crate::support::{
-    float, load_sample, point, read_glb_meshes, read_ply, report, run_scene, sample_legs,
+    float, load_sample, point, read_glb_meshes, read_ply, report, run_scene, sample, sample_legs,
     scene_for, stderr, write_raw_meshes, RawMesh,
 };
 
@@ -688,6 +688,56 @@ fn every_sample_turned_or_moved_fits_as_upright_up_to_the_motion() {
             );
         }
     }
+}
+
+/// A whole body turned in its file about its up is pictured from its own front: the report's
+/// facing turns with it, and its density picture is the upright body's.
+#[test]
+fn a_body_turned_in_its_file_is_pictured_from_its_own_front() {
+    let dir = tempfile::tempdir().unwrap();
+    let upright = sample("makehuman_body.glb");
+    let turn = Rotation3::from_axis_angle(&Vector3::y_axis(), 40f64.to_radians());
+    let turned: Vec<RawMesh> = read_glb_meshes(&upright)
+        .iter()
+        .map(|m| RawMesh {
+            positions: m.positions.iter().map(|p| turn * p).collect(),
+            ..m.clone()
+        })
+        .collect();
+    let turned = write_raw_meshes(dir.path(), "turned.glb", &turned);
+    let picture = |leg: &Path| {
+        let top = json!({ "outputs": ["picture"], "tube": { "bottom": "ankle" } });
+        let (run, out) = run_scene(&scene_for(leg, json!({}), top), RESOLUTION, &[]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        let out_dir = run.path().join("out");
+        let facing = &report(&out_dir)["details"]["leg"]["landmarks"]["facing"];
+        let facing = Vector3::from_fn(|k, _| facing[k].as_f64().unwrap());
+        let image = image::open(out_dir.join("density.png")).unwrap().to_rgb8();
+        (facing, image)
+    };
+    let (facing, want) = picture(&upright);
+    let (turned_facing, got) = picture(&turned);
+    assert!(
+        (turn * facing - turned_facing).norm() < 0.02,
+        "facing {turned_facing} against {}",
+        turn * facing
+    );
+    assert_eq!(got.dimensions(), want.dimensions());
+    let differing = got
+        .pixels()
+        .zip(want.pixels())
+        .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b[c]) > 24))
+        .count() as f64
+        / f64::from(want.width() * want.height());
+    println!(
+        "turned 40°: {:.2} % of the pixels differ",
+        100.0 * differing
+    );
+    assert!(
+        differing < 0.01,
+        "{:.2} % of the pixels differ",
+        100.0 * differing
+    );
 }
 
 // ---------------------------------------------------------------------------------------------

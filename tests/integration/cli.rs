@@ -628,7 +628,7 @@ fn a_fit_without_its_preview_says_how_to_render_it() {
 }
 
 #[test]
-fn a_fit_out_of_steps_is_written_and_says_where_it_was_still_moving() {
+fn a_fit_out_of_steps_is_written_and_says_where_it_had_not_settled() {
     let dir = tempfile::tempdir().unwrap();
     let scene = write(
         dir.path(),
@@ -647,25 +647,26 @@ fn a_fit_out_of_steps_is_written_and_says_where_it_was_still_moving() {
             "-q",
         ],
     );
-    // Exit 3: written, not converged; the warning and the report say where it was moving.
+    // Exit 3: written, not converged; the warning and the report say where it had not settled.
     assert_eq!(out.status.code(), Some(3), "{}", stderr(&out));
     let text = stderr(&out);
     assert!(
         text.contains("did not converge within solver.max_steps = 20"),
         "{text}"
     );
-    assert!(text.contains("were still moving"), "{text}");
+    assert!(text.contains("had not settled"), "{text}");
     assert!(
         text.contains("up the stocking from its bottom end"),
         "{text}"
     );
     let r = report(&dir.path().join("out"));
     assert_eq!(r["metrics"]["converged"], false);
-    let place = r["details"]["solver"]["still_moving"].as_str().unwrap();
+    let place = r["details"]["solver"]["unsettled_at"].as_str().unwrap();
     assert!(
-        place.starts_with("courses ") && text.contains(place),
+        place.starts_with("course") && text.contains(place),
         "{place}"
     );
+    assert!(place.contains("cm above the sole, at "), "{place}");
     let fine = r["details"]["solver"]["levels"]
         .as_array()
         .unwrap()

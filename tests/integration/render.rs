@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::sync::OnceLock;
 
-use knitfit::base::{Direction, Segment, SurfaceMesh, YarnGeometry, YarnKind};
+use knitfit::base::{Direction, Segment, Stance, SurfaceMesh, YarnGeometry, YarnKind};
 use knitfit::export::gltf::read::read_stocking_glb;
 use knitfit::preview::{render_preview, PreviewBuffers, PreviewInput};
 use knitfit::preview::{CameraSettings, PreviewSettings};
@@ -58,7 +58,12 @@ fn thick_fit() -> &'static (tempfile::TempDir, PathBuf, Scene) {
 fn buffers(settings: &PreviewSettings) -> PreviewBuffers {
     let (_, glb, scene) = thick_fit();
     let stocking = read_stocking_glb(glb).unwrap();
-    let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
+    let input = PreviewInput::new(
+        &stocking.leg,
+        &stocking.yarns,
+        &scene.yarns,
+        Stance::default(),
+    );
     render_preview(input, settings, "test").unwrap().buffers
 }
 
@@ -201,7 +206,12 @@ fn broken_geometry_renders_finite_pixels_without_panicking() {
     stocking.leg.triangles.push([0, 0, 0]);
     stocking.leg.triangles.push([0, 1, u32::MAX]);
     stocking.leg.normals[5] = [0.0, 0.0, 0.0];
-    let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
+    let input = PreviewInput::new(
+        &stocking.leg,
+        &stocking.yarns,
+        &scene.yarns,
+        Stance::default(),
+    );
     let settings = PreviewSettings {
         width: 64,
         height: 128,
@@ -440,6 +450,7 @@ fn yarn_finer_than_a_pixel_averages_to_the_true_coverage_without_moire() {
         yarns: &yarns,
         radius_m: [radius; 3],
         yarn_colour: [[0.1; 3]; 3],
+        stance: Stance::default(),
     };
     let distance = 0.5;
     let fov = 2.0 * (0.048f64 / distance).atan().to_degrees();
@@ -484,7 +495,12 @@ fn yarn_finer_than_a_pixel_averages_to_the_true_coverage_without_moire() {
 fn density_mode_draws_the_denser_ankle_hotter_than_the_thigh_with_a_colour_bar() {
     let (_, glb, scene) = thick_fit();
     let stocking = read_stocking_glb(glb).unwrap();
-    let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
+    let input = PreviewInput::new(
+        &stocking.leg,
+        &stocking.yarns,
+        &scene.yarns,
+        Stance::default(),
+    );
     let settings = PreviewSettings {
         mode: knitfit::preview::RenderMode::Density,
         ..tall_settings()
@@ -577,7 +593,12 @@ fn loop_sheerness(needles: u32, stitch_m: [f64; 2], denier: f64) -> [(f64, f64);
     let scene = Scene::load(Some(&scene_path)).unwrap();
     let stocking = read_stocking_glb(&dir.path().join("out/stocking.glb")).unwrap();
     let (lo, hi) = yarn_heights(&stocking.yarns);
-    let input = PreviewInput::new(&stocking.leg, &stocking.yarns, &scene.yarns);
+    let input = PreviewInput::new(
+        &stocking.leg,
+        &stocking.yarns,
+        &scene.yarns,
+        Stance::default(),
+    );
     let b = render_preview(input, &tall_settings(), "test")
         .unwrap()
         .buffers;
