@@ -463,8 +463,9 @@ pub struct SolvedFit {
     pub knit: Knit,
     /// What the solver did.
     pub solver: SolverRun,
-    /// Where the grid asked for had not settled when the solver ran out of steps, in words
-    /// ([`unsettled_words`]; multilevel only); `None` when it converged.
+    /// Where the grid asked for had not settled when the solver ran out of steps, in words:
+    /// the courses, their place and whether the residual was within the tolerance (multilevel
+    /// only); `None` when it converged.
     pub unsettled_at: Option<String>,
     /// Contact counters over all levels.
     pub counters: ContactCounters,
