@@ -177,9 +177,9 @@ pub struct LandmarkDetails {
     /// Unit vector up the body, world space.
     pub up: [f64; 3],
     /// Unit vector where the character faces, square to up, world space: where its standing
-    /// feet point, on average, or +Z without a foot. The pictures are seen from it (from +Z
-    /// where that is within 20°, as glTF characters face).
-    pub facing: [f64; 3],
+    /// feet point, on average; `null` without a foot or where they disagree. The pictures are
+    /// seen from it (from +Z where that is within 20°, as glTF characters face, or `null`).
+    pub facing: Option<[f64; 3]>,
     /// Legs found at the bottom of the mesh.
     pub legs_found: usize,
     /// The dressed leg's side (`left`, `right`); `null` when the file holds one leg.

@@ -47,14 +47,19 @@ impl Default for Stance {
 
 impl Stance {
     /// The stance with `up` and `facing` made unit and square (`facing`'s part along `up`
-    /// removed); the default where either is degenerate.
+    /// removed); the default where `up` is degenerate or not finite, [`Stance::upright`] where
+    /// `facing` is.
     pub fn new(up: Vec3, facing: Vec3) -> Stance {
-        let Some(up) = up.try_normalize(1e-12) else {
+        let unit = |v: Vec3| {
+            v.try_normalize(1e-12)
+                .filter(|v| v.iter().all(|c| c.is_finite()))
+        };
+        let Some(up) = unit(up) else {
             return Stance::default();
         };
-        match (facing - up * up.dot(&facing)).try_normalize(1e-12) {
+        match unit(facing - up * up.dot(&facing)) {
             Some(facing) => Stance { up, facing },
-            None => Stance::default(),
+            None => Stance::upright(up),
         }
     }
 
@@ -76,7 +81,7 @@ impl Stance {
     /// wherever it roughly keeps that convention (up within [`UP_SNAP_DEG`] of +Y, then facing
     /// within [`FACING_SNAP_DEG`] of +Z), so that a file that keeps it is seen along its axes,
     /// its body's lean and its feet's toe-out not taken for a turn; its own where it does not
-    /// (a character turned or lying in its file).
+    /// (a character turned in its file, or tilted from the file axis nearest its up).
     pub fn pictured(up: Vec3, facing: Vec3) -> Stance {
         let near = |a: &Vec3, b: &Vec3, degrees: f64| {
             a.try_normalize(1e-12)
@@ -99,6 +104,16 @@ impl Stance {
     /// The character's left: `up × facing`.
     pub fn left(&self) -> Vec3 {
         self.up.cross(&self.facing)
+    }
+
+    /// `p`'s coordinates along the character's left, up and facing.
+    pub fn coordinates(&self, p: [f64; 3]) -> [f64; 3] {
+        [self.left(), self.up, self.facing].map(|a| a.x * p[0] + a.y * p[1] + a.z * p[2])
+    }
+
+    /// The world point with coordinates `c` along the character's left, up and facing.
+    pub fn world(&self, c: [f64; 3]) -> [f64; 3] {
+        (self.left() * c[0] + self.up * c[1] + self.facing * c[2]).into()
     }
 }
 
@@ -132,5 +147,25 @@ mod tests {
             Stance::default()
         );
         assert_eq!(Stance::new(Vec3::y(), Vec3::y()), Stance::default());
+        // Coordinates along left, up and facing, and back: exact in glTF's stance.
+        let p = [0.1234, -0.8, 0.333];
+        assert_eq!(Stance::default().coordinates(p), p);
+        assert_eq!(Stance::default().world(p), p);
+        let c = stance.coordinates(p);
+        let back = Vec3::from(stance.world(c));
+        assert!((back - Vec3::from(p)).norm() < 1e-12, "{back}");
+        assert!((c[2] - Vec3::from(p).dot(&turned)).abs() < 1e-12);
+        assert_eq!(
+            Stance::new(Vec3::z(), Vec3::z()),
+            Stance::upright(Vec3::z())
+        );
+        assert_eq!(
+            Stance::new(Vec3::y(), Vec3::new(f64::NAN, 0.0, 1.0)),
+            Stance::default()
+        );
+        assert_eq!(
+            Stance::new(Vec3::repeat(f64::INFINITY), Vec3::z()),
+            Stance::default()
+        );
     }
 }

@@ -6,10 +6,10 @@
 //!
 //! - **Orthographic views at one scale.** Lengths compare across the two views and along the leg
 //!   (a perspective camera would enlarge whatever is nearer to it). Both views are framed on the
-//!   bounding box of the drawn triangles with a margin. glTF's character faces +Z with +Y up, so
-//!   the *front* view looks from +Z towards −Z (+X to the right) and the *side* view from +X
-//!   towards −X (−Z to the right: the character's front is on the left, and for a left leg this
-//!   is its outer side).
+//!   drawn triangles' extent along their axes, with a margin. They are taken from how the
+//!   character stands ([`Stance`]): the *front* view looks at its face (its left on the right;
+//!   for glTF's stance, from +Z with +X to the right), the *side* view at its left (its front on
+//!   the left: for a left leg, its outer side).
 //! - **Colour.** Density maps linearly over [min, max] of the covered vertices (density > 0) onto
 //!   the heat map, the same as the vertex colours of `stocking.glb` and `leg.ply` and the
 //!   colour bar's ([`super::colour_bar`]). Vertices without yarn (density 0, negative or not
@@ -74,7 +74,8 @@ const MAX_SUPERSAMPLE: u32 = 4;
 /// memory; `supersample` is lowered to stay within it.
 const MAX_SAMPLES_HIGH: u32 = 4096;
 
-/// One orthographic camera: world directions of the image's right and of the viewer; up is +Y.
+/// One orthographic camera: world directions of the image's right and of the viewer; up is the
+/// character's.
 #[derive(Clone, Copy, Debug)]
 struct ViewFrame {
     label: &'static str,

@@ -14,9 +14,11 @@
 //!   followed up and down from slice to slice: the loop that encloses the last centre, or else
 //!   the nearest within [`MAX_STEP_M`]. Following stops where the mesh is cut, or where two legs'
 //!   loops become one (the crotch).
-//! - **Facing and side**: the character faces where its standing feet point, on average; its
-//!   left is `up × facing`. With no foot it faces +Z, as glTF characters do. The pictures'
-//!   views are taken from it ([`Landmarks::stance`]).
+//! - **Facing and side**: the character faces where its standing feet point, on average, where
+//!   they agree within [`FEET_AGREE_DEG`]; its left is `up × facing`. Where they disagree, left
+//!   is taken from the lowest foot alone; with no foot the character faces +Z, as glTF
+//!   characters do. The pictures' views are taken from it ([`Landmarks::stance`]). A kneeling
+//!   figure, its toes pointing back, is taken to face backwards.
 //! - **Ankle**: the smallest girth between the foot and a third of the way up; **knee**: the
 //!   smallest between 35 % and 70 % of the way from ankle to thigh top; **toe**: the foot's
 //!   vertex furthest from the ankle's centre line; a foot is there when that reaches more than
@@ -67,6 +69,9 @@ pub const FOOT_MAX_M: f64 = 0.4;
 /// Feet whose lowest section lies within this of the lowest one's stand, metres: their mean
 /// direction is where the character faces (a foot lifted higher may point anywhere).
 pub const STANDING_M: f64 = 0.03;
+/// Standing feet further apart in direction than this, degrees, do not say where the character
+/// faces: each foot's toe-out is 5–15°; a foot turned out further is a pose.
+pub const FEET_AGREE_DEG: f64 = 45.0;
 
 /// One section of a followed leg.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -109,8 +114,9 @@ pub struct Landmarks {
     /// Unit vector pointing up the body.
     pub up: [f64; 3],
     /// Unit vector where the character faces, square to up (module docs): what its left and
-    /// right, and the pictures' front and side, are taken from.
-    pub facing: [f64; 3],
+    /// right, and the pictures' front and side, are taken from; `None` where no foot stands, or
+    /// the standing feet disagree.
+    pub facing: Option<[f64; 3]>,
     /// Legs found at the bottom of the mesh.
     pub legs_found: usize,
     /// The dressed leg's side, where the file holds both.
@@ -133,9 +139,14 @@ pub struct Landmarks {
 }
 
 impl Landmarks {
-    /// The stance the character is pictured in ([`Stance::pictured`]).
+    /// The stance the character is pictured in ([`Stance::pictured`]): glTF's facing, +Z, where
+    /// its feet do not say.
     pub fn stance(&self) -> Stance {
-        Stance::pictured(Vector3::from(self.up), Vector3::from(self.facing))
+        let up = Vector3::from(self.up);
+        let facing = self
+            .facing
+            .map_or_else(|| Stance::upright(up).facing, Vector3::from);
+        Stance::pictured(up, facing)
     }
 
     /// The section of the profile nearest height `s`.
@@ -318,7 +329,11 @@ pub fn find_landmarks(
         .collect();
     let soles: Vec<Option<f64>> = down.rings.iter().map(|r| Some(r.last()?.s)).collect();
     let facing = facing(&feet, &soles, &up);
-    let left = up.cross(&facing);
+    // Left and right: from the facing, or where the feet disagree, the lowest foot's direction.
+    let forward = facing
+        .or_else(|| lowest_foot(&feet, &soles))
+        .unwrap_or_else(|| Stance::upright(up).facing);
+    let left = up.cross(&forward);
 
     let leftness = |r: &Ring| Vector3::from(r.centre).dot(&left);
     let chosen =
@@ -400,7 +415,7 @@ pub fn find_landmarks(
     profile.retain(|r| r.s >= ankle.s);
     Ok(Landmarks {
         up: up.into(),
-        facing: facing.into(),
+        facing: facing.map(Into::into),
         legs_found: seeds.len(),
         side: (seeds.len() > 1).then_some(side),
         sole: sole.coords.into(),
@@ -413,24 +428,43 @@ pub fn find_landmarks(
     })
 }
 
-/// Where the character faces, square to `up` (module docs): the mean direction of the feet
-/// standing within [`STANDING_M`] of the lowest (`soles[i]`: leg `i`'s lowest section), or +Z
-/// (as square to `up` as it goes) where no foot stands.
-fn facing(feet: &[Option<Foot>], soles: &[Option<f64>], up: &Vector3<f64>) -> Vector3<f64> {
-    let standing: Vec<(Vector3<f64>, f64)> = feet
-        .iter()
+/// The feet with a direction, each with the height of its leg's lowest section (`soles[i]`).
+fn feet_with_soles(feet: &[Option<Foot>], soles: &[Option<f64>]) -> Vec<(Vector3<f64>, f64)> {
+    feet.iter()
         .zip(soles)
         .filter_map(|(f, s)| Some((Vector3::from(f.as_ref()?.direction), (*s)?)))
-        .collect();
-    let lowest = standing.iter().map(|f| f.1).fold(f64::INFINITY, f64::min);
-    let feet_point: Vector3<f64> = standing
+        .collect()
+}
+
+/// Where the character faces, square to `up` (module docs): the mean direction of the feet
+/// standing within [`STANDING_M`] of the lowest; `None` where no foot stands, or two standing
+/// feet point more than [`FEET_AGREE_DEG`] apart (a foot turned out, a dancer's position: their
+/// mean would turn the character).
+fn facing(feet: &[Option<Foot>], soles: &[Option<f64>], up: &Vector3<f64>) -> Option<Vector3<f64>> {
+    let feet = feet_with_soles(feet, soles);
+    let lowest = feet.iter().map(|f| f.1).fold(f64::INFINITY, f64::min);
+    let standing: Vec<Vector3<f64>> = feet
         .iter()
         .filter(|f| f.1 <= lowest + STANDING_M)
         .map(|f| f.0)
-        .sum();
-    (feet_point - up * up.dot(&feet_point))
-        .try_normalize(1e-9)
-        .unwrap_or_else(|| Stance::upright(*up).facing)
+        .collect();
+    let agree = FEET_AGREE_DEG.to_radians().cos();
+    let disagree = standing
+        .iter()
+        .enumerate()
+        .any(|(i, a)| standing[i + 1..].iter().any(|b| a.dot(b) < agree));
+    let sum: Vector3<f64> = standing.iter().sum();
+    (!disagree)
+        .then(|| (sum - up * up.dot(&sum)).try_normalize(1e-9))
+        .flatten()
+}
+
+/// The direction of the foot standing lowest (a lifted foot may point anywhere), if any.
+fn lowest_foot(feet: &[Option<Foot>], soles: &[Option<f64>]) -> Option<Vector3<f64>> {
+    feet_with_soles(feet, soles)
+        .into_iter()
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|f| f.0)
 }
 
 /// Where a followed leg ends without joining another at `last`: a cut, unless its skin goes on
@@ -756,7 +790,7 @@ mod tests {
             let turned: Vec<Point3<f64>> = positions.iter().map(|p| turn * p).collect();
             let l = find_landmarks(&turned, &triangles, Vector3::y(), Side::Left).unwrap();
             let forward = turn * Vector3::z();
-            let facing = Vector3::from(l.facing);
+            let facing = Vector3::from(l.facing.expect("both feet point forward"));
             // Within the boxes' toe tips' 11° (a corner of each box is its tip).
             assert!(facing.dot(&forward) > 0.97, "{degrees}°: facing {facing}");
             assert!(facing.dot(&Vector3::y()).abs() < 1e-9);
@@ -772,5 +806,56 @@ mod tests {
                 assert!(stance.facing.dot(&forward) > 0.97, "{stance:?}");
             }
         }
+    }
+
+    /// Two legs, the right one's foot turned out 60° about its ankle and raised `lift` metres.
+    fn a_foot_turned_out(lift: f64) -> (Vec<Point3<f64>>, Vec<[u32; 3]>) {
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        for x in [0.15, -0.15] {
+            let y = if x < 0.0 { lift } else { 0.0 };
+            add_box(
+                &mut positions,
+                &mut triangles,
+                [x - 0.05, y, -0.05],
+                [x + 0.05, 0.8, 0.05],
+            );
+            add_box(
+                &mut positions,
+                &mut triangles,
+                [x - 0.05, y, 0.06],
+                [x + 0.05, y + 0.04, 0.25],
+            );
+            if x < 0.0 {
+                // Outwards, towards −X, about the leg's own axis.
+                let turn =
+                    nalgebra::Rotation3::from_axis_angle(&Vector3::y_axis(), -60f64.to_radians());
+                let n = positions.len();
+                for p in &mut positions[n - 8..] {
+                    let axis = Point3::new(x, p.y, 0.0);
+                    *p = axis + turn * (*p - axis);
+                }
+            }
+        }
+        (positions, triangles)
+    }
+
+    #[test]
+    fn feet_that_disagree_do_not_turn_the_character_and_a_lifted_one_is_not_asked() {
+        // Both standing: they disagree by 60°, so the feet do not say where it faces, and it
+        // is pictured along the file's axes.
+        let (positions, triangles) = a_foot_turned_out(0.0);
+        let l = find_landmarks(&positions, &triangles, Vector3::y(), Side::Left).unwrap();
+        assert_eq!(l.facing, None, "{l:?}");
+        assert_eq!(l.stance(), Stance::default());
+        // The turned foot lifted 5 cm: the standing one says where the character faces.
+        let (positions, triangles) = a_foot_turned_out(0.05);
+        let l = find_landmarks(&positions, &triangles, Vector3::y(), Side::Left).unwrap();
+        let facing = Vector3::from(l.facing.expect("one foot stands"));
+        assert!(facing.dot(&Vector3::z()) > 0.97, "{facing}");
+        assert!(
+            l.ankle.centre[0] > 0.0,
+            "the left leg: {:?}",
+            l.ankle.centre
+        );
     }
 }

@@ -77,8 +77,9 @@ impl Camera {
         )
     }
 
-    /// The camera that frames the box `lo..hi` (metres) seen from `view` of a character
-    /// standing in `stance`: its front, its left side, its back, or between front and left.
+    /// The camera that frames the box `lo..hi` (metres, along the character's left, up and
+    /// facing: [`Stance::coordinates`]) seen from `view` of a character standing in `stance`:
+    /// its front, its left side, its back, or between front and left.
     pub fn framing(lo: [f64; 3], hi: [f64; 3], view: View, stance: &Stance, aspect: f64) -> Camera {
         let s = std::f64::consts::FRAC_1_SQRT_2;
         let (facing, left) = (stance.facing, stance.left());
@@ -88,7 +89,7 @@ impl Camera {
             View::Back => -facing,
             View::ThreeQuarter => (facing + left) * s,
         };
-        let centre = Point3::from(std::array::from_fn(|k| (lo[k] + hi[k]) / 2.0));
+        let centre = Point3::from(stance.world(std::array::from_fn(|k| (lo[k] + hi[k]) / 2.0)));
         let cam = Camera::looking(
             centre + toward_viewer,
             centre,
@@ -101,7 +102,7 @@ impl Camera {
         // For each corner: the eye distance from the centre at which it just fits.
         let mut distance: f64 = 1e-6;
         for corner in 0..8 {
-            let d = box_corner(lo, hi, corner) - centre;
+            let d = Point3::from(stance.world(box_corner(lo, hi, corner))) - centre;
             let (x, y, z) = (d.dot(&cam.right), d.dot(&cam.up), d.dot(&toward_viewer));
             let need_x = x.abs() * (1.0 + MARGIN) / tan_x + z;
             let need_y = y.abs() * (1.0 + MARGIN) / tan_y + z;
@@ -126,14 +127,8 @@ impl Camera {
 }
 
 /// Corner `corner` (0–7: bit `k` picks `hi` on axis `k`) of the box `lo`–`hi`.
-fn box_corner(lo: [f64; 3], hi: [f64; 3], corner: usize) -> Point3<f64> {
-    Point3::from(std::array::from_fn(|k| {
-        if corner >> k & 1 == 1 {
-            hi[k]
-        } else {
-            lo[k]
-        }
-    }))
+fn box_corner(lo: [f64; 3], hi: [f64; 3], corner: usize) -> [f64; 3] {
+    std::array::from_fn(|k| if corner >> k & 1 == 1 { hi[k] } else { lo[k] })
 }
 
 #[cfg(test)]
@@ -146,7 +141,7 @@ mod tests {
         for view in View::ALL {
             let cam = Camera::framing(lo, hi, view, &Stance::default(), 0.75);
             for corner in 0..8 {
-                let d = box_corner(lo, hi, corner) - cam.eye;
+                let d = Point3::from(box_corner(lo, hi, corner)) - cam.eye;
                 let z = d.dot(&cam.forward);
                 assert!(z > 0.0, "{view:?}: corner behind the eye");
                 let x = d.dot(&cam.right) / (z * cam.tan_half_fov * cam.aspect);

@@ -166,6 +166,7 @@ pub struct PreparedScene<'a> {
     layer_m: f64,
     coverage: Option<&'a [f32]>,
     density: Option<&'a [f32]>,
+    /// The box the auto-framed camera frames, along the character's left, up and facing.
     bounds: ([f64; 3], [f64; 3]),
 }
 
@@ -210,20 +211,29 @@ impl<'a> PreparedScene<'a> {
             }
         }
         // The camera frames the stocking, not the whole file (a body): the yarn's points where
-        // it has any within the leg's box, else the leg.
-        let mut yarn_lo = [f64::INFINITY; 3];
-        let mut yarn_hi = [f64::NEG_INFINITY; 3];
-        for p in &input.yarns.positions {
-            if (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k]) {
+        // it has any within the leg's box, else the leg; boxed along the character's left, up
+        // and facing, so a character turned in its file is framed as tightly as an upright one.
+        let stance = &input.stance;
+        let box_of = |points: &mut dyn Iterator<Item = [f64; 3]>| {
+            let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+            for c in points.map(|p| stance.coordinates(p)) {
                 for k in 0..3 {
-                    yarn_lo[k] = yarn_lo[k].min(p[k]);
-                    yarn_hi[k] = yarn_hi[k].max(p[k]);
+                    lo[k] = lo[k].min(c[k]);
+                    hi[k] = hi[k].max(c[k]);
                 }
             }
-        }
-        if (0..3).all(|k| yarn_lo[k] <= yarn_hi[k]) {
-            (lo, hi) = (yarn_lo, yarn_hi);
-        }
+            (0..3).all(|k| lo[k] <= hi[k]).then_some((lo, hi))
+        };
+        let in_leg_box = |p: &&[f64; 3]| (0..3).all(|k| p[k] >= lo[k] && p[k] <= hi[k]);
+        let yarn = box_of(&mut input.yarns.positions.iter().filter(in_leg_box).copied());
+        let leg_box = || {
+            let corners = triangles
+                .iter()
+                .flatten()
+                .map(|&i| vertices[i as usize].coords.into());
+            box_of(&mut corners.collect::<Vec<[f64; 3]>>().into_iter())
+        };
+        (lo, hi) = yarn.or_else(leg_box).unwrap_or((lo, hi));
         let mesh = TriMesh::new(vertices, triangles.clone()).map_err(|e| Error::Encode {
             what: what.into(),
             message: format!("the leg has no triangle to render: {e}"),

@@ -15,8 +15,8 @@ use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, Unit, Vector
 use serde_json::{json, Value};
 
 use crate::support::{
-    float, load_sample, point, read_glb_meshes, read_ply, report, run_scene, sample, sample_legs,
-    scene_for, stderr, write_raw_meshes, RawMesh,
+    float, knitfit, load_sample, point, read_glb_meshes, read_ply, report, run_scene, sample,
+    sample_legs, scene_for, stderr, write_raw_meshes, RawMesh,
 };
 
 /// The tube of every fit here: small, as the figures compared do not need more.
@@ -691,7 +691,8 @@ fn every_sample_turned_or_moved_fits_as_upright_up_to_the_motion() {
 }
 
 /// A whole body turned in its file about its up is pictured from its own front: the report's
-/// facing turns with it, and its density picture is the upright body's.
+/// facing turns with it, its density picture and its preview are the upright body's, and
+/// `knitfit render` of its `stocking.glb` frames it as the fit's own preview did.
 #[test]
 fn a_body_turned_in_its_file_is_pictured_from_its_own_front() {
     let dir = tempfile::tempdir().unwrap();
@@ -705,39 +706,64 @@ fn a_body_turned_in_its_file_is_pictured_from_its_own_front() {
         })
         .collect();
     let turned = write_raw_meshes(dir.path(), "turned.glb", &turned);
-    let picture = |leg: &Path| {
-        let top = json!({ "outputs": ["picture"], "tube": { "bottom": "ankle" } });
+    // The preview in density mode: the leg's colours, no yarn, so two fits compare.
+    let render = [
+        "--width", "96", "--height", "128", "--spp", "1", "--mode", "density",
+    ];
+    let pictures = |leg: &Path| {
+        let top = json!({
+            "outputs": ["picture", "glb", "preview"],
+            "tube": { "bottom": "ankle" },
+            "render": { "width": 96, "height": 128, "spp": 1, "mode": "density" },
+        });
         let (run, out) = run_scene(&scene_for(leg, json!({}), top), RESOLUTION, &[]);
         assert!(out.status.success(), "{}", stderr(&out));
         let out_dir = run.path().join("out");
         let facing = &report(&out_dir)["details"]["leg"]["landmarks"]["facing"];
         let facing = Vector3::from_fn(|k, _| facing[k].as_f64().unwrap());
-        let image = image::open(out_dir.join("density.png")).unwrap().to_rgb8();
-        (facing, image)
+        let open = |name: &str| image::open(out_dir.join(name)).unwrap().to_rgb8();
+        let rendered = knitfit(
+            run.path(),
+            &[
+                &["render", "out", "--out", "rendered.png", "-q"],
+                &render[..],
+            ]
+            .concat(),
+        );
+        assert!(rendered.status.success(), "{}", stderr(&rendered));
+        let same = std::fs::read(out_dir.join("preview.png")).unwrap()
+            == std::fs::read(run.path().join("rendered.png")).unwrap();
+        assert!(same, "knitfit render frames it as the fit's preview did");
+        (facing, open("density.png"), open("preview.png"))
     };
-    let (facing, want) = picture(&upright);
-    let (turned_facing, got) = picture(&turned);
+    let (facing, density, preview) = pictures(&upright);
+    let (turned_facing, turned_density, turned_preview) = pictures(&turned);
     assert!(
         (turn * facing - turned_facing).norm() < 0.02,
         "facing {turned_facing} against {}",
         turn * facing
     );
-    assert_eq!(got.dimensions(), want.dimensions());
-    let differing = got
-        .pixels()
-        .zip(want.pixels())
-        .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b[c]) > 24))
-        .count() as f64
-        / f64::from(want.width() * want.height());
-    println!(
-        "turned 40°: {:.2} % of the pixels differ",
-        100.0 * differing
-    );
-    assert!(
-        differing < 0.01,
-        "{:.2} % of the pixels differ",
-        100.0 * differing
-    );
+    for (name, got, want) in [
+        ("density.png", turned_density, density),
+        ("preview.png", turned_preview, preview),
+    ] {
+        assert_eq!(got.dimensions(), want.dimensions(), "{name}");
+        let differing = got
+            .pixels()
+            .zip(want.pixels())
+            .filter(|(a, b)| (0..3).any(|c| a[c].abs_diff(b[c]) > 24))
+            .count() as f64
+            / f64::from(want.width() * want.height());
+        println!(
+            "{name} turned 40°: {:.2} % of the pixels differ",
+            100.0 * differing
+        );
+        assert!(
+            differing < 0.01,
+            "{name}: {:.2} % of the pixels differ",
+            100.0 * differing
+        );
+    }
 }
 
 // ---------------------------------------------------------------------------------------------
