@@ -748,13 +748,7 @@ mod tests {
         // Two legs 0.8 m tall, 0.3 m apart, each with a foot forward (+Z); the right one (−X,
         // since the body faces +Z) stands 3 cm lower. Its foot is within a foot's reach of the
         // left leg, and lower.
-        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
-        for (x, y) in [(0.15, 0.0), (-0.15, -0.03)] {
-            let leg = ([x - 0.05, y, -0.05], [x + 0.05, y + 0.8, 0.05]);
-            let foot = ([x - 0.05, y, 0.06], [x + 0.05, y + 0.04, 0.25]);
-            add_box(&mut positions, &mut triangles, leg.0, leg.1);
-            add_box(&mut positions, &mut triangles, foot.0, foot.1);
-        }
+        let (positions, triangles) = legs_with_feet(0.0, -0.03);
         for (side, x, y) in [(Side::Left, 0.15, 0.0), (Side::Right, -0.15, -0.03)] {
             let l = find_landmarks(&positions, &triangles, Vector3::y(), side).unwrap();
             assert_eq!(l.legs_found, 2);
@@ -769,21 +763,7 @@ mod tests {
     fn a_body_turned_about_its_up_faces_where_its_feet_point_and_keeps_its_left() {
         // Two legs with feet forward (+Z), standing level, the left one at +X; then the same
         // turned 40° about up.
-        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
-        for x in [0.15, -0.15] {
-            add_box(
-                &mut positions,
-                &mut triangles,
-                [x - 0.05, 0.0, -0.05],
-                [x + 0.05, 0.8, 0.05],
-            );
-            add_box(
-                &mut positions,
-                &mut triangles,
-                [x - 0.05, 0.0, 0.06],
-                [x + 0.05, 0.04, 0.25],
-            );
-        }
+        let (positions, triangles) = legs_with_feet(0.0, 0.0);
         for degrees in [0.0, 40.0] {
             let turn =
                 nalgebra::Rotation3::from_axis_angle(&Vector3::y_axis(), f64::to_radians(degrees));
@@ -808,33 +788,23 @@ mod tests {
         }
     }
 
-    /// Two legs, the right one's foot turned out 60° about its ankle and raised `lift` metres.
-    fn a_foot_turned_out(lift: f64) -> (Vec<Point3<f64>>, Vec<[u32; 3]>) {
+    /// Two legs 0.8 m tall, 0.3 m apart, the left one (+X) standing at y = 0 and the right one
+    /// `right_lift` metres higher, each with a box foot forward (+Z); the right foot turned out
+    /// `right_turn_deg` about its leg's axis, towards −X.
+    fn legs_with_feet(right_turn_deg: f64, right_lift: f64) -> (Vec<Point3<f64>>, Vec<[u32; 3]>) {
         let (mut positions, mut triangles) = (Vec::new(), Vec::new());
-        for x in [0.15, -0.15] {
-            let y = if x < 0.0 { lift } else { 0.0 };
-            add_box(
-                &mut positions,
-                &mut triangles,
-                [x - 0.05, y, -0.05],
-                [x + 0.05, 0.8, 0.05],
-            );
-            add_box(
-                &mut positions,
-                &mut triangles,
-                [x - 0.05, y, 0.06],
-                [x + 0.05, y + 0.04, 0.25],
-            );
-            if x < 0.0 {
-                // Outwards, towards −X, about the leg's own axis.
-                let turn =
-                    nalgebra::Rotation3::from_axis_angle(&Vector3::y_axis(), -60f64.to_radians());
-                let n = positions.len();
-                for p in &mut positions[n - 8..] {
-                    let axis = Point3::new(x, p.y, 0.0);
-                    *p = axis + turn * (*p - axis);
-                }
-            }
+        for (x, y) in [(0.15, 0.0), (-0.15, right_lift)] {
+            let leg = ([x - 0.05, y, -0.05], [x + 0.05, y + 0.8, 0.05]);
+            let foot = ([x - 0.05, y, 0.06], [x + 0.05, y + 0.04, 0.25]);
+            add_box(&mut positions, &mut triangles, leg.0, leg.1);
+            add_box(&mut positions, &mut triangles, foot.0, foot.1);
+        }
+        let turn =
+            nalgebra::Rotation3::from_axis_angle(&Vector3::y_axis(), -right_turn_deg.to_radians());
+        let n = positions.len();
+        for p in &mut positions[n - 8..] {
+            let axis = Point3::new(-0.15, p.y, 0.0);
+            *p = axis + turn * (*p - axis);
         }
         (positions, triangles)
     }
@@ -843,12 +813,12 @@ mod tests {
     fn feet_that_disagree_do_not_turn_the_character_and_a_lifted_one_is_not_asked() {
         // Both standing: they disagree by 60°, so the feet do not say where it faces, and it
         // is pictured along the file's axes.
-        let (positions, triangles) = a_foot_turned_out(0.0);
+        let (positions, triangles) = legs_with_feet(60.0, 0.0);
         let l = find_landmarks(&positions, &triangles, Vector3::y(), Side::Left).unwrap();
         assert_eq!(l.facing, None, "{l:?}");
         assert_eq!(l.stance(), Stance::default());
         // The turned foot lifted 5 cm: the standing one says where the character faces.
-        let (positions, triangles) = a_foot_turned_out(0.05);
+        let (positions, triangles) = legs_with_feet(60.0, 0.05);
         let l = find_landmarks(&positions, &triangles, Vector3::y(), Side::Left).unwrap();
         let facing = Vector3::from(l.facing.expect("one foot stands"));
         assert!(facing.dot(&Vector3::z()) > 0.97, "{facing}");
