@@ -120,8 +120,9 @@ pub struct FitArgs {
     /// Leg file (.glb, .gltf or .ply). Overrides leg.file.
     #[arg(long)]
     pub leg: Option<PathBuf>,
-    /// Tube size, WALESxCOURSES (e.g. 150x150). Overrides tube.wales and tube.courses.
-    #[arg(long, value_name = "WxC")]
+    /// Tube size: WALES (e.g. 150; the courses follow the stitch, each cell as many stitches
+    /// long as wide) or WALESxCOURSES (e.g. 150x150). Overrides tube.wales and tube.courses.
+    #[arg(long, value_name = "W or WxC")]
     pub resolution: Option<String>,
     /// Bottom and top of the stocking on the leg's axis, in the leg file's coordinates:
     /// BX,BY,BZ,TX,TY,TZ. Overrides leg.axis.
@@ -230,7 +231,21 @@ impl FitArgs {
             set.push(Override::new("--leg", LEG_FILE, path));
         }
         if let Some(text) = &self.resolution {
-            let [wales, courses] = parse_grid("--resolution", text)?;
+            // Wales alone leave the courses to the stitch (`null`: tube.courses left out).
+            let (wales, courses) = match text.trim().parse::<usize>() {
+                Ok(wales) => (wales, serde_json::Value::Null),
+                Err(_) => {
+                    let [wales, courses] =
+                        parse_grid("--resolution", text).map_err(|_| Error::InvalidArgument {
+                            flag: "--resolution".into(),
+                            message: format!(
+                                "expected wales such as 150, or wales and courses such as \
+                                 150x150, got {text:?}"
+                            ),
+                        })?;
+                    (wales, courses.into())
+                }
+            };
             set.push(
                 Override::new("--resolution", "tube.wales", wales).and("tube.courses", courses),
             );
@@ -512,7 +527,7 @@ mod tests {
         let loaded = args.load().unwrap();
         let s = &loaded.scene;
         assert_eq!(loaded.leg_path(), PathBuf::from("legs/my leg.glb"));
-        assert_eq!((s.tube.wales, s.tube.courses), (30, 20));
+        assert_eq!((s.tube.wales, s.tube.courses), (30, Some(20)));
         let axis = s.leg.axis.unwrap();
         assert_eq!((axis.bottom, axis.top), ([0.0, 0.1, 0.0], [0.0, 0.9, -0.1]));
         assert_eq!(loaded.set_by(LEG_AXIS), Some("--axis"));
@@ -569,7 +584,11 @@ mod tests {
             ),
             (
                 &["fit", "--resolution", "2by2"][..],
-                "--resolution: expected two counts",
+                "--resolution: expected wales such as 150, or wales and courses",
+            ),
+            (
+                &["fit", "--resolution", "2"][..],
+                "--resolution: needs at least 3 wales",
             ),
             (
                 &["fit", "--axis", "1,2,3"][..],

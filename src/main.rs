@@ -69,8 +69,8 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
         say!(
             "fit {}x{} on {} ({} triangles): {} steps, residual {:.2e}, max penetration {:.4} mm, \
              {} in {:.2} s",
-            scene.tube.wales,
-            scene.tube.courses,
+            report.details.tube.wales,
+            report.details.tube.courses,
             loaded.leg_path().display(),
             m.leg_triangles.unwrap_or(0),
             m.steps,

@@ -427,14 +427,19 @@ impl Plan {
             Stage::BuildCollider,
             format!("contact ({} queries)", scene.contact.method.name()),
         );
-        let (wales, courses) = (scene.tube.wales, scene.tube.courses);
+        let wales = scene.tube.wales;
+        // Courses left out are known once the leg's length is (Fabric::grid_courses).
+        let grid = match scene.tube.courses {
+            Some(courses) => format!("{wales}×{courses}"),
+            None => format!("{wales}×(courses for cells as many stitches long as wide)"),
+        };
         let terms = match plan.forces.connection_factor {
             Some(c2) => format!("spring force + yarn connection (c2 = {c2}) + sliding contact"),
             None => "spring force + sliding contact".to_string(),
         };
         match scene.solver.method {
             SolverMethod::Paper => {
-                plan.add(Stage::KnitTube, format!("tube {wales}×{courses}"));
+                plan.add(Stage::KnitTube, format!("tube {grid}"));
                 plan.add(
                     Stage::Fit,
                     format!("{terms}; solver.method \"paper\": explicit damped steps"),
@@ -442,6 +447,9 @@ impl Plan {
             }
             SolverMethod::Multilevel => {
                 let chain = |coarsest: usize| -> String {
+                    let Some(courses) = scene.tube.courses else {
+                        return format!("halving down to {coarsest} a side, then {grid}");
+                    };
                     let sizes = grid_sizes_down_to(wales, courses, coarsest);
                     let grids: Vec<String> =
                         sizes.iter().map(|(w, c)| format!("{w}×{c}")).collect();
@@ -451,9 +459,9 @@ impl Plan {
                 // centimetres apart) and follows the real stitch count's levels, whose courses
                 // the leg's length decides; without tube.bottom the leg decides, so name both.
                 let stocking = format!(
-                    "on the real stitch count's levels coarser than {wales}×{courses}, then \
-                     {wales}×{courses}; where it has none, from its coarsest level if that is \
-                     the coarser grid, else on grids {}",
+                    "on the real stitch count's levels coarser than {grid}, then {grid}; where \
+                     it has none, from its coarsest level if that is the coarser grid, else on \
+                     grids {}",
                     chain(STOCKING_COARSEST)
                 );
                 let tube = format!("on grids {}", chain(COARSEST));
@@ -682,6 +690,17 @@ mod tests {
         };
         let mut scene = Scene::load(None).unwrap();
         assert!(!Plan::fit(&scene).has(Stage::KnitTube));
+        // The bundled scene leaves the courses to the stitch: known once the leg's length is.
+        assert_eq!(scene.tube.courses, None);
+        let why = fit_why(&scene);
+        assert!(
+            why.contains(
+                "halving down to 24 a side, then 150×(courses for cells as many stitches long \
+                 as wide)"
+            ),
+            "{why}"
+        );
+        scene.tube.courses = Some(150);
         let why = fit_why(&scene);
         assert!(why.contains("38×39 → 75×76 → 150×150"), "{why}");
         // A stocking to the toe follows the real stitch count's levels coarser than it, or its
@@ -697,7 +716,7 @@ mod tests {
             "{why}"
         );
         let (wales, courses) = (scene.tube.wales, scene.tube.courses);
-        (scene.tube.wales, scene.tube.courses) = (100, 100);
+        (scene.tube.wales, scene.tube.courses) = (100, Some(100));
         let why = fit_why(&scene);
         assert!(
             why.ends_with("the coarser grid, else on grids 50×51 → 100×100"),

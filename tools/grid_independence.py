@@ -10,7 +10,9 @@ finely meshed foot's toes weigh more than the rest of the leg).
 
     python3 tools/grid_independence.py --out /tmp/gi                       # every sample leg
     python3 tools/grid_independence.py --out /tmp/gi --samples makehuman_leg_foot \\
-        --grids 150x150,300x300 --tolerance 1e-3 --reference-tolerance 3e-5
+        --grids 150,150x150,300x300 --tolerance 1e-3 --reference-tolerance 3e-5
+
+A grid of wales alone (`150`) leaves the courses to the stitch, as the default scene does.
 
 Fits already in --out are reused (delete the folder to refit). Standard library only; needs a
 release build (`cargo build --release`). The real count's fit can take minutes at 3e-5.
@@ -105,7 +107,8 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--out", required=True, type=pathlib.Path)
     parser.add_argument("--samples", default=",".join(SAMPLES))
-    parser.add_argument("--grids", default="100x100,150x150,300x300")
+    # Wales alone: courses that make each cell as many stitches long as wide (decision 0069).
+    parser.add_argument("--grids", default="100,150,300,100x100,150x150,300x300")
     parser.add_argument("--tolerance", type=float, default=1e-3)
     parser.add_argument("--reference-tolerance", type=float, default=3e-5)
     parser.add_argument("--binary", type=pathlib.Path, default=ROOT / "target/release/knitfit")
@@ -158,7 +161,9 @@ def main():
             toeless = [relative_l2(vertices, reference, f, no_toes) for f in FIELDS]
             by_area = [relative_l2(vertices, reference, f, [a * c for a, c in zip(areas, covered)])
                        for f in FIELDS]
-            print(f"| {grid} ({args.tolerance:g}) | " + " | ".join(f"{e:.1f} %" for e in whole)
+            tube = report["details"]["tube"]
+            name = grid if "x" in grid else f"{grid}: {tube['wales']}x{tube['courses']}"
+            print(f"| {name} ({args.tolerance:g}) | " + " | ".join(f"{e:.1f} %" for e in whole)
                   + "".join(" | " + " / ".join(f"{e:.1f}" for e in columns) + " %"
                             for columns in (leg_only, toeless, by_area))
                   + " | "

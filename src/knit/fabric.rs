@@ -90,6 +90,19 @@ impl Fabric {
         [(self.needles.round() as usize).max(3), courses.max(2)]
     }
 
+    /// Courses of a grid of `wales` around on a stocking `relaxed_length_m` long when the scene
+    /// leaves `tube.courses` out: as many as make each cell the same number of real stitches
+    /// along as around (the real count's courses scaled by `wales / needles`), so the cell is a
+    /// block of real stitches and has the stitch's shape. A grid of N×N points on a stocking to the
+    /// toe has cells 1.7× as many stitches long as wide, and its courses, not its wales, decide
+    /// the fit over the toes (docs/decisions/0069). At least 2; at the needles, the real count.
+    pub fn grid_courses(&self, wales: usize, relaxed_length_m: f64) -> usize {
+        let [real_wales, real_courses] = self.real_count(relaxed_length_m);
+        let intervals = (real_courses - 1) as f64 * wales as f64 / real_wales as f64;
+        // `as usize` saturates; the caller checks the grid's size.
+        (intervals.round() as usize).saturating_add(1).max(2)
+    }
+
     /// Real stitches a grid cell of rest size `rest_m` (course spring, wale spring) stands for,
     /// around and along.
     pub fn stitches_per_cell(&self, rest_m: [f64; 2]) -> [f64; 2] {
@@ -135,6 +148,42 @@ mod tests {
             fabric.stitches_per_cell([fabric.relaxed_circumference_m() / 150.0, 0.006]);
         assert!((around - 400.0 / 150.0).abs() < 1e-12);
         assert!((along - 0.006 / 0.00074).abs() < 1e-12);
+    }
+
+    #[test]
+    fn courses_left_out_make_cells_of_as_many_stitches_along_as_around() {
+        let fabric = Fabric::of(
+            &KnitSettings::default(),
+            &Yarns::default(),
+            &TubeSettings::default(),
+        );
+        // 0.5187 m of relaxed stocking is 701 real courses of 0.74 mm (700 intervals).
+        let length = 700.0 * 0.00074;
+        assert_eq!(fabric.real_count(length), [400, 701]);
+        assert_eq!(
+            fabric.grid_courses(400, length),
+            701,
+            "at the needles, the real count"
+        );
+        assert_eq!(fabric.grid_courses(150, length), 264);
+        assert_eq!(fabric.grid_courses(100, length), 176);
+        let rest = |courses: usize| {
+            let wales = 150.0;
+            [
+                fabric.relaxed_circumference_m() / wales,
+                length / (courses - 1) as f64,
+            ]
+        };
+        let [around, along] = fabric.stitches_per_cell(rest(fabric.grid_courses(150, length)));
+        assert!(
+            (along / around - 1.0).abs() < 0.01,
+            "{around} × {along} stitches"
+        );
+        assert_eq!(
+            fabric.grid_courses(3, 0.001),
+            2,
+            "never fewer than the two end rings"
+        );
     }
 
     #[test]

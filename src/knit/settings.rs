@@ -123,8 +123,11 @@ fn default_colour() -> [f64; 3] {
 pub struct TubeSettings {
     /// Points around the tube (wales) (default: 150, the paper's smaller fit).
     pub wales: usize,
-    /// Rings along the tube (courses) (default: 150).
-    pub courses: usize,
+    /// Rings along the tube (courses). Absent means as many as make each grid cell the same
+    /// number of real stitches along as around, once the stocking's length is known
+    /// ([`super::Fabric::grid_courses`]: some 260 for 150 wales on a stocking to the toe)
+    /// (default: absent).
+    pub courses: Option<usize>,
     /// Circumference of the stocking lying relaxed, metres. Absent means `knit.needles` ×
     /// `knit.course_spacing_m` (default: absent, 0.20 m for 400 needles at 0.5 mm, a typical
     /// sheer stocking's leg measured flat and doubled).
@@ -215,7 +218,7 @@ impl Default for TubeSettings {
     fn default() -> Self {
         TubeSettings {
             wales: 150,
-            courses: 150,
+            courses: None,
             relaxed_circumference_m: None,
             relaxed_length_m: None,
             bottom: None,
@@ -360,25 +363,29 @@ impl Yarns {
     }
 }
 
+/// Refuses a `wales × courses` tube grid that is too small to be a tube or too large for a
+/// knit's 32-bit point indices; the message says which.
+pub fn check_grid_size(wales: usize, courses: usize) -> Result<(), String> {
+    let (w, c) = (wales, courses);
+    if w < 3 || c < 2 {
+        return Err(format!("needs at least 3 wales and 2 courses, got {w}×{c}"));
+    }
+    if w.checked_mul(c).is_none_or(|n| n > MAX_TUBE_POINTS) {
+        return Err(format!(
+            "{w}×{c} points is over the {MAX_TUBE_POINTS} points a knit's 32-bit indices can \
+             number"
+        ));
+    }
+    Ok(())
+}
+
 impl TubeSettings {
     /// Checks every value; the error names the field under `tube`.
     pub fn validate(&self) -> Result<(), Invalid> {
-        let (w, c) = (self.wales, self.courses);
-        if w < 3 || c < 2 {
-            return Err(Invalid::new(
-                "",
-                format!("needs at least 3 wales and 2 courses, got {w}×{c}"),
-            ));
-        }
-        if w.checked_mul(c).is_none_or(|n| n > MAX_TUBE_POINTS) {
-            return Err(Invalid::new(
-                "",
-                format!(
-                    "{w}×{c} points is over the {MAX_TUBE_POINTS} points a knit's 32-bit \
-                     indices can number"
-                ),
-            ));
-        }
+        let w = self.wales;
+        // Courses left out are known, and checked, once the stocking's length is.
+        let c = self.courses.unwrap_or(2);
+        check_grid_size(w, c).map_err(|message| Invalid::new("", message))?;
         if let Some(circumference) = self.relaxed_circumference_m {
             settings::positive_at_most("relaxed_circumference_m", circumference, MAX_STOCKING_M)?;
         }

@@ -260,7 +260,7 @@ fn sweep(
 fn fit_case(base: &Scene, case: &BenchCase) -> Result<(SolvedFit, f64, Option<u64>)> {
     let mut scene = base.clone();
     scene.tube.wales = case.wales;
-    scene.tube.courses = case.courses;
+    scene.tube.courses = Some(case.courses);
     // The sweep compares solvers on the open tube, on every leg alike (the whole stocking has
     // its own section).
     scene.tube.bottom = Some(TubeBottom::Ankle);

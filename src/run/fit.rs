@@ -18,7 +18,7 @@ use crate::export;
 use crate::export::gltf::GlbNode;
 use crate::export::{Output, YarnsWritten};
 use crate::knit::path::{path_to_toe, TubePath};
-use crate::knit::settings::MAX_TUBE_POINTS;
+use crate::knit::settings::{check_grid_size, MAX_TUBE_POINTS};
 use crate::knit::tube::{
     build_stocking, build_tube, end_rings, heel_pocket_half_length_m, part_at, tube_axis,
     Centreline, TubeSpec,
@@ -528,14 +528,14 @@ pub fn solve_fit(
     })?;
     let relaxed_length = relaxed_length(scene, centreline.length(), scene_name)?;
     let fabric = scene.fabric();
-    let spec = TubeSpec {
-        wales: scene.tube.wales,
-        courses: scene.tube.courses,
-        pattern: scene.knit.pattern,
-        relaxed_circumference_m: fabric.relaxed_circumference_m(),
-        relaxed_length_m: relaxed_length,
-        stitch_m: fabric.stitch_m,
-    };
+    let spec = tube_spec(
+        scene,
+        plan,
+        &leg,
+        path.is_some(),
+        relaxed_length,
+        scene_name,
+    )?;
     check_heel_pocket(scene, &spec, path.is_some(), scene_name)?;
     let offset = scene.contact.offset(&scene.yarns);
     let mut levels = TubeLevels {
@@ -786,10 +786,72 @@ pub struct Placement {
     pub path: Option<TubePath>,
 }
 
+/// The tube the scene asks for on a stocking `relaxed_length` long, its courses given or, where
+/// the scene leaves them out, the stitch's ([`Fabric::grid_courses`]), checked as a given grid is
+/// before the leg is read: its size, its memory, and for a stocking to the toe its coarseness.
+fn tube_spec(
+    scene: &Scene,
+    plan: &Plan,
+    leg: &Leg,
+    to_toe: bool,
+    relaxed_length: f64,
+    scene_name: &str,
+) -> Result<TubeSpec> {
+    let fabric = scene.fabric();
+    let wales = scene.tube.wales;
+    let spec = TubeSpec {
+        wales,
+        courses: scene
+            .tube
+            .courses
+            .unwrap_or_else(|| fabric.grid_courses(wales, relaxed_length)),
+        pattern: scene.knit.pattern,
+        relaxed_circumference_m: fabric.relaxed_circumference_m(),
+        relaxed_length_m: relaxed_length,
+        stitch_m: fabric.stitch_m,
+    };
+    if scene.tube.courses.is_none() {
+        let refuse = |message: String| Error::InvalidScene {
+            path: scene_name.to_string(),
+            field: "tube.courses".into(),
+            message: format!(
+                "left out, it follows the stitch: {message}; give tube.courses (--resolution \
+                 WxC)"
+            ),
+        };
+        check_grid_size(wales, spec.courses).map_err(refuse)?;
+        if let Some(why) = to_toe
+            .then(|| too_coarse_a_stocking(wales, spec.courses))
+            .flatten()
+        {
+            return Err(refuse(why));
+        }
+        let outputs: Vec<_> = plan.files.iter().map(|file| file.output).collect();
+        let size = FitSize {
+            tube: [wales, spec.courses],
+            ..fit_size(scene, &outputs, leg.triangles.len())
+        };
+        MemoryCheck::fit(&size, &scene.limits).enforce(&leg.path.display().to_string())?;
+    }
+    Ok(spec)
+}
+
 /// Fewest wales or courses a stocking to the toe is fitted on: below it the rings are
 /// centimetres apart over the heel and the toe. Its coarse levels may go to
 /// [`STOCKING_COARSEST`], as they only start the next level.
 const SMALLEST_STOCKING: usize = 60;
+
+/// Why a stocking to the toe may not be fitted on a `wales × courses` grid, if it may not.
+fn too_coarse_a_stocking(wales: usize, courses: usize) -> Option<String> {
+    (wales.min(courses) < SMALLEST_STOCKING).then(|| {
+        format!(
+            "at {wales}×{courses} the rings would be centimetres apart over the heel and the \
+             toe, where such a coarse fit chatters instead of settling; give at least \
+             {SMALLEST_STOCKING}×{SMALLEST_STOCKING} (--resolution, tube.wales and \
+             tube.courses)"
+        )
+    })
+}
 
 /// The path of a stocking to the toe on `landmarks`, its top where `tube.top` puts it.
 fn stocking_path(scene: &Scene, leg: &Leg, landmarks: &Landmarks) -> Result<TubePath> {
@@ -800,14 +862,10 @@ fn stocking_path(scene: &Scene, leg: &Leg, landmarks: &Landmarks) -> Result<Tube
              (--bottom ankle) for a stocking that ends there"
         ),
     };
-    let (wales, courses) = (scene.tube.wales, scene.tube.courses);
-    if wales.min(courses) < SMALLEST_STOCKING {
-        return Err(fail(format!(
-            "at {wales}×{courses} the rings would be centimetres apart over the heel and the \
-             toe, where such a coarse fit chatters instead of settling; give at least \
-             {SMALLEST_STOCKING}×{SMALLEST_STOCKING} (--resolution, tube.wales and \
-             tube.courses)"
-        )));
+    // Courses left out are checked once the stocking's length gives them (`tube_spec`).
+    let courses = scene.tube.courses.unwrap_or(SMALLEST_STOCKING);
+    if let Some(why) = too_coarse_a_stocking(scene.tube.wales, courses) {
+        return Err(fail(why));
     }
     let axis = tube_axis(landmarks, TubeBottom::Toe, scene.tube.top).map_err(fail)?;
     let top_s = axis.top().coords.dot(&Vector3::from(landmarks.up));
@@ -823,7 +881,12 @@ pub fn memory_check(scene: &Scene, plan: &Plan, leg_triangles: usize) -> MemoryC
 /// The size of `scene`'s fit for the memory estimate, writing `outputs`.
 fn fit_size<'a>(scene: &Scene, outputs: &'a [Output], leg_triangles: usize) -> FitSize<'a> {
     FitSize {
-        tube: [scene.tube.wales, scene.tube.courses],
+        // Courses left out are at least as many as the wales on a stocking of the samples'
+        // shape (Fabric::grid_courses); checked again once known (`tube_spec`).
+        tube: [
+            scene.tube.wales,
+            scene.tube.courses.unwrap_or(scene.tube.wales),
+        ],
         leg_triangles,
         outputs,
         preview_pixels: u64::from(scene.render.width) * u64::from(scene.render.height),

@@ -181,7 +181,7 @@ fn stocking_scene(case: &StockingCase) -> Result<LoadedScene> {
     scene.tube.bottom = Some(TubeBottom::Toe);
     scene.tube.heel = case.heel;
     scene.tube.wales = case.wales;
-    scene.tube.courses = case.courses;
+    scene.tube.courses = Some(case.courses);
     scene.outputs = vec![Output::Ply, Output::Glb, Output::Picture, Output::Preview];
     Ok(LoadedScene {
         scene,
