@@ -25,10 +25,10 @@
 //! current positions (lagged by nothing). Its iterations still grow with the grid size;
 //! [`super::multilevel`] starts it from a coarser grid's rest state to cut how many it needs.
 //!
-//! Contact and the held end rings act through [`Constraints`] as for the paper's solver: the
-//! move is limited, and the momentum carries only the move that was allowed. The step itself
-//! leaves out the force the skin holds, so a resting point is not pushed into the skin and
-//! taken back each iteration (docs/decisions/0010).
+//! Contact and the held end rings act through [`Constraints`] as for the paper's solver: the move
+//! is limited, and the momentum carries only the move that was allowed. The step itself leaves out
+//! the force the skin holds, so a resting point is not pushed into the skin and taken back each
+//! iteration (docs/decisions/0010).
 //!
 //! **The stall test.** The power `Σ F·v` is taken over the whole grid, and late in a fit most of
 //! the grid can still be coasting forward while a few hundred points (just off the skin at the
@@ -42,12 +42,12 @@
 //! restarted and no gain, stop it, saying where ([`OutOfBalance`]; decisions/0049).
 //!
 //! **Convergence.** The relative residual is the paper solver's (RMS unheld net force over RMS
-//! spring force); with it, the *force step* must be below the tolerance: the largest move the
-//! unheld force alone would make in one step, `s |F_i| / m_i`, over the shortest rest length,
-//! so one point far from balance cannot hide in the RMS. The last iteration's largest move is
-//! reported but does not decide: with momentum it includes coasting along near-free slides of
-//! the tube around a smooth leg, which change neither the forces nor the density
-//! (docs/decisions/0011).
+//! spring force); with it the *force step*, `s |F_i| / m_i` over the shortest rest length (the
+//! largest move the unheld force alone would make), must be below the tolerance, so one point far
+//! from balance cannot hide in the RMS. The last iteration's largest move is reported but does not
+//! decide: with momentum it includes coasting along near-free slides of the tube around a smooth
+//! leg, which change neither the forces nor the density (docs/decisions/0011). With [`Polish`] a
+//! level goes on past the tolerance towards a tighter residual, best effort.
 
 use std::time::Instant;
 
@@ -189,6 +189,30 @@ impl RestartRules {
     }
 }
 
+/// Best-effort iterations after a level has met its tolerance (the multilevel solver's finest
+/// level). From the first iteration whose residual and force step are below the tolerance, the
+/// level goes on until its residual is below [`Polish::residual`] with the force step still
+/// below the tolerance, or [`Polish::max_iterations`] more iterations have passed, or the
+/// futility watch fires (no stall then), or the level's own cap is reached. It has converged
+/// whichever: where it stops in a state that no longer meets the tolerance (momentum can take the
+/// residual back above it), it hands back the state that first met it, and that state's figures.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Polish {
+    /// The relative residual to go on to; the force step need only stay below the tolerance.
+    pub residual: f64,
+    /// Iterations after the tolerance was first met, at most (the level's own cap still holds).
+    pub max_iterations: usize,
+}
+
+/// The state that first met the tolerance, kept while polishing.
+struct Met {
+    iteration: usize,
+    x: Vec<crate::base::Vec3>,
+    residual: f64,
+    force_step: f64,
+    max_move: f64,
+}
+
 /// What the iteration on one grid did.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct LevelStats {
@@ -198,6 +222,9 @@ pub struct LevelStats {
     pub courses: usize,
     /// Iterations taken.
     pub iterations: usize,
+    /// Of those, the iterations after the tolerance was first met, polishing towards a tighter
+    /// residual ([`Polish`]); 0 without polishing.
+    pub polish_iterations: usize,
     /// Times the momentum was restarted.
     pub restarts: usize,
     /// Of those, the restarts the stall test made (module docs).
@@ -212,7 +239,8 @@ pub struct LevelStats {
     /// The largest move of the last iteration (force and momentum), over the shortest rest
     /// length.
     pub max_move: f64,
-    /// True when both went below the tolerance.
+    /// True when both went below the tolerance (a polished level: at the iteration that first
+    /// met it, and in the state handed back).
     pub converged: bool,
     /// Where the iteration stopped early because it was going nowhere (module docs); `null`
     /// when it did not.
@@ -226,16 +254,20 @@ pub struct LevelStats {
     pub seconds: f64,
 }
 
-/// Relaxes `knit` in place on its own grid until the residual and the largest move are below
-/// `tolerance`, or `max_iterations` is reached. `first_step` numbers the observer's steps
-/// (levels of a multilevel solve count on from each other).
+/// Relaxes `knit` in place on its own grid until the residual and the force step are below
+/// `tolerance`, or `max_iterations` is reached. With `polish`, a level that meets the tolerance
+/// goes on towards `polish.residual` ([`Polish`]) and converges whatever that reaches.
+/// `first_step` numbers the observer's steps (levels of a multilevel solve count on from each
+/// other).
 ///
 /// Errors: [`Error::SolverDiverged`] when a value stops being finite or the residual runs away.
+#[allow(clippy::too_many_arguments)]
 pub fn relax_accelerated(
     knit: &mut Knit,
     terms: &ForceTerms,
     tolerance: f64,
     max_iterations: usize,
+    polish: Option<Polish>,
     constraints: &mut dyn Constraints,
     observer: &mut dyn RelaxObserver,
     first_step: usize,
@@ -255,6 +287,8 @@ pub fn relax_accelerated(
     // A point whose force step is above the tolerance is unsettled.
     let unsettled_above = tolerance * shortest_rest / STEP;
     let mut start_residual = None;
+    // Polishing: the state that first met the tolerance.
+    let mut met: Option<Met> = None;
     let mut iteration = 0;
     loop {
         // The step is taken with the momentum of no restart, in the same pass; the rare
@@ -286,7 +320,48 @@ pub fn relax_accelerated(
             )));
         }
         let converged = residual < tolerance && force_step < tolerance;
-        if converged || iteration >= max_iterations || stall.is_some() {
+        if let Some(polish) = polish {
+            if converged && met.is_none() {
+                met = Some(Met {
+                    iteration,
+                    x: knit.particles.x.clone(),
+                    residual,
+                    force_step,
+                    max_move,
+                });
+            }
+            if let Some(met) = &met {
+                let polished = residual < polish.residual && force_step < tolerance;
+                let spent = iteration - met.iteration >= polish.max_iterations;
+                if polished || spent || iteration >= max_iterations || stall.is_some() {
+                    // Best effort: a state that no longer meets the tolerance goes back to the
+                    // one that first did; a watch that fired while polishing is no stall.
+                    let (residual, force_step, max_move) = if converged {
+                        (residual, force_step, max_move)
+                    } else {
+                        knit.particles.x.clone_from(&met.x);
+                        (met.residual, met.force_step, met.max_move)
+                    };
+                    return Ok(LevelStats {
+                        wales: knit.wales,
+                        courses: knit.courses,
+                        iterations: iteration,
+                        polish_iterations: iteration - met.iteration,
+                        restarts,
+                        stall_restarts,
+                        start_residual: start,
+                        residual,
+                        force_step,
+                        max_move,
+                        converged: true,
+                        stall: None,
+                        unsettled: None,
+                        seconds: started.elapsed().as_secs_f64(),
+                    });
+                }
+            }
+        }
+        if met.is_none() && (converged || iteration >= max_iterations || stall.is_some()) {
             // A level that converged on the iteration after the watch fired is no stall.
             let stall = stall.filter(|_| !converged);
             let unsettled = (!converged && stall.is_none())
@@ -295,6 +370,7 @@ pub fn relax_accelerated(
                 wales: knit.wales,
                 courses: knit.courses,
                 iterations: iteration,
+                polish_iterations: 0,
                 restarts,
                 stall_restarts,
                 start_residual: start,
@@ -426,7 +502,17 @@ mod tests {
         };
         let mut knit = tube_pulled_at(6);
         let relax = |knit: &mut Knit, tolerance, cap| {
-            relax_accelerated(knit, &terms, tolerance, cap, &mut Unconstrained, &mut (), 0).unwrap()
+            relax_accelerated(
+                knit,
+                &terms,
+                tolerance,
+                cap,
+                None,
+                &mut Unconstrained,
+                &mut (),
+                0,
+            )
+            .unwrap()
         };
         let capped = relax(&mut knit, 1e-3, 2);
         assert!(!capped.converged && capped.stall.is_none());
@@ -440,6 +526,154 @@ mod tests {
         let settled = relax(&mut knit, 1e-3, 100_000);
         assert!(settled.converged, "{settled:?}");
         assert_eq!(settled.unsettled, None);
+        // Without polishing a level stops at the first iteration that meets the tolerance.
+        assert_eq!(settled.polish_iterations, 0);
+        assert!(settled.residual > 1e-4, "{settled:?}");
+    }
+
+    /// Records the residual of every iteration.
+    struct Residuals(Vec<f64>);
+
+    impl RelaxObserver for Residuals {
+        fn on_step(&mut self, _step: usize, residual: f64) {
+            self.0.push(residual);
+        }
+    }
+
+    /// [`tube_pulled_at`] course 6, relaxed; its stats, knit and every iteration's residual.
+    fn relaxed_tube(
+        tolerance: f64,
+        max_iterations: usize,
+        polish: Option<Polish>,
+    ) -> (LevelStats, Knit, Vec<f64>) {
+        let terms = ForceTerms {
+            stiffness: [1.0; 3],
+            connection_factor: None,
+        };
+        let mut knit = tube_pulled_at(6);
+        let mut residuals = Residuals(Vec::new());
+        let stats = relax_accelerated(
+            &mut knit,
+            &terms,
+            tolerance,
+            max_iterations,
+            polish,
+            &mut Unconstrained,
+            &mut residuals,
+            0,
+        )
+        .unwrap();
+        (stats, knit, residuals.0)
+    }
+
+    /// The figures of a level but its time.
+    fn untimed(stats: &LevelStats) -> LevelStats {
+        LevelStats {
+            seconds: 0.0,
+            ..stats.clone()
+        }
+    }
+
+    #[test]
+    fn a_polished_level_goes_on_from_where_it_met_the_tolerance_to_the_polish_residual() {
+        let (plain, plain_knit, _) = relaxed_tube(1e-3, 100_000, None);
+        assert!(plain.converged && plain.residual > 1e-4, "{plain:?}");
+        let polish = Polish {
+            residual: 1e-4,
+            max_iterations: 10_000,
+        };
+        let (polished, knit, _) = relaxed_tube(1e-3, 100_000, Some(polish));
+        assert!(polished.converged, "{polished:?}");
+        assert!(
+            polished.residual < 1e-4 && polished.force_step < 1e-3,
+            "{polished:?}"
+        );
+        assert!(polished.iterations > plain.iterations, "{polished:?}");
+        // Counted from the iteration the plain level stopped at.
+        assert!(polished.polish_iterations > 0);
+        assert_eq!(
+            polished.iterations - polished.polish_iterations,
+            plain.iterations
+        );
+        assert_eq!((polished.stall, polished.unsettled), (None, None));
+        assert_ne!(knit.particles.x, plain_knit.particles.x);
+        // The level's own cap ends the polishing too, converged.
+        let capped_at = plain.iterations + 2;
+        let (capped, _, _) = relaxed_tube(1e-3, capped_at, Some(polish));
+        assert!(capped.converged && capped.unsettled.is_none(), "{capped:?}");
+        assert_eq!(
+            (capped.iterations, capped.polish_iterations),
+            (capped_at, 2)
+        );
+    }
+
+    #[test]
+    fn a_polish_budget_spent_hands_back_the_state_that_first_met_the_tolerance() {
+        // No budget: the plain level's state and figures.
+        let (plain, plain_knit, _) = relaxed_tube(1e-3, 100_000, None);
+        let none = Polish {
+            residual: 1e-9,
+            max_iterations: 0,
+        };
+        let (polished, knit, _) = relaxed_tube(1e-3, 100_000, Some(none));
+        assert_eq!(untimed(&polished), untimed(&plain));
+        assert_eq!(knit.particles.x, plain_knit.particles.x);
+
+        // An iteration that first meets a tolerance and whose next one is above it again
+        // (momentum): a budget of one iteration ends above the tolerance, so the level goes back.
+        let (_, _, residuals) = relaxed_tube(1e-9, 100_000, None);
+        let mut best_before = f64::INFINITY;
+        let mut bump = None;
+        for (k, pair) in residuals.windows(2).enumerate() {
+            if pair[0] < 0.5 && pair[0] < best_before && pair[1] > pair[0] {
+                bump = Some((k, (pair[0] + pair[1].min(best_before)) / 2.0));
+                break;
+            }
+            best_before = best_before.min(pair[0]);
+        }
+        let (met_at, tolerance) = bump.expect("the momentum takes the residual back up somewhere");
+        let (plain, plain_knit, _) = relaxed_tube(tolerance, 100_000, None);
+        assert_eq!(plain.iterations, met_at, "{plain:?}");
+        let one = Polish {
+            residual: 1e-9,
+            max_iterations: 1,
+        };
+        let (polished, knit, residuals) = relaxed_tube(tolerance, 100_000, Some(one));
+        assert!(residuals[met_at + 1] >= tolerance, "{residuals:?}");
+        assert!(polished.converged, "{polished:?}");
+        assert_eq!(
+            (polished.iterations, polished.polish_iterations),
+            (met_at + 1, 1)
+        );
+        let back = LevelStats {
+            iterations: plain.iterations,
+            polish_iterations: 0,
+            restarts: plain.restarts,
+            stall_restarts: plain.stall_restarts,
+            ..untimed(&polished)
+        };
+        assert_eq!(back, untimed(&plain));
+        assert_eq!(knit.particles.x, plain_knit.particles.x);
+    }
+
+    #[test]
+    fn a_futile_watch_while_polishing_is_no_stall() {
+        // Relaxed without polishing to 1e-9, the tube's residual floors near 1e-6 and the watch
+        // stops it as going nowhere.
+        let (futile, _, _) = relaxed_tube(1e-9, 100_000, None);
+        assert!(futile.stall.is_some() && !futile.converged, "{futile:?}");
+        let polish = Polish {
+            residual: 1e-9,
+            max_iterations: 100_000,
+        };
+        let (polished, _, _) = relaxed_tube(1e-3, 100_000, Some(polish));
+        assert!(polished.converged, "{polished:?}");
+        assert_eq!((polished.stall, polished.unsettled), (None, None));
+        assert_eq!(polished.iterations, futile.iterations);
+        assert!(
+            polished.residual < 1e-3 && polished.residual > 1e-9,
+            "{polished:?}"
+        );
     }
 
     #[test]

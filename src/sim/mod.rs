@@ -14,7 +14,7 @@ pub mod multilevel;
 pub mod relax;
 pub mod settings;
 
-pub use accelerated::{relax_accelerated, LevelStats};
+pub use accelerated::{relax_accelerated, LevelStats, Polish};
 pub use multilevel::{relax_multilevel, Levels, MultilevelStats};
 pub use relax::{relax, relax_constrained, stability_limit, RelaxStats};
 pub use settings::{ContactSettings, OnUnstable, SolverMethod, SolverSettings};

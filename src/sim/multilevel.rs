@@ -20,8 +20,13 @@
 //! It does not keep the finest grid's work flat: that level still needs more iterations the
 //! finer the grid, and sending the fine residual back down (V-cycles, FAS) has not been shown to
 //! help here (docs/decisions/0025).
+//!
+//! Coarser levels stop at [`COARSE_TOLERANCE_FACTOR`] times the tolerance. The finest level
+//! converges at the tolerance, then polishes its residual towards that same tenth, best effort
+//! ([`Polish`]): it often starts under the tolerance after interpolation and would otherwise stop
+//! with the coarse level's slow slide over the toe still in it (docs/decisions/0067 and 0069).
 
-use super::accelerated::{relax_accelerated, LevelStats};
+use super::accelerated::{relax_accelerated, LevelStats, Polish};
 use super::{Constraints, ForceTerms, RelaxObserver};
 use crate::base::Vec3;
 use crate::error::Result;
@@ -46,6 +51,11 @@ pub const COARSE_LEVEL_ITERATIONS: usize = 10_000;
 /// stops at the tolerance with that error still in it. Coarse iterations are cheap: at a tenth
 /// of the tolerance a whole stocking's leg above the ankle is within 0.2–2.3 % in pressure of
 /// its rest (3–8 % at twice it), for 1.1–1.7× the run's time (docs/decisions/0060).
+///
+/// The finest level polishes its residual towards the same fraction once it has met the
+/// tolerance, in at most [`COARSE_LEVEL_ITERATIONS`] more iterations and never failing for it
+/// ([`Polish`]): it often starts under the tolerance and would keep the coarse level's slide
+/// over the toe (docs/decisions/0067 and 0069).
 pub const COARSE_TOLERANCE_FACTOR: f64 = 0.1;
 
 /// A coarser level stopped as futile hands its state on all the same when its residual is
@@ -162,9 +172,11 @@ pub fn grid_sizes_following(
 
 /// Relaxes a `wales × courses` knit coarse to fine (module docs); returns the fine knit at rest
 /// and each level's figures, or, where a level stopped as futile ([`LevelStats::stall`]), that
-/// level's knit and the figures so far. The finest level runs to `tolerance` or `max_iterations`; coarser
-/// levels to [`COARSE_TOLERANCE_FACTOR`] times `tolerance`, in at most
-/// [`COARSE_LEVEL_ITERATIONS`].
+/// level's knit and the figures so far. Coarser levels run to [`COARSE_TOLERANCE_FACTOR`] times
+/// `tolerance`, in at most [`COARSE_LEVEL_ITERATIONS`]. The finest runs to `tolerance` or
+/// `max_iterations`; once it meets `tolerance` it polishes its residual towards
+/// [`COARSE_TOLERANCE_FACTOR`] times it, in at most [`COARSE_LEVEL_ITERATIONS`] more iterations
+/// (and within `max_iterations`), and converges whatever that reaches ([`Polish`]).
 ///
 /// Errors: those of [`relax_accelerated`], and a coarser level's state that
 /// [`Levels::accept`] refuses.
@@ -204,6 +216,10 @@ pub fn relax_multilevel(
             } else {
                 max_iterations.min(COARSE_LEVEL_ITERATIONS)
             },
+            finest.then_some(Polish {
+                residual: tolerance * COARSE_TOLERANCE_FACTOR,
+                max_iterations: COARSE_LEVEL_ITERATIONS,
+            }),
             constraints,
             observer,
             stats.total_iterations(),
