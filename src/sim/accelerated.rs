@@ -192,10 +192,11 @@ impl RestartRules {
 /// Best-effort iterations after a level has met its tolerance (the multilevel solver's finest
 /// level). From the first iteration whose residual and force step are below the tolerance, the
 /// level goes on until its residual is below [`Polish::residual`] with the force step still
-/// below the tolerance, or [`Polish::max_iterations`] more iterations have passed, or the
-/// futility watch fires (no stall then), or the level's own cap is reached. It has converged
-/// whichever: where it stops in a state that no longer meets the tolerance (momentum can take the
-/// residual back above it), it hands back the state that first met it, and that state's figures.
+/// below the tolerance, or [`Polish::max_iterations`] more iterations have passed, or 1,000 in a
+/// row have not bettered its best residual by 10 %, or the futility watch fires (no stall then),
+/// or the level's own cap is reached. It has converged whichever: where it stops in a state that
+/// no longer meets the tolerance (momentum can take the residual back above it), it hands back
+/// the state that first met it, and that state's figures.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Polish {
     /// The relative residual to go on to; the force step need only stay below the tolerance.
@@ -204,13 +205,36 @@ pub struct Polish {
     pub max_iterations: usize,
 }
 
-/// The state that first met the tolerance, kept while polishing.
+/// Polishing stops when its best residual has not gained [`FUTILE_PROGRESS`] over this many
+/// iterations: a few points trading places at a knee hold the residual at 5e-4–6e-3 for ever
+/// (makehuman_hips_heavy 100×100), and the futility watch, which needs a quarter of the
+/// iterations restarted, does not see them (docs/decisions/0067).
+const POLISH_WINDOW: usize = 1000;
+
+/// The state that first met the tolerance, kept while polishing, and how polishing gains.
 struct Met {
     iteration: usize,
     x: Vec<crate::base::Vec3>,
     residual: f64,
     force_step: f64,
     max_move: f64,
+    /// The best residual since, and the best when the current [`POLISH_WINDOW`] began.
+    best: f64,
+    window_best: f64,
+}
+
+impl Met {
+    /// Takes a polishing iteration's residual; false once a whole window has not gained.
+    fn gaining(&mut self, iteration: usize, residual: f64) -> bool {
+        self.best = self.best.min(residual);
+        let since = iteration - self.iteration;
+        if since == 0 || since % POLISH_WINDOW != 0 {
+            return true;
+        }
+        let gained = self.best < FUTILE_PROGRESS * self.window_best;
+        self.window_best = self.best;
+        gained
+    }
 }
 
 /// What the iteration on one grid did.
@@ -328,11 +352,14 @@ pub fn relax_accelerated(
                     residual,
                     force_step,
                     max_move,
+                    best: residual,
+                    window_best: residual,
                 });
             }
-            if let Some(met) = &met {
+            if let Some(met) = &mut met {
                 let polished = residual < polish.residual && force_step < tolerance;
-                let spent = iteration - met.iteration >= polish.max_iterations;
+                let spent = iteration - met.iteration >= polish.max_iterations
+                    || !met.gaining(iteration, residual);
                 if polished || spent || iteration >= max_iterations || stall.is_some() {
                     // Best effort: a state that no longer meets the tolerance goes back to the
                     // one that first did; a watch that fired while polishing is no stall.
@@ -529,6 +556,35 @@ mod tests {
         // Without polishing a level stops at the first iteration that meets the tolerance.
         assert_eq!(settled.polish_iterations, 0);
         assert!(settled.residual > 1e-4, "{settled:?}");
+    }
+
+    #[test]
+    fn polishing_stops_after_a_window_without_a_tenth_gained() {
+        let met = |residual: f64| Met {
+            iteration: 10,
+            x: Vec::new(),
+            residual,
+            force_step: 0.0,
+            max_move: 0.0,
+            best: residual,
+            window_best: residual,
+        };
+        // Stuck, trading places around 6e-4: the first whole window ends it.
+        let mut stuck = met(6e-4);
+        let end = 10 + POLISH_WINDOW;
+        assert!((11..end).all(|i| stuck.gaining(i, 6e-4 * (1.0 + 0.1 * (i % 2) as f64))));
+        assert!(!stuck.gaining(end, 6e-4));
+        // Falling by a tenth a window, not more: it goes on as long as it falls.
+        let mut falling = met(1e-3);
+        for window in 1..=3 {
+            let i = 10 + window * POLISH_WINDOW;
+            assert!(falling.gaining(i - 1, 1e-3 * 0.85f64.powi(window as i32)));
+            assert!(
+                falling.gaining(i, 1e-3 * 0.85f64.powi(window as i32)),
+                "window {window}"
+            );
+        }
+        assert!(!falling.gaining(10 + 4 * POLISH_WINDOW, 1e-3 * 0.86f64.powi(3)));
     }
 
     /// Records the residual of every iteration.
