@@ -590,11 +590,12 @@ fn every_kind_of_export_damage_to_every_sample_fits_like_the_clean_file() {
             );
             damage.check_cleaned(&name, &clean, &got, &done, &raw);
             // The heavy sample's open tube at 60×60 holds two rest states at its ankle edge
-            // (`solvers.rs`); at the default tolerance it is 14 % from its rest, and the
-            // T-junctions' extra vertices alone move it 2 % (0.4 % with the coarse levels
-            // looser, docs/decisions/0060). Every other sample: within 0.3 %.
+            // (`solvers.rs`). With T-junctions its 30×31 level stalls at the knee and hands on
+            // another start, and the two fits, each polished to a tenth of the tolerance, rest
+            // 3.8 % apart (2 % when the finest level stopped at the tolerance; decision 0069).
+            // Every other sample: within 0.3 %.
             let limit = if sample == "makehuman_hips_heavy.glb" {
-                0.03
+                0.05
             } else {
                 0.01
             };

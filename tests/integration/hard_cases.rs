@@ -128,6 +128,14 @@ fn check_fit_covering(
     let collider = Collider::new(leg, ContactMethod::Bvh).unwrap();
     let yarns = read_ply(&out_dir.join("stocking.ply"));
     let knit_points = m["points"].as_u64().unwrap() as usize;
+    // Courses next to a held end ring may fold a little past it where the fabric is slack
+    // along the wale there (it carries no compression): by a quarter of a course spacing at
+    // most, and the report counts the courses out of order (`bunched_courses`). A thin ankle
+    // polished to a tenth of the tolerance folds 1 mm past its ring (decision 0069).
+    let course_m = r["details"]["tube"]["rest_wale_spacing_m"]
+        .as_f64()
+        .unwrap();
+    let bunched = r["details"]["tube"]["bunched_courses"].as_u64().unwrap();
     let mut largest_gap_m: f64 = 0.0;
     for (i, v) in yarns.payload["vertex"].iter().enumerate() {
         let q = point(v);
@@ -137,9 +145,10 @@ fn check_fit_covering(
         assert!(d >= -1e-7, "{name}: yarn point {i} is {d} m inside the leg");
         let slack = if i < knit_points { 1e-6 } else { 1e-4 } / length;
         let s = along(&q);
+        let folded = i < knit_points && bunched > 0 && (s + 0.25 * course_m / length >= 0.0);
         assert!(
-            (-slack..=1.0 + slack).contains(&s),
-            "{name}: yarn point {i} at {s} of the axis"
+            (-slack..=1.0 + slack).contains(&s) || folded && s <= 1.0 + slack,
+            "{name}: yarn point {i} at {s} of the axis ({bunched} courses bunched)"
         );
         if i < knit_points {
             largest_gap_m = largest_gap_m.max(d);

@@ -26,7 +26,7 @@ fn solve_grid(
     // The open tube: these compare solvers on grids too coarse for a foot.
     scene.tube.bottom = Some(knitfit::knit::TubeBottom::Ankle);
     scene.tube.wales = wales;
-    scene.tube.courses = courses;
+    scene.tube.courses = Some(courses);
     scene.solver.method = method;
     scene.solver.tolerance = tolerance;
     solve_scene(leg, scene)
@@ -162,7 +162,7 @@ fn the_bench_reference_tolerance_converges_on_every_sample_leg() {
     // keep it from converging on the faceted legs (docs/decisions/0027).
     for leg in sample_legs() {
         let mut scene = Scene::load(None).unwrap();
-        (scene.tube.wales, scene.tube.courses) = (50, 50);
+        (scene.tube.wales, scene.tube.courses) = (50, Some(50));
         scene.tube.bottom = Some(knitfit::knit::TubeBottom::Ankle);
         scene.solver.tolerance = 1e-6;
         scene.solver.max_steps = 20_000;

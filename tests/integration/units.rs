@@ -76,7 +76,9 @@ fn a_whole_stockings_fields_are_the_same_on_the_default_grid_and_at_the_real_sti
     // Over the heel and the toe, closed by the toe seam: the fields are measured over the same
     // fabric on every grid, on over the seam, and cut back at its folds (decision 0057).
     let leg = sample("makehuman_leg_foot.glb");
-    let (coarse_dir, coarse) = fit(&leg, "150x150", &[]);
+    // The default grid: 150 wales, the courses following the stitch (150×264 here).
+    let (coarse_dir, coarse) = fit(&leg, "150", &[]);
+    assert_eq!(coarse["details"]["tube"]["courses"], 264);
     let courses = coarse["details"]["knit"]["courses"]
         .as_f64()
         .unwrap()
@@ -87,27 +89,25 @@ fn a_whole_stockings_fields_are_the_same_on_the_default_grid_and_at_the_real_sti
     let b = leg_fields(&real_dir.path().join("out"));
     let above = above_the_ankle(&coarse_dir.path().join("out"), &coarse);
     let (a_leg, b_leg) = (kept(&a, &above), kept(&b, &above));
-    // The grids follow the real count's coarse levels (decision 0063), so here they agree as
-    // the issue asks over the whole leg (1.2 / 0.3 / 2.4 % measured) and above the ankle (0.2 /
-    // 0.1 / 0.5 %). Not every sample's foot does at every grid: it rests where its solver's
-    // path leaves it, the real count's own too (issue 21, decision 0062).
-    let real = format!("150x150 against 400x{courses}");
+    // The grids follow the real count's coarse levels (decision 0063), with cells as many
+    // stitches long as wide and the finest level polished (decision 0069), so they agree as
+    // the issue asks over the whole leg, toes included (0.8 / 0.2 / 2.7 % measured), and
+    // above the ankle (0.1 / 0.1 / 0.3 %).
+    let real = format!("150 against 400x{courses}");
     assert_fields_agree(&a, &b, &real);
     assert_fields_agree(&a_leg, &b_leg, &format!("{real} above the ankle"));
-    // A 100×100 stocking agrees above the ankle too (0.2 / 0.1 / 0.6 % measured; decisions
-    // 0061, 0063 and 0065).
-    let (small_dir, small) = fit(&leg, "100x100", &[]);
+    // A stocking of 100 wales agrees above the ankle too (0.1 / 0.1 / 0.4 % measured;
+    // decisions 0061, 0063 and 0065).
+    let (small_dir, small) = fit(&leg, "100", &[]);
     let c = leg_fields(&small_dir.path().join("out"));
     let above = above_the_ankle(&small_dir.path().join("out"), &small);
     let (c_leg, b_leg) = (kept(&c, &above), kept(&b, &above));
-    let what = format!("100x100 against 400x{courses} above the ankle");
+    let what = format!("100 against 400x{courses} above the ankle");
     assert_fields_agree(&c_leg, &b_leg, &what);
-    // And per vertex over the foot too, but for the toe box, where the fabric bridges the
-    // toes' clefts and the model does not decide its rest (decision 0064): 2.3 / 0.4 / 2.2 %
-    // measured, 4.3 % in pressure while a coarse grid's fields took a wider kernel than a fine
-    // one's (decision 0065).
+    // And per vertex over the foot but for the toe box (0.5 / 0.1 / 0.7 % measured; decision
+    // 0064); with the toes it is 3.7 % in pressure at 100 wales (decision 0069).
     let outside = outside_the_toe_box(&small_dir.path().join("out"), &small);
-    let what = format!("100x100 against 400x{courses} outside the toe box");
+    let what = format!("100 against 400x{courses} outside the toe box");
     assert_fields_agree(&kept(&c, &outside), &kept(&b, &outside), &what);
 }
 
