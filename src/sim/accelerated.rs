@@ -228,7 +228,7 @@ impl Met {
     fn gaining(&mut self, iteration: usize, residual: f64) -> bool {
         self.best = self.best.min(residual);
         let since = iteration - self.iteration;
-        if since == 0 || since % POLISH_WINDOW != 0 {
+        if since == 0 || !since.is_multiple_of(POLISH_WINDOW) {
             return true;
         }
         let gained = self.best < FUTILE_PROGRESS * self.window_best;
