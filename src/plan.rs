@@ -431,7 +431,7 @@ impl Plan {
         // Courses left out are known once the leg's length is (Fabric::grid_courses).
         let grid = match scene.tube.courses {
             Some(courses) => format!("{wales}×{courses}"),
-            None => format!("{wales}×(courses for cells as many stitches long as wide)"),
+            None => format!("{wales} wales × the courses for cells as many stitches long as wide"),
         };
         let terms = match plan.forces.connection_factor {
             Some(c2) => format!("spring force + yarn connection (c2 = {c2}) + sliding contact"),
@@ -446,30 +446,39 @@ impl Plan {
                 );
             }
             SolverMethod::Multilevel => {
-                let chain = |coarsest: usize| -> String {
-                    let Some(courses) = scene.tube.courses else {
-                        return format!("halving down to {coarsest} a side, then {grid}");
-                    };
-                    let sizes = grid_sizes_down_to(wales, courses, coarsest);
-                    let grids: Vec<String> =
-                        sizes.iter().map(|(w, c)| format!("{w}×{c}")).collect();
-                    grids.join(" → ")
-                };
-                // A stocking to the toe coarsens less (its heel and toe need rings a few
-                // centimetres apart) and follows the real stitch count's levels, whose courses
-                // the leg's length decides; without tube.bottom the leg decides, so name both.
-                let stocking = format!(
-                    "on the real stitch count's levels coarser than {grid}, then {grid}; where \
-                     it has none, from its coarsest level if that is the coarser grid, else on \
-                     grids {}",
-                    chain(STOCKING_COARSEST)
-                );
-                let tube = format!("on grids {}", chain(COARSEST));
-                let grids = match scene.tube.bottom {
-                    Some(TubeBottom::Ankle) => tube,
-                    Some(TubeBottom::Toe) => stocking,
-                    None if tube == stocking => tube,
-                    None => format!("{tube} (to the toe: {stocking})"),
+                let grids = match scene.tube.courses {
+                    // Courses left out: known, and so the levels, once the leg's length is.
+                    None => format!(
+                        "up to {grid}: an open tube on grids halving down to {COARSEST} a side; \
+                         a stocking to the toe on the real stitch count's levels coarser than \
+                         it, else from its coarsest level if that is the coarser grid, else on \
+                         grids halving down to {STOCKING_COARSEST} a side"
+                    ),
+                    Some(courses) => {
+                        let chain = |coarsest: usize| -> String {
+                            let sizes = grid_sizes_down_to(wales, courses, coarsest);
+                            let grids: Vec<String> =
+                                sizes.iter().map(|(w, c)| format!("{w}×{c}")).collect();
+                            grids.join(" → ")
+                        };
+                        // A stocking to the toe coarsens less (its heel and toe need rings a
+                        // few centimetres apart) and follows the real stitch count's levels,
+                        // whose courses the leg's length decides; without tube.bottom the leg
+                        // decides, so name both.
+                        let stocking = format!(
+                            "on the real stitch count's levels coarser than {grid}, then \
+                             {grid}; where it has none, from its coarsest level if that is the \
+                             coarser grid, else on grids {}",
+                            chain(STOCKING_COARSEST)
+                        );
+                        let tube = format!("on grids {}", chain(COARSEST));
+                        match scene.tube.bottom {
+                            Some(TubeBottom::Ankle) => tube,
+                            Some(TubeBottom::Toe) => stocking,
+                            None if tube == stocking => tube,
+                            None => format!("{tube} (to the toe: {stocking})"),
+                        }
+                    }
                 };
                 plan.add(
                     Stage::Fit,
@@ -695,8 +704,9 @@ mod tests {
         let why = fit_why(&scene);
         assert!(
             why.contains(
-                "halving down to 24 a side, then 150×(courses for cells as many stitches long \
-                 as wide)"
+                "up to 150 wales × the courses for cells as many stitches long as wide: an open \
+                 tube on grids halving down to 24 a side; a stocking to the toe on the real \
+                 stitch count's levels"
             ),
             "{why}"
         );

@@ -94,7 +94,7 @@ impl Fabric {
     /// leaves `tube.courses` out: as many as make each cell the same number of real stitches
     /// along as around (the real count's courses scaled by `wales / needles`), so the cell is a
     /// block of real stitches and has the stitch's shape. A grid of N×N points on a stocking to the
-    /// toe has cells 1.7× as many stitches long as wide, and its courses, not its wales, decide
+    /// toe has cells 1.75–2× as many stitches long as wide, and its courses, not its wales, decide
     /// the fit over the toes (docs/decisions/0069). At least 2; at the needles, the real count.
     pub fn grid_courses(&self, wales: usize, relaxed_length_m: f64) -> usize {
         let [real_wales, real_courses] = self.real_count(relaxed_length_m);
