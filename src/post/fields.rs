@@ -42,7 +42,7 @@ use crate::knit::fabric::PA_PER_MMHG;
 use crate::knit::{Fabric, Knit, PointId};
 use crate::leg::{Leg, SkinCurvature};
 use crate::post::loops::loop_shapes;
-use crate::post::transfer::carry_to_leg;
+use crate::post::transfer::{carry_to_leg, OpenEnd};
 use crate::sim::ForceTerms;
 
 /// Square metres per square centimetre.
@@ -543,7 +543,8 @@ pub fn measure_fields(
     terms: &ForceTerms,
 ) -> (KnitFields, KnitFields) {
     let per_point = KnitFields::measure(knit, fabric, terms, skin, offset);
-    let on_leg = carry_to_leg(knit, &per_point, &leg.positions, skin);
+    let ends = OpenEnd::of_tube(knit);
+    let on_leg = carry_to_leg(knit, &per_point, &leg.positions, skin, &ends);
     (per_point, on_leg)
 }
 

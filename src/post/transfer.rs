@@ -9,8 +9,9 @@
 //! grid): a kernel three coarse spacings wide blurred a 100×100 stocking's heel. Skin with no
 //! fabric that near takes the mean of the grid's points within three grid spacings (a loose
 //! stocking round a thin ankle still covers it), and 0 where no yarn is near even so (uncovered
-//! skin). Pressure is not carried: the stress is, and pressed on the skin's curvature at the
-//! vertex itself ([`crate::post::fields`]).
+//! skin). Skin beyond the stocking's open ends (the welt's plane, an open tube's ankle ring)
+//! takes nothing, however near their yarn ([`OpenEnd`]). Pressure is not carried: the stress is,
+//! and pressed on the skin's curvature at the vertex itself ([`crate::post::fields`]).
 //!
 //! Deterministic whatever the thread count: the kernel sums run in the vertices' order.
 
@@ -35,16 +36,80 @@ const SPACINGS_PER_KERNEL: f64 = 3.0;
 /// kernel instead of sampling millions).
 const MAX_SAMPLES_PER_CELL_SIDE: usize = 4;
 
+/// An open end of a stocking (its welt, an open tube's ankle): the plane of its held ring and
+/// the side the fabric lies on. Skin beyond it is bare, however near the ring's yarn: without
+/// it, skin up to a kernel's width or three grid spacings past the welt took the stocking's
+/// fields, a band as wide as the grid was coarse.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OpenEnd {
+    /// The ring's centre.
+    pub centre: Point3<f64>,
+    /// Unit vector from the ring into the stocking.
+    pub inward: Vec3,
+}
+
+impl OpenEnd {
+    /// The open ends of a tube's knit: its first ring, and its last unless a toe seam closes
+    /// it. Each ring's plane is fitted to its points (the normal is the least-spread direction
+    /// of their scatter), facing the knit's centroid: the next ring can fold past a held one at
+    /// a slack end, so the line to it is no guide.
+    pub fn of_tube(knit: &Knit) -> Vec<OpenEnd> {
+        let x = &knit.particles.x;
+        if knit.courses < 2 || x.is_empty() {
+            return Vec::new();
+        }
+        let middle: Vec3 = x.iter().sum::<Vec3>() / x.len() as f64;
+        let end = |c: usize| {
+            let ring: Vec<Vec3> = (0..knit.wales)
+                .map(|w| x[knit.point(w, c).index()])
+                .collect();
+            let centre = ring.iter().sum::<Vec3>() / ring.len() as f64;
+            let scatter: Matrix3<f64> = ring
+                .iter()
+                .map(|p| (p - centre) * (p - centre).transpose())
+                .sum();
+            let eigen = scatter.symmetric_eigen();
+            let least = eigen.eigenvalues.imin();
+            let normal: Vec3 = eigen.eigenvectors.column(least).into_owned();
+            let towards = middle - centre;
+            let inward = if normal.dot(&towards) < 0.0 {
+                -normal
+            } else {
+                normal
+            };
+            OpenEnd {
+                centre: Point3::from(centre),
+                inward,
+            }
+        };
+        let mut ends = vec![end(0)];
+        if !knit.has_toe_seam() {
+            ends.push(end(knit.courses - 1));
+        }
+        ends
+    }
+
+    /// True for a point beyond the end, where there is no fabric.
+    pub fn beyond(&self, p: &Point3<f64>) -> bool {
+        (p - self.centre).dot(&self.inward) < 0.0
+    }
+}
+
 /// `per_point`, the fields at the points of `knit`, carried to `leg_vertices` (module docs): by
 /// the 16 mm kernel over samples inside the grid's cells where its points lie further apart
 /// than a third of that, over its points where they do not; skin with no fabric that near, by
-/// the grid's points within three grid spacings.
+/// the grid's points within three grid spacings; skin beyond one of the `ends`, none.
 pub fn carry_to_leg(
     knit: &Knit,
     per_point: &KnitFields,
     leg_vertices: &[Point3<f64>],
     skin: &SkinCurvature,
+    ends: &[OpenEnd],
 ) -> KnitFields {
+    let bare: Vec<bool> = leg_vertices
+        .iter()
+        .map(|v| ends.iter().any(|end| end.beyond(v)))
+        .collect();
     let spacing = mean_spacing(knit, Direction::Course).max(mean_spacing(knit, Direction::Wale));
     let points = Carrier {
         fields: per_point,
@@ -54,7 +119,7 @@ pub fn carry_to_leg(
     };
     let n = samples_per_side(spacing);
     if n == 1 {
-        return from_first_near(&[points], leg_vertices, skin);
+        return from_first_near(&[points], leg_vertices, &bare, skin);
     }
     let samples = CellSamples::of(knit, n);
     let sampled = samples.of_fields(per_point);
@@ -65,7 +130,7 @@ pub fn carry_to_leg(
         // 16 mm, wider only where `n` is at its cap (a leg at an absurd scale).
         bandwidth: (SPACINGS_PER_KERNEL * spacing / n as f64).max(TRANSFER_BANDWIDTH_M),
     };
-    from_first_near(&[inside_cells, points], leg_vertices, skin)
+    from_first_near(&[inside_cells, points], leg_vertices, &bare, skin)
 }
 
 /// Samples along each side of a grid cell whose points lie `spacing` metres apart: enough that
@@ -278,19 +343,21 @@ fn kernel_means(
     (out, near)
 }
 
-/// The fields carried over to leg vertices (0 where no yarn is near): each vertex takes them
-/// from the first of `carriers` with fabric within its kernel, pressure apart: the stress is
-/// carried over, and pressed on the skin at each vertex (its curvature there, not the
-/// yarn's, whatever the grid).
+/// The fields carried over to leg vertices (0 where no yarn is near, and where `bare`): each
+/// vertex takes them from the first of `carriers` with fabric within its kernel, pressure
+/// apart: the stress is carried over, and pressed on the skin at each vertex (its curvature
+/// there, not the yarn's, whatever the grid).
 fn from_first_near(
     carriers: &[Carrier],
     leg_vertices: &[Point3<f64>],
+    bare: &[bool],
     skin: &SkinCurvature,
 ) -> KnitFields {
     // The stress's six components, (0,0) (0,1) (0,2) (1,1) (1,2) (2,2).
     const UPPER: [(usize, usize); 6] = [(0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2)];
     let mut moved = vec![vec![0.0; leg_vertices.len()]; 5 + UPPER.len()];
-    let mut found = vec![false; leg_vertices.len()];
+    // Bare skin is taken as found already, so that no carrier gives it fields.
+    let mut found = bare.to_vec();
     for carrier in carriers {
         let per_point = carrier.fields;
         let components: Vec<Vec<f64>> = UPPER
@@ -352,7 +419,7 @@ fn from_first_near(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::knit::Pattern;
+    use crate::knit::{Pattern, Tile};
     use crate::post::fields::tests::{flat, pocket_knit, round_skin};
 
     /// Fields on a flat `spacing` grid 6 cm across: `density(x)` as the stitch density, the
@@ -449,7 +516,7 @@ mod tests {
         let skin = SkinCurvature::of(&surface, MEASURE_SPAN_M);
         let on_leg = |spacing: f64| {
             let (knit, fields) = flat_fields(spacing, field);
-            carry_to_leg(&knit, &fields, &leg, &skin).stitch_density
+            carry_to_leg(&knit, &fields, &leg, &skin, &[]).stitch_density
         };
         let (fine, coarse) = (on_leg(0.001), on_leg(0.008));
         let points_alone = {
@@ -477,6 +544,46 @@ mod tests {
     }
 
     #[test]
+    fn skin_beyond_an_open_end_is_bare_however_near_its_yarn() {
+        // Flat fabric of density 5 over x from 0 to 6 cm, its end across x = 3 cm: skin 1 mm
+        // under the fabric takes 5 on the fabric's side and nothing past the end.
+        let (knit, fields) = flat_fields(0.001, |_| 5.0);
+        let surface = round_skin(0.04);
+        let skin = SkinCurvature::of(&surface, MEASURE_SPAN_M);
+        let end = OpenEnd {
+            centre: Point3::new(0.03, 0.03, 0.0),
+            inward: Vec3::x(),
+        };
+        let leg = [0.031, 0.029].map(|x| Point3::new(x, 0.03, 0.001));
+        let carried = |ends: &[OpenEnd]| carry_to_leg(&knit, &fields, &leg, &skin, ends);
+        let density = carried(&[end]).stitch_density;
+        assert!((density[0] - 5.0).abs() < 1e-12, "{density:?}");
+        assert_eq!(density[1], 0.0);
+        let cut = carried(&[end]);
+        assert!(cut.named().iter().all(|(_, values)| values[1] == 0.0));
+        assert!((carried(&[]).stitch_density[1] - 5.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_tubes_open_ends_are_its_first_ring_and_its_last_unless_a_seam_closes_it() {
+        // A tube along +y, rings 1 cm apart from y = 0.
+        let tube = Knit::grid(8, 5, true, &Tile::of(Pattern::Plain), 0.01, 0.01, |w, c| {
+            let t = std::f64::consts::TAU * w as f64 / 8.0;
+            Vec3::new(0.02 * t.cos(), 0.01 * c as f64, 0.02 * t.sin())
+        });
+        let ends = OpenEnd::of_tube(&tube);
+        assert_eq!(ends.len(), 2);
+        assert!((ends[0].centre - Point3::origin()).norm() < 1e-12);
+        assert!((ends[0].inward - Vec3::y()).norm() < 1e-12);
+        assert!((ends[1].centre - Point3::new(0.0, 0.04, 0.0)).norm() < 1e-12);
+        assert!((ends[1].inward + Vec3::y()).norm() < 1e-12);
+        assert!(ends[0].beyond(&Point3::new(0.02, -0.001, 0.0)));
+        assert!(!ends[0].beyond(&Point3::new(0.02, 0.001, 0.0)));
+        let closed = tube.with_toe_seam(0.01);
+        assert_eq!(OpenEnd::of_tube(&closed), ends[..1]);
+    }
+
+    #[test]
     fn skin_the_fabric_hangs_further_off_takes_the_grids_points() {
         // An 8 mm grid of density 5: skin 2 cm under it has no sample within 16 mm, but the
         // grid's points within three spacings (24 mm) reach it; skin 3 cm under, nothing.
@@ -484,7 +591,7 @@ mod tests {
         let surface = round_skin(0.04);
         let skin = SkinCurvature::of(&surface, MEASURE_SPAN_M);
         let leg = [0.0, -0.02, -0.03].map(|z| Point3::new(0.03, 0.03, z));
-        let density = carry_to_leg(&knit, &fields, &leg, &skin).stitch_density;
+        let density = carry_to_leg(&knit, &fields, &leg, &skin, &[]).stitch_density;
         assert!((density[0] - 5.0).abs() < 1e-12 && (density[1] - 5.0).abs() < 1e-12);
         assert_eq!(density[2], 0.0);
     }
