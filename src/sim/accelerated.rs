@@ -192,11 +192,12 @@ impl RestartRules {
 /// Best-effort iterations after a level has met its tolerance (the multilevel solver's finest
 /// level). From the first iteration whose residual and force step are below the tolerance, the
 /// level goes on until its residual is below [`Polish::residual`] with the force step still
-/// below the tolerance, or [`Polish::max_iterations`] more iterations have passed, or 1,000 in a
-/// row have not bettered its best residual by 10 %, or the futility watch fires (no stall then),
-/// or the level's own cap is reached. It has converged whichever: where it stops in a state that
-/// no longer meets the tolerance (momentum can take the residual back above it), it hands back
-/// the state that first met it, and that state's figures.
+/// below the tolerance, or [`Polish::max_iterations`] more iterations have passed, or a window
+/// of 3,000 iterations has not bettered its best residual by 10 %, or the futility
+/// watch fires (no stall then), or the level's own cap is reached, or the state stops being
+/// finite or runs away. It has converged whichever: where it stops in a state that no longer
+/// meets the tolerance, or is further from rest than the state that first met it (momentum
+/// can take the residual back up), it hands back that first state, and its figures.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Polish {
     /// The relative residual to go on to; the force step need only stay below the tolerance.
@@ -205,11 +206,12 @@ pub struct Polish {
     pub max_iterations: usize,
 }
 
-/// Polishing stops when its best residual has not gained [`FUTILE_PROGRESS`] over this many
-/// iterations: a few points trading places at a knee hold the residual at 5e-4–6e-3 for ever
-/// (makehuman_hips_heavy 100×100), and the futility watch, which needs a quarter of the
-/// iterations restarted, does not see them (docs/decisions/0067).
-const POLISH_WINDOW: usize = 1000;
+/// Polishing stops when its best residual has not gained [`FUTILE_PROGRESS`] over a window of
+/// this many iterations: a few points trading places at a knee can hold the residual at
+/// 5e-4–6e-3 for ever (makehuman_hips_heavy 100×100), and the futility watch, which needs a
+/// quarter of the iterations restarted, does not see them (docs/decisions/0067). Shorter
+/// windows cut short plateaus that end (makehuman_hips_heavy 100×187: over 1,000 iterations).
+const POLISH_WINDOW: usize = 3000;
 
 /// The state that first met the tolerance, kept while polishing, and how polishing gains.
 struct Met {
@@ -335,15 +337,18 @@ pub fn relax_accelerated(
             iteration,
             what,
         };
-        if !(residual.is_finite() && force_step.is_finite() && f64::is_finite(max_move)) {
+        let finite = residual.is_finite() && force_step.is_finite() && f64::is_finite(max_move);
+        let runaway = residual > RUNAWAY_GROWTH * start.max(tolerance);
+        // While polishing, a state that met the tolerance is held: it is handed back instead.
+        if met.is_none() && !finite {
             return Err(diverged("a position or force stopped being finite".into()));
         }
-        if residual > RUNAWAY_GROWTH * start.max(tolerance) {
+        if met.is_none() && runaway {
             return Err(diverged(format!(
                 "the residual grew from {start:.3e} to {residual:.3e}"
             )));
         }
-        let converged = residual < tolerance && force_step < tolerance;
+        let converged = finite && residual < tolerance && force_step < tolerance;
         if let Some(polish) = polish {
             if converged && met.is_none() {
                 met = Some(Met {
@@ -360,10 +365,13 @@ pub fn relax_accelerated(
                 let polished = residual < polish.residual && force_step < tolerance;
                 let spent = iteration - met.iteration >= polish.max_iterations
                     || !met.gaining(iteration, residual);
-                if polished || spent || iteration >= max_iterations || stall.is_some() {
-                    // Best effort: a state that no longer meets the tolerance goes back to the
-                    // one that first did; a watch that fired while polishing is no stall.
-                    let (residual, force_step, max_move) = if converged {
+                let lost = !finite || runaway;
+                if polished || spent || lost || iteration >= max_iterations || stall.is_some() {
+                    // Best effort: a state that no longer meets the tolerance, or is further
+                    // from rest than the one that first did, goes back to that one; a watch
+                    // that fired while polishing is no stall.
+                    let (residual, force_step, max_move) = if converged && residual <= met.residual
+                    {
                         (residual, force_step, max_move)
                     } else {
                         knit.particles.x.clone_from(&met.x);
