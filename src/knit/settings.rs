@@ -383,9 +383,17 @@ impl TubeSettings {
     /// Checks every value; the error names the field under `tube`.
     pub fn validate(&self) -> Result<(), Invalid> {
         let w = self.wales;
-        // Courses left out are known, and checked, once the stocking's length is.
-        let c = self.courses.unwrap_or(2);
-        check_grid_size(w, c).map_err(|message| Invalid::new("", message))?;
+        let grid = match self.courses {
+            Some(c) => check_grid_size(w, c),
+            // Courses left out are known, and checked, once the stocking's length is.
+            None if w < 3 => Err(format!("needs at least 3 wales, got {w}")),
+            None if w > MAX_TUBE_POINTS / 2 => Err(format!(
+                "{w} wales by at least 2 courses is over the {MAX_TUBE_POINTS} points a knit's \
+                 32-bit indices can number"
+            )),
+            None => Ok(()),
+        };
+        grid.map_err(|message| Invalid::new("", message))?;
         if let Some(circumference) = self.relaxed_circumference_m {
             settings::positive_at_most("relaxed_circumference_m", circumference, MAX_STOCKING_M)?;
         }

@@ -491,7 +491,7 @@ pub fn solve_fit(
     clock: &mut StageClock,
     progress: &mut dyn Progress,
 ) -> Result<SolvedFit> {
-    let (leg, memory) = clock.time(Stage::LoadLeg, || -> Result<_> {
+    let (leg, mut memory) = clock.time(Stage::LoadLeg, || -> Result<_> {
         let file = read_leg_file(&inputs.leg)?;
         // Refuse a fit too large for memory before the leg is decoded or the knit allocated.
         let memory = memory_check(scene, plan, file.declared_triangles());
@@ -535,6 +535,7 @@ pub fn solve_fit(
         path.is_some(),
         relaxed_length,
         scene_name,
+        &mut memory,
     )?;
     check_heel_pocket(scene, &spec, path.is_some(), scene_name)?;
     let offset = scene.contact.offset(&scene.yarns);
@@ -788,7 +789,8 @@ pub struct Placement {
 
 /// The tube the scene asks for on a stocking `relaxed_length` long, its courses given or, where
 /// the scene leaves them out, the stitch's ([`Fabric::grid_courses`]), checked as a given grid is
-/// before the leg is read: its size, its memory, and for a stocking to the toe its coarseness.
+/// before the leg is read: its size, its memory (which replaces `memory`, the estimate made
+/// before), and for a stocking to the toe its coarseness.
 fn tube_spec(
     scene: &Scene,
     plan: &Plan,
@@ -796,6 +798,7 @@ fn tube_spec(
     to_toe: bool,
     relaxed_length: f64,
     scene_name: &str,
+    memory: &mut MemoryCheck,
 ) -> Result<TubeSpec> {
     let fabric = scene.fabric();
     let wales = scene.tube.wales;
@@ -831,7 +834,8 @@ fn tube_spec(
             tube: [wales, spec.courses],
             ..fit_size(scene, &outputs, leg.triangles.len())
         };
-        MemoryCheck::fit(&size, &scene.limits).enforce(&leg.path.display().to_string())?;
+        *memory = MemoryCheck::fit(&size, &scene.limits);
+        memory.enforce(&leg.path.display().to_string())?;
     }
     Ok(spec)
 }
@@ -872,6 +876,10 @@ fn stocking_path(scene: &Scene, leg: &Leg, landmarks: &Landmarks) -> Result<Tube
     path_to_toe(landmarks, top_s, &leg.positions, &leg.triangles).map_err(fail)
 }
 
+/// Courses per wale the memory estimate takes where the scene leaves the courses out, before
+/// the stocking's length is known: 1.6–2.0 on the samples' stockings to the toe.
+const COURSES_PER_WALE_ESTIMATE: usize = 2;
+
 /// The fit's memory check: its tube, leg and files against the scene's limits.
 pub fn memory_check(scene: &Scene, plan: &Plan, leg_triangles: usize) -> MemoryCheck {
     let outputs: Vec<_> = plan.files.iter().map(|file| file.output).collect();
@@ -881,11 +889,15 @@ pub fn memory_check(scene: &Scene, plan: &Plan, leg_triangles: usize) -> MemoryC
 /// The size of `scene`'s fit for the memory estimate, writing `outputs`.
 fn fit_size<'a>(scene: &Scene, outputs: &'a [Output], leg_triangles: usize) -> FitSize<'a> {
     FitSize {
-        // Courses left out are at least as many as the wales on a stocking of the samples'
-        // shape (Fabric::grid_courses); checked again once known (`tube_spec`).
+        // Courses left out follow the stitch (Fabric::grid_courses): up to twice the wales on
+        // the samples' stockings to the toe, fewer on a leg alone; checked again once known
+        // (`tube_spec`).
         tube: [
             scene.tube.wales,
-            scene.tube.courses.unwrap_or(scene.tube.wales),
+            scene
+                .tube
+                .courses
+                .unwrap_or(COURSES_PER_WALE_ESTIMATE * scene.tube.wales),
         ],
         leg_triangles,
         outputs,
