@@ -37,9 +37,9 @@ const SPACINGS_PER_KERNEL: f64 = 3.0;
 const MAX_SAMPLES_PER_CELL_SIDE: usize = 4;
 
 /// An open end of a stocking (its welt, an open tube's ankle): the plane of its held ring and
-/// the side the fabric lies on. Skin beyond it is bare, however near the ring's yarn: without
-/// it, skin up to a kernel's width or three grid spacings past the welt took the stocking's
-/// fields, a band as wide as the grid was coarse.
+/// the side the fabric lies on. Skin beyond it is bare, however near the ring's yarn: the kernel
+/// and the three grid spacings reach past the end, and would cover a band as wide as the grid
+/// is coarse. Fabric folded back past a slack ring (a quarter course at most) is not counted.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct OpenEnd {
     /// The ring's centre.
