@@ -88,9 +88,9 @@ fn both_solvers_reach_the_same_rest_state_on_every_sample_leg() {
         // without penetration. They differ in how much the fabric bunches along the wale at
         // the open ankle edge (wale stretch 0.69 against 0.83, so 620 against 380 stitches per
         // cm²), which the fields' span of exactly 8 mm resolves and the 10 mm span of whole
-        // steps smoothed (decision 0057): 32 % apart. Skin past the open ankle ring is bare
-        // (decision 0069); it took the ring's fields in both states, which diluted the
-        // difference to 25 %. Every other sample has one rest state.
+        // steps smoothed (decision 0057): 32 % apart, measured over the covered skin alone (skin
+        // past the open ankle ring is bare, decision 0069). Every other sample has one rest
+        // state.
         let limit = if leg.ends_with("makehuman_hips_heavy.glb") {
             0.35
         } else {
