@@ -122,6 +122,10 @@ pub struct Knit {
     grid_springs: usize,
     /// True when the last course is closed by a toe seam.
     toe_seam: bool,
+    /// The toe seam's rest length in grid wale steps (its rest over a wale spring's; 1 without
+    /// a seam): the fabric the seam stands for, the same on every grid, is a fraction of a
+    /// coarse grid's step.
+    toe_seam_steps: f64,
     /// The heel pocket's short rows, if knitted.
     short_rows: Option<ShortRows>,
     /// Grid points that shaping springs reach, ascending.
@@ -278,6 +282,7 @@ impl Knit {
             yarn_blend: None,
             grid_springs,
             toe_seam: false,
+            toe_seam_steps: 1.0,
             short_rows: None,
             shaped_grid_points: Vec::new(),
             yarn_spring_count: 0,
@@ -310,6 +315,10 @@ impl Knit {
             });
         }
         self.toe_seam = true;
+        let wale_rest = self.grid_rest_m()[1];
+        if rest > 0.0 && wale_rest > 0.0 {
+            self.toe_seam_steps = rest / wale_rest;
+        }
         self.build_lists();
         self
     }
@@ -593,6 +602,13 @@ impl Knit {
     /// 0 and `wales / 2`, and an odd course's middle pair, which a course spring joins).
     pub fn toe_seam_partner(&self, w: usize) -> Option<usize> {
         seam_facing(self.wales, w).filter(|_| self.toe_seam)
+    }
+
+    /// The toe seam's rest length in grid wale steps (1 without a seam): on a grid coarser than
+    /// the stitches, the seam is a fraction of a step of fabric; its springs are stiffer by
+    /// as much, so that per strain they are the same fabric as the wales.
+    pub fn toe_seam_steps(&self) -> f64 {
+        self.toe_seam_steps
     }
 
     /// The heel pocket's short rows, if knitted.

@@ -55,8 +55,9 @@ pub struct TubeSpec {
     /// Length of the relaxed stocking along its centreline, metres.
     pub relaxed_length_m: f64,
     /// The knit's stitch: distance between wales along a course and between courses along a
-    /// wale, metres (`knit.course_spacing_m`, `knit.wale_spacing_m`). Only their ratio matters
-    /// to the fit: it sets how much stiffer the fabric is around than along.
+    /// wale, metres (`knit.course_spacing_m`, `knit.wale_spacing_m`). Their ratio sets how much
+    /// stiffer the fabric is around than along; the distance between courses is also the toe
+    /// seam's rest, one real course on every grid (docs/decisions/0070).
     pub stitch_m: [f64; 2],
 }
 
@@ -185,7 +186,7 @@ pub fn build_stocking(spec: &TubeSpec, path: &TubePath, heel: TubeHeel) -> Knit 
         |w, c| rings[c][w].coords,
     )
     .with_stitch_shape(spec.stitch_m[0], spec.stitch_m[1])
-    .with_toe_seam(rest_wale);
+    .with_toe_seam(spec.stitch_m[1]);
     if heel == TubeHeel::Pocket {
         let [lo, hi] = path.heel_range();
         let course = ((0.5 * (lo + hi) / length) * (c_count - 1) as f64).round() as usize;

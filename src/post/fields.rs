@@ -10,7 +10,8 @@
 //! * **Stretch** at a yarn point, along the course and along the wale: the fitted fabric's length
 //!   over its relaxed length there (1 relaxed, 1.5 stretched by half), measured over
 //!   [`MEASURE_SPAN_M`] of relaxed fabric either way on every grid (fractional spans,
-//!   interpolated), along the wale on over the toe seam, and cut back at the seam's folds to the
+//!   interpolated), along the wale on over the toe seam (one real course of fabric on every
+//!   grid, a fraction of a coarse grid's step), and cut back at the seam's folds to the
 //!   point's own side (see [`stretch`]).
 //! * **Coverage**, 0–1: the fraction of skin hidden by yarn seen along the normal. Each stitch
 //!   is its yarn's loop (Choi & Lo 2003, [`crate::post::loops`]: the shape the `loops` output
@@ -292,16 +293,33 @@ impl Spans {
 
     /// Calls `f(point, line)` for every point of every wale, `line` its line along the wale
     /// (see [`Spans::measure_to_folds`]): through the heel pocket's short rows, and on over the
-    /// toe seam along the facing wale.
+    /// toe seam along the facing wale, in steps of relaxed fabric: the seam is
+    /// [`Knit::toe_seam_steps`] of one, so past it the span's ends lie on the chords between
+    /// the facing wale's points.
     fn along_every_wale(knit: &Knit, mut f: impl FnMut(PointId, &dyn Fn(isize) -> Option<Vec3>)) {
         for w in 0..knit.wales {
             let path = knit.wale_path_over_toe(w);
-            for (j, &p) in path.iter().take(knit.wale_chain(w).len()).enumerate() {
+            let own = knit.wale_chain(w).len();
+            // The toe seam is a fraction of a grid step of relaxed fabric (one on the real
+            // stitches): past it, the facing wale's points fall between whole steps from here.
+            let seam = knit.toe_seam_steps();
+            let x = |k: usize| path.get(k).map(|q| knit.particles.x[q.index()]);
+            let between = |k: usize, t: f64| match t > 1e-9 {
+                true => Some(x(k)? + (x(k + 1)? - x(k)?) * t),
+                false => x(k),
+            };
+            for (j, &p) in path.iter().take(own).enumerate() {
                 let line = |i: isize| {
-                    usize::try_from(j as isize + i)
-                        .ok()
-                        .and_then(|j| path.get(j))
-                        .map(|q| knit.particles.x[q.index()])
+                    let target = usize::try_from(j as isize + i).ok()?;
+                    if target < own {
+                        return x(target);
+                    }
+                    let past_last = (target + 1 - own) as f64;
+                    if past_last < seam {
+                        return between(own - 1, past_last / seam);
+                    }
+                    let on = past_last - seam;
+                    between(own + on.floor() as usize, on.fract())
                 };
                 f(p, &line);
             }
@@ -630,40 +648,44 @@ pub(crate) mod tests {
     #[test]
     fn a_toe_seams_folds_are_measured_on_each_points_own_side() {
         // A tube of 12 wales laid flat as hosiery is at the toe: each ring a slit, wales 1–5 on
-        // top and 7–11 underneath, one wale spacing apart, wales 0 and 6 the folds between
-        // them; the toe seam closes the last course, each wale's step across it one course
-        // spacing. Every spring is at its rest length, so the fabric is unstretched: the
-        // wales' spans run over the seam and the courses' round the folds, each cut back to
-        // the point's own side of a fold (a span over a fold reads 0.5–1.4 here).
+        // top and 7–11 underneath, the seam's length apart, wales 0 and 6 the folds between
+        // them; the toe seam closes the last course. Every spring is at its rest length, so the
+        // fabric is unstretched: the wales' spans run over the seam and the courses' round the
+        // folds, each cut back to the point's own side of a fold (a span over a fold reads
+        // 0.5–1.4 here). The seam is one course spacing, as on the real stitches, or a fraction
+        // of one, as on a grid coarser than them: the spans past it then fall between points.
         let (n, courses, a, b) = (12, 20, 0.001_f64, 0.001);
-        let h = b / 2.0;
-        let fold = (a * a - h * h).sqrt();
-        let at = |w: usize, c: usize| {
-            let (x, z) = match w {
-                0 => (a - fold, 0.0),
-                6 => (5.0 * a + fold, 0.0),
-                1..=5 => (w as f64 * a, h),
-                _ => ((n - w) as f64 * a, -h),
+        for seam in [b, 0.3 * b] {
+            let h = seam / 2.0;
+            let fold = (a * a - h * h).sqrt();
+            let at = |w: usize, c: usize| {
+                let (x, z) = match w {
+                    0 => (a - fold, 0.0),
+                    6 => (5.0 * a + fold, 0.0),
+                    1..=5 => (w as f64 * a, h),
+                    _ => ((n - w) as f64 * a, -h),
+                };
+                Vec3::new(x, c as f64 * b, z)
             };
-            Vec3::new(x, c as f64 * b, z)
-        };
-        let knit =
-            Knit::grid(n, courses, true, &Tile::of(Pattern::Plain), a, b, at).with_toe_seam(b);
-        let (course, wale) = stretch(&knit);
-        for c in 0..courses {
-            for w in 0..n {
-                let i = knit.point(w, c).index();
-                assert!(
-                    (wale[i] - 1.0).abs() < 1e-9,
-                    "wale {w}, course {c}: {}",
-                    wale[i]
-                );
-                // The corners of a slit are not arcs: within 3 % there.
-                assert!(
-                    (course[i] - 1.0).abs() < 0.03,
-                    "wale {w}, course {c}: {}",
-                    course[i]
-                );
+            let knit = Knit::grid(n, courses, true, &Tile::of(Pattern::Plain), a, b, at)
+                .with_toe_seam(seam);
+            assert!((knit.toe_seam_steps() - seam / b).abs() < 1e-12);
+            let (course, wale) = stretch(&knit);
+            for c in 0..courses {
+                for w in 0..n {
+                    let i = knit.point(w, c).index();
+                    assert!(
+                        (wale[i] - 1.0).abs() < 1e-9,
+                        "seam {seam}, wale {w}, course {c}: {}",
+                        wale[i]
+                    );
+                    // The corners of a slit are not arcs: within 3 % there.
+                    assert!(
+                        (course[i] - 1.0).abs() < 0.03,
+                        "seam {seam}, wale {w}, course {c}: {}",
+                        course[i]
+                    );
+                }
             }
         }
     }

@@ -47,7 +47,11 @@ impl ForceTerms {
             Some(shares) => self.blended(shares[direction.index()], direction),
             None => self.stiffness[yarn.index() as usize],
         };
-        stiffness * knit.stiffness_scale[direction.index()]
+        let seam = match yarn {
+            YarnKind::Seam => 1.0 / knit.toe_seam_steps(),
+            _ => 1.0,
+        };
+        stiffness * knit.stiffness_scale[direction.index()] * seam
     }
 
     /// The stiffness of yarns mixed in `shares` along `direction`: courses lie side by side, so
@@ -104,4 +108,42 @@ pub trait RelaxObserver {
 
 impl RelaxObserver for () {
     fn on_step(&mut self, _step: usize, _residual: f64) {}
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::knit::pattern::{Pattern, Tile};
+
+    #[test]
+    fn a_toe_seam_shorter_than_a_step_is_the_same_fabric_per_strain() {
+        // Wale springs resting at 1 and a seam resting at 0.2 (one real course on a grid five
+        // times coarser): the seam is a fifth of a step, and its springs five times as stiff,
+        // so that stretched by the same strain they pull as a wale spring does.
+        let tube = || {
+            Knit::grid(
+                8,
+                4,
+                true,
+                &Tile::of(Pattern::Alternating),
+                1.0,
+                1.0,
+                |w, c| Vec3::new(w as f64, c as f64, 0.0),
+            )
+            .with_stitch_shape(1.0, 1.0)
+        };
+        let knit = tube().with_toe_seam(0.2);
+        assert!((knit.toe_seam_steps() - 0.2).abs() < 1e-12);
+        let terms = ForceTerms {
+            stiffness: [1.0, 10.0, 10.0],
+            connection_factor: None,
+        };
+        let wale = terms.c1_of(&knit, YarnKind::Nylon, Direction::Wale);
+        let seam = terms.c1_of(&knit, YarnKind::Seam, Direction::Wale);
+        assert!((seam * 0.2 - wale).abs() < 1e-12 * wale);
+        // Without a seam, or with one a step long, nothing changes.
+        assert_eq!(tube().toe_seam_steps(), 1.0);
+        let whole = tube().with_toe_seam(1.0);
+        assert_eq!(terms.c1_of(&whole, YarnKind::Seam, Direction::Wale), wale);
+    }
 }
