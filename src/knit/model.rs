@@ -122,9 +122,7 @@ pub struct Knit {
     grid_springs: usize,
     /// True when the last course is closed by a toe seam.
     toe_seam: bool,
-    /// The toe seam's rest length in grid wale steps (its rest over a wale spring's; 1 without
-    /// a seam): the fabric the seam stands for, the same on every grid, is a fraction of a
-    /// coarse grid's step.
+    /// See [`Knit::toe_seam_steps`].
     toe_seam_steps: f64,
     /// The heel pocket's short rows, if knitted.
     short_rows: Option<ShortRows>,
