@@ -450,9 +450,9 @@ impl Plan {
                     // Courses left out: known, and so the levels, once the leg's length is.
                     None => format!(
                         "up to {grid}: an open tube on grids halving down to {COARSEST} a side; \
-                         a stocking to the toe on the real stitch count's levels coarser than \
-                         it, else from its coarsest level if that is the coarser grid, else on \
-                         grids halving down to {STOCKING_COARSEST} a side"
+                         a stocking to the toe on the real stitch count's levels with no more \
+                         wales than it, else from its coarsest level if that is the coarser \
+                         grid, else on grids halving down to {STOCKING_COARSEST} a side"
                     ),
                     Some(courses) => {
                         let chain = |coarsest: usize| -> String {
@@ -466,9 +466,9 @@ impl Plan {
                         // whose courses the leg's length decides; without tube.bottom the leg
                         // decides, so name both.
                         let stocking = format!(
-                            "on the real stitch count's levels coarser than {grid}, then \
-                             {grid}; where it has none, from its coarsest level if that is the \
-                             coarser grid, else on grids {}",
+                            "on the real stitch count's levels with no more wales than {grid}, \
+                             whatever their courses, then {grid}; where it has none, from its \
+                             coarsest level if that is the coarser grid, else on grids {}",
                             chain(STOCKING_COARSEST)
                         );
                         let tube = format!("on grids {}", chain(COARSEST));
@@ -713,15 +713,15 @@ mod tests {
         scene.tube.courses = Some(150);
         let why = fit_why(&scene);
         assert!(why.contains("38×39 → 75×76 → 150×150"), "{why}");
-        // A stocking to the toe follows the real stitch count's levels coarser than it, or its
-        // coarsest, or halves its own down to 48 a side, and the plan says so.
+        // A stocking to the toe follows the real stitch count's levels with no more wales than
+        // it, or its coarsest, or halves its own down to 48 a side, and the plan says so.
         scene.tube.bottom = Some(TubeBottom::Toe);
         let why = fit_why(&scene);
         assert!(
             why.ends_with(
-                "on the real stitch count's levels coarser than 150×150, then 150×150; where it \
-                 has none, from its coarsest level if that is the coarser grid, else on grids \
-                 75×76 → 150×150"
+                "on the real stitch count's levels with no more wales than 150×150, whatever \
+                 their courses, then 150×150; where it has none, from its coarsest level if \
+                 that is the coarser grid, else on grids 75×76 → 150×150"
             ),
             "{why}"
         );

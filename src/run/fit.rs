@@ -53,7 +53,7 @@ use crate::scene::{LoadedScene, Scene, LEG_AXIS};
 use crate::sim::accelerated::OutOfBalance;
 use crate::sim::contact::{ContactCounters, LegContact};
 use crate::sim::multilevel::{
-    grid_sizes_down_to, grid_sizes_following, COARSEST, STOCKING_COARSEST,
+    grid_sizes_down_to, grid_sizes_following, largest_level, COARSEST, STOCKING_COARSEST,
 };
 use crate::sim::{
     relax_constrained, relax_multilevel, Constraints, ForceTerms, LevelStats, Levels,
@@ -836,6 +836,30 @@ fn tube_spec(
         };
         *memory = MemoryCheck::fit(&size, &scene.limits);
         memory.enforce(&leg.path.display().to_string())?;
+    }
+    // A stocking follows the real count's chain, whose level with the grid's wales has more
+    // points than a grid with fewer courses than the stitch's: the fit needs that level's memory.
+    if to_toe {
+        let real = fabric.real_count(relaxed_length);
+        let sizes = grid_sizes_following(real, wales, spec.courses, STOCKING_COARSEST);
+        let [w, c] = largest_level(&sizes);
+        if w.saturating_mul(c) > wales * spec.courses {
+            let refuse = |message: String| Error::InvalidScene {
+                path: scene_name.to_string(),
+                field: "tube".into(),
+                message: format!(
+                    "its fit passes through the real count's {w}×{c} level: {message}"
+                ),
+            };
+            check_grid_size(w, c).map_err(refuse)?;
+            let outputs: Vec<_> = plan.files.iter().map(|file| file.output).collect();
+            let size = FitSize {
+                tube: [w, c],
+                ..fit_size(scene, &outputs, leg.triangles.len())
+            };
+            *memory = MemoryCheck::fit(&size, &scene.limits);
+            memory.enforce(&leg.path.display().to_string())?;
+        }
     }
     Ok(spec)
 }

@@ -3,8 +3,8 @@
 //!
 //! The knit is first relaxed on a grid with about half the wales and half the courses of the
 //! one asked for (and that on a grid half as fine again, down to [`COARSEST`] points a side;
-//! a stocking to the toe on the real stitch count's own coarser levels where it has them,
-//! [`grid_sizes_following`]: its foot rests where the coarse levels leave it).
+//! a stocking to the toe on the real stitch count's own levels with no more wales where it has
+//! them, [`grid_sizes_following`]: its foot rests where the coarse levels leave it).
 //! A coarse grid stands for the same stocking: its rest lengths are twice as long, so the same
 //! relaxed circumference and length. Its rest state is interpolated (bilinearly, around the
 //! closed courses and along the wales) onto the next finer grid, the constraints put any
@@ -140,13 +140,16 @@ pub fn grid_sizes_down_to(wales: usize, courses: usize, coarsest: usize) -> Vec<
 }
 
 /// Grid sizes for a `wales × courses` stocking that follows the real stitch count's own path:
-/// the levels of the real count's chain ([`grid_sizes_down_to`] to `coarsest`) coarser than the
-/// grid both ways and no smaller than `coarsest`, then the grid. Where it has none, its
-/// coarsest level if that is still the coarser grid (fewer wales, fewer points: 50×102 for a
-/// 100×100 stocking on a leg whose real count has 805 courses), else the grid's own chain. A
-/// stocking's foot rests where its coarse levels leave it, the real count's too (decision
-/// 0062), so a grid starts from the real count's coarsest rest where it can (decisions 0063
-/// and 0066).
+/// the levels of the real count's chain ([`grid_sizes_down_to`] to `coarsest`) with no more
+/// wales than the grid, whatever their courses, and no smaller than `coarsest` (the real count
+/// itself only where it is the grid), then the grid. So a grid with fewer courses than the
+/// stitch's (an N×N one, 100×100 where the real count's chain has 100×176) is solved on the
+/// chain's level with its wales first. Where there are none, the real count's coarsest level
+/// if that is still the coarser grid (fewer wales, fewer points), else the grid's own chain.
+/// A stocking's foot has more than one rest and settles in the one its coarse levels lead to,
+/// the real count's too (decisions 0062 and 0071), so a grid follows the real count's path as
+/// far as its wales allow (decisions 0063, 0066 and 0072). [`largest_level`] is what that
+/// costs in points.
 pub fn grid_sizes_following(
     [real_wales, real_courses]: [usize; 2],
     wales: usize,
@@ -154,20 +157,33 @@ pub fn grid_sizes_following(
     coarsest: usize,
 ) -> Vec<(usize, usize)> {
     let chain = grid_sizes_down_to(real_wales, real_courses, coarsest);
-    let usable = |&(w, c): &(usize, usize)| w.min(c) >= coarsest && w < wales;
+    let real = (real_wales, real_courses);
     let mut sizes: Vec<(usize, usize)> = chain
         .iter()
         .copied()
-        .filter(|&(w, c)| usable(&(w, c)) && c < courses)
+        .filter(|&(w, c)| w.min(c) >= coarsest && w <= wales && (w, c) != real)
+        .filter(|&level| level != (wales, courses))
         .collect();
     if sizes.is_empty() {
         match chain.first().copied() {
-            Some((w, c)) if usable(&(w, c)) && w * c < wales * courses => sizes.push((w, c)),
+            Some((w, c)) if w.min(c) >= coarsest && w < wales && w * c < wales * courses => {
+                sizes.push((w, c))
+            }
             _ => return grid_sizes_down_to(wales, courses, coarsest),
         }
     }
     sizes.push((wales, courses));
     sizes
+}
+
+/// The level of `sizes` with the most points, `[wales, courses]`: the grid itself, or where it
+/// follows the real count's chain with fewer courses than the stitch's
+/// ([`grid_sizes_following`]), the chain's level with its wales, up to twice its points.
+pub fn largest_level(sizes: &[(usize, usize)]) -> [usize; 2] {
+    sizes
+        .iter()
+        .max_by_key(|&&(w, c)| w.saturating_mul(c))
+        .map_or([0, 0], |&(w, c)| [w, c])
 }
 
 /// Relaxes a `wales × courses` knit coarse to fine (module docs); returns the fine knit at rest
@@ -380,18 +396,33 @@ mod tests {
             grid_sizes_down_to(100, 100, STOCKING_COARSEST),
             vec![(50, 51), (100, 100)]
         );
-        // A stocking follows the real count's levels coarser than it, or halves its own.
+        // A stocking follows the real count's levels with no more wales than it, whatever
+        // their courses (an N×N grid has fewer than the stitch's), or halves its own.
         let following = |w, c| grid_sizes_following([400, 701], w, c, STOCKING_COARSEST);
-        assert_eq!(following(150, 150), vec![(50, 89), (150, 150)]);
-        assert_eq!(following(300, 300), vec![(50, 89), (100, 176), (300, 300)]);
+        assert_eq!(following(150, 150), vec![(50, 89), (100, 176), (150, 150)]);
+        assert_eq!(following(150, 263), vec![(50, 89), (100, 176), (150, 263)]);
+        assert_eq!(following(100, 100), vec![(50, 89), (100, 176), (100, 100)]);
+        assert_eq!(largest_level(&following(100, 100)), [100, 176]);
+        assert_eq!(largest_level(&following(150, 150)), [150, 150]);
+        assert_eq!(
+            following(300, 300),
+            vec![(50, 89), (100, 176), (200, 351), (300, 300)]
+        );
         assert_eq!(
             following(400, 701),
             grid_sizes_down_to(400, 701, STOCKING_COARSEST)
         );
-        assert_eq!(following(60, 60), vec![(60, 60)]);
-        // Where it has no level coarser both ways, its coarsest if that has fewer points.
+        // More wales than the real count: never the real count itself first.
+        assert_eq!(
+            following(500, 100),
+            vec![(50, 89), (100, 176), (200, 351), (500, 100)]
+        );
+        assert_eq!(following(60, 60), vec![(50, 89), (60, 60)]);
         let following = |w, c| grid_sizes_following([400, 805], w, c, STOCKING_COARSEST);
-        assert_eq!(following(100, 100), vec![(50, 102), (100, 100)]);
+        assert_eq!(following(100, 100), vec![(50, 102), (100, 202), (100, 100)]);
+        assert_eq!(following(60, 80), vec![(50, 102), (60, 80)]);
+        // Where it has no level with fewer wales, its coarsest if that has fewer points.
+        let following = |w, c| grid_sizes_following([400, 805], w, c, 60);
         assert_eq!(following(60, 80), vec![(60, 80)]);
         // A real count too small to halve is no level below the coarsest.
         let following = |w, c| grid_sizes_following([40, 701], w, c, STOCKING_COARSEST);
