@@ -178,7 +178,8 @@ pub fn grid_sizes_following(
 
 /// The level of `sizes` with the most points, `[wales, courses]`: the grid itself, or where it
 /// follows the real count's chain with fewer courses than the stitch's
-/// ([`grid_sizes_following`]), the chain's level with its wales, up to twice its points.
+/// ([`grid_sizes_following`]), the chain's level with its wales (about the points of the grid
+/// whose courses follow the stitch: 1.75–2× an N×N grid's on the samples' stockings).
 pub fn largest_level(sizes: &[(usize, usize)]) -> [usize; 2] {
     sizes
         .iter()
