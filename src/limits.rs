@@ -92,6 +92,9 @@ pub struct FitSize<'a> {
     pub preview_pixels: u64,
     /// The tube's points are real stitches drawn as loops (for `loops` or the preview).
     pub loops: bool,
+    /// A level with more points than the tube that the solver relaxes first, if any: an N×N
+    /// stocking follows the real count's levels up to its wales (docs/decisions/0072).
+    pub solved_on: Option<[usize; 2]>,
 }
 
 /// The peak memory a fit is estimated to need, by part, in bytes.
@@ -100,6 +103,9 @@ pub struct MemoryEstimate {
     /// Tube size, wales × courses (for messages).
     #[serde(skip)]
     pub tube: [usize; 2],
+    /// [`FitSize::solved_on`] (for messages).
+    #[serde(skip)]
+    pub solved_on: Option<[usize; 2]>,
     /// Tube points (wales × courses).
     pub tube_points: u64,
     /// Triangles the leg file declares.
@@ -145,11 +151,17 @@ impl MemoryEstimate {
         } else {
             0.0
         };
+        // The solver's part on the larger level it relaxes first; the files' on the tube.
+        let solved = size
+            .solved_on
+            .map_or(points, |[w, c]| (w as f64 * c as f64).max(points));
+        let tube = points * tube + (solved - points) * SOLVE_BYTES_PER_POINT;
         // f64 → u64 saturates, so an absurd size reads as "more than any machine has".
-        let (base_bytes, tube_bytes) = (BASE_BYTES as u64, (points * tube) as u64);
+        let (base_bytes, tube_bytes) = (BASE_BYTES as u64, tube as u64);
         let (leg_bytes, preview_bytes) = ((triangles * leg) as u64, preview as u64);
         MemoryEstimate {
             tube: size.tube,
+            solved_on: size.solved_on,
             tube_points: points as u64,
             leg_triangles: size.leg_triangles as u64,
             base_bytes,
@@ -315,9 +327,12 @@ impl MemoryCheck {
         } else {
             "lower --resolution (tube.wales, tube.courses)"
         };
+        let first = e.solved_on.map_or(String::new(), |[w, c]| {
+            format!(", relaxed first on the real stitch count's {w}×{c} level,")
+        });
         Err(self.too_large(
             format!(
-                "a fit of {}×{} points on {leg_name} ({} triangles)",
+                "a fit of {}×{} points{first} on {leg_name} ({} triangles)",
                 e.tube[0], e.tube[1], e.leg_triangles
             ),
             how_to_override,
@@ -391,6 +406,7 @@ mod tests {
             outputs,
             preview_pixels: 768 * 768,
             loops: false,
+            solved_on: None,
         }
     }
 
@@ -415,6 +431,22 @@ mod tests {
         assert!(MemoryEstimate::fit(&drawn_as_loops).tube_bytes > small.tube_bytes);
         assert_eq!(small.preview_bytes, 0);
         assert!(MemoryEstimate::fit(&size(&[Output::Preview])).preview_bytes > 0);
+        // A larger level relaxed first adds its solver's part only: the files are the tube's.
+        let through = |solved_on| {
+            MemoryEstimate::fit(&FitSize {
+                solved_on,
+                ..size(&[Output::Ply])
+            })
+            .tube_bytes
+        };
+        let plain = through(None);
+        let extra = (150.0 * 150.0 * SOLVE_BYTES_PER_POINT) as u64;
+        assert_eq!(through(Some([150, 300])), plain + extra);
+        assert_eq!(
+            through(Some([100, 100])),
+            plain,
+            "a smaller level costs nothing more"
+        );
     }
 
     #[test]

@@ -829,37 +829,38 @@ fn tube_spec(
         {
             return Err(refuse(why));
         }
+    }
+    // A stocking with fewer courses than the stitch's is relaxed first on the real count's
+    // level with its wales, which has more points (`grid_sizes_following`).
+    let solved_on = to_toe
+        .then(|| {
+            let real = fabric.real_count(relaxed_length);
+            largest_level(&grid_sizes_following(
+                real,
+                wales,
+                spec.courses,
+                STOCKING_COARSEST,
+            ))
+        })
+        .filter(|&[w, c]| w.saturating_mul(c) > wales * spec.courses);
+    if let Some([w, c]) = solved_on {
+        check_grid_size(w, c).map_err(|message| Error::InvalidScene {
+            path: scene_name.to_string(),
+            field: "tube".into(),
+            message: format!("relaxed first on the real stitch count's {w}×{c} level: {message}"),
+        })?;
+    }
+    // Courses left out, or a larger level, are known only now: the estimate made before the
+    // leg was read is replaced.
+    if scene.tube.courses.is_none() || solved_on.is_some() {
         let outputs: Vec<_> = plan.files.iter().map(|file| file.output).collect();
         let size = FitSize {
             tube: [wales, spec.courses],
+            solved_on,
             ..fit_size(scene, &outputs, leg.triangles.len())
         };
         *memory = MemoryCheck::fit(&size, &scene.limits);
         memory.enforce(&leg.path.display().to_string())?;
-    }
-    // A stocking follows the real count's chain, whose level with the grid's wales has more
-    // points than a grid with fewer courses than the stitch's: the fit needs that level's memory.
-    if to_toe {
-        let real = fabric.real_count(relaxed_length);
-        let sizes = grid_sizes_following(real, wales, spec.courses, STOCKING_COARSEST);
-        let [w, c] = largest_level(&sizes);
-        if w.saturating_mul(c) > wales * spec.courses {
-            let refuse = |message: String| Error::InvalidScene {
-                path: scene_name.to_string(),
-                field: "tube".into(),
-                message: format!(
-                    "its fit passes through the real count's {w}×{c} level: {message}"
-                ),
-            };
-            check_grid_size(w, c).map_err(refuse)?;
-            let outputs: Vec<_> = plan.files.iter().map(|file| file.output).collect();
-            let size = FitSize {
-                tube: [w, c],
-                ..fit_size(scene, &outputs, leg.triangles.len())
-            };
-            *memory = MemoryCheck::fit(&size, &scene.limits);
-            memory.enforce(&leg.path.display().to_string())?;
-        }
     }
     Ok(spec)
 }
@@ -928,6 +929,8 @@ fn fit_size<'a>(scene: &Scene, outputs: &'a [Output], leg_triangles: usize) -> F
         preview_pixels: u64::from(scene.render.width) * u64::from(scene.render.height),
         // Loops are drawn for the real stitches, checked once their count is known.
         loops: false,
+        // A larger level than the grid is known once the stocking's length is (`tube_spec`).
+        solved_on: None,
     }
 }
 

@@ -308,3 +308,28 @@ fn regression_a_heel_pocket_longer_than_the_stocking_is_refused_not_allocated() 
         ],
     );
 }
+
+#[test]
+fn an_nxn_stocking_is_checked_for_the_larger_level_it_is_relaxed_on_first() {
+    // 100×100 to the toe is relaxed first on the real count's 100×176 level (decision 0072):
+    // about 37 MiB as the grid alone (the check before the leg is read passes), about 41 MiB
+    // with that level's solver; a limit between the two refuses it once the level is known.
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "s.json", r#"{"outputs": ["ply"]}"#);
+    let leg = crate::support::sample("makehuman_leg_foot.glb");
+    let args = [
+        &fit_args(&leg, "100x100")[..],
+        &["--memory-limit", "0.0385"],
+    ]
+    .concat();
+    let out = knitfit(dir.path(), &args);
+    assert_refused(
+        dir.path(),
+        &out,
+        &[
+            "a fit of 100×100 points, relaxed first on the real stitch count's 100×176 level",
+            "needs about 41 MiB",
+            "lower --resolution",
+        ],
+    );
+}
