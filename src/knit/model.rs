@@ -185,8 +185,9 @@ impl ShortRows {
 pub struct Face {
     /// The corners.
     pub corners: Vec<PointId>,
-    /// Knitted stitches the face stands for: the mean of its two sides' wale intervals (1 for a
-    /// grid cell), 0 for the toe seam, which is sewn, not knitted.
+    /// Knitted stitches the face stands for, in grid cells: the mean of its two sides' wale
+    /// intervals (1 for a grid cell, its interval over the first on a graded grid), 0 for the
+    /// toe seam, which is sewn, not knitted.
     pub stitches: f64,
 }
 
@@ -291,6 +292,96 @@ impl Knit {
         };
         knit.build_lists();
         knit
+    }
+
+    /// The same grid with its courses `intervals[c]` metres of relaxed fabric apart along the
+    /// wale (course `c` to `c + 1`), rather than all one rest length: a grid graded finer where
+    /// its cells would be too long for the shape they wrap (a toe's tip). The springs stay the
+    /// same fabric per strain: a wale spring is stiffer by the first interval over its own
+    /// (shorter yarn, stiffer), and a ring's course springs by the fabric it stands for (half
+    /// its intervals either side) over the first interval. On an even grid every factor is 1.
+    /// Before the shaping, whose springs take the first interval as their step.
+    pub fn with_course_intervals(mut self, intervals: &[f64]) -> Knit {
+        assert_eq!(
+            intervals.len() + 1,
+            self.courses,
+            "an interval between each two courses"
+        );
+        assert_eq!(self.grid_springs, self.springs.len(), "before the shaping");
+        let start = self.courses * self.course_springs_per_row();
+        for (c, &rest) in intervals.iter().enumerate() {
+            for s in &mut self.springs[start + c * self.wales..][..self.wales] {
+                s.rest = rest;
+            }
+        }
+        self
+    }
+
+    /// Relaxed fabric between course `c` and `c + 1` along the wale, metres (the rest of the
+    /// grid's wale springs there; see [`Knit::with_course_intervals`]).
+    pub fn course_interval(&self, c: usize) -> f64 {
+        self.springs[self.courses * self.course_springs_per_row() + c * self.wales].rest
+    }
+
+    /// Relaxed fabric from the first course to each course along the wale, metres.
+    pub fn course_places(&self) -> Vec<f64> {
+        let mut place = 0.0;
+        let mut places = Vec::with_capacity(self.courses);
+        for c in 0..self.courses {
+            places.push(place);
+            if c + 1 < self.courses {
+                place += self.course_interval(c);
+            }
+        }
+        places
+    }
+
+    /// [`Knit::grid_spring_factors`] of spring `s`: its row's for a grid spring, 1 for the
+    /// shaping's (whose own factors, the toe seam's, are its yarn's).
+    pub fn spring_factor(&self, s: usize) -> f64 {
+        if s >= self.grid_springs {
+            return 1.0;
+        }
+        let per_row = self.course_springs_per_row();
+        let start = self.courses * per_row;
+        match s < start {
+            true => self.grid_spring_factors(s / per_row.max(1))[0],
+            false => self.grid_spring_factors((s - start) / self.wales)[1],
+        }
+    }
+
+    /// True when the courses are not all one rest length apart (a graded grid).
+    pub fn is_graded(&self) -> bool {
+        if self.courses < 3 || self.wales == 0 {
+            return false;
+        }
+        let first = self.course_interval(0);
+        (1..self.courses - 1).any(|c| self.course_interval(c) != first)
+    }
+
+    /// Factor on the stiffness of the grid's springs in course row `c` and of its wale springs
+    /// from course `c` up (`[course, wale]`): 1 on an even grid (see
+    /// [`Knit::with_course_intervals`]).
+    pub fn grid_spring_factors(&self, c: usize) -> [f64; 2] {
+        let last = self.courses.saturating_sub(1);
+        if last == 0 || self.wales == 0 {
+            return [1.0, 1.0];
+        }
+        // Read per row by the force pass: the first interval directly, not by a search.
+        let first = self.course_interval(0);
+        if first <= 0.0 {
+            return [1.0, 1.0];
+        }
+        let height = match c {
+            0 => first,
+            _ if c == last => self.course_interval(last - 1),
+            _ => 0.5 * (self.course_interval(c - 1) + self.course_interval(c)),
+        };
+        let wale = match c < last {
+            true => first / self.course_interval(c),
+            false => 1.0,
+        };
+        [height / first, wale]
     }
 
     /// Closes the last course with a toe seam, as hosiery is closed: the course laid flat with
@@ -660,6 +751,30 @@ impl Knit {
         }
     }
 
+    /// Relaxed fabric from the first course to each point of [`Knit::wale_chain`] `w`, metres:
+    /// the grid's intervals, and through a heel pocket its short rows' wale springs.
+    pub fn wale_chain_places(&self, w: usize) -> Vec<f64> {
+        let pocket = self.short_rows.as_ref().filter(|rows| rows.depth[w] > 0);
+        let mut steps = Vec::with_capacity(self.courses + 8);
+        for c in 0..self.courses.saturating_sub(1) {
+            match pocket {
+                Some(rows) if rows.course == c => {
+                    // The short rows' springs are the shaping's, one first interval each.
+                    let step = self.grid_rest_m()[1];
+                    steps.extend(std::iter::repeat_n(step, 2 * rows.depth[w] + 1));
+                }
+                _ => steps.push(self.course_interval(c)),
+            }
+        }
+        let mut place = 0.0;
+        std::iter::once(0.0)
+            .chain(steps.into_iter().map(|r| {
+                place += r;
+                place
+            }))
+            .collect()
+    }
+
     /// [`Knit::wale_chain`] of wale `w`, and where a toe seam joins it to another wale, on over
     /// the toe and back along that wale to its first course: the fabric's path along the wale.
     pub fn wale_path_over_toe(&self, w: usize) -> Vec<PointId> {
@@ -676,7 +791,13 @@ impl Knit {
         let wales = self.wales;
         let across = self.course_springs_per_row();
         let mut faces = Vec::with_capacity(across * self.courses);
+        let first = self.grid_rest_m()[1];
         for c in 0..self.courses.saturating_sub(1) {
+            // A graded grid's cell is its interval's share of an even one's.
+            let cell = match first > 0.0 {
+                true => self.course_interval(c) / first,
+                false => 1.0,
+            };
             for w in 0..across {
                 let next = (w + 1) % wales;
                 match &self.short_rows {
@@ -692,7 +813,7 @@ impl Knit {
                             self.point(next, c + 1),
                             self.point(w, c + 1),
                         ],
-                        stitches: 1.0,
+                        stitches: cell,
                     }),
                 }
             }

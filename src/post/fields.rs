@@ -111,7 +111,12 @@ pub fn stretch(knit: &Knit) -> Stretch {
     let mut wale = vec![1.0; knit.len()];
     if rest_wale > 0.0 {
         Spans::along_every_wale(knit, |p, line| {
-            if let Some(s) = spans.measure_to_folds(reach_wale, line, ratio(rest_wale)) {
+            let reach = line.reach.unwrap_or(reach_wale);
+            let ratio = |ends: &Ends| match line.relaxed {
+                Some(relaxed) => ends.arc_length() / relaxed(ends),
+                None => ratio(rest_wale)(ends),
+            };
+            if let Some(s) = spans.measure_to_folds(reach, line.at, ratio) {
                 wale[p.index()] = s;
             }
         });
@@ -126,6 +131,9 @@ struct Ends {
     before: Vec3,
     here: Vec3,
     after: Vec3,
+    /// Whole steps back to `before` and on to `after`.
+    back: f64,
+    on: f64,
     steps: f64,
 }
 
@@ -270,6 +278,8 @@ impl Spans {
             before,
             here,
             after,
+            back,
+            on,
             steps: back + on,
         })
     }
@@ -293,38 +303,100 @@ impl Spans {
 
     /// Calls `f(point, line)` for every point of every wale, `line` its line along the wale
     /// (see [`Spans::measure_to_folds`]): through the heel pocket's short rows, and on over the
-    /// toe seam along the facing wale, in steps of relaxed fabric: the seam is
-    /// [`Knit::toe_seam_steps`] of one, so past it the span's ends lie on the chords between
-    /// the facing wale's points.
-    fn along_every_wale(knit: &Knit, mut f: impl FnMut(PointId, &dyn Fn(isize) -> Option<Vec3>)) {
+    /// toe seam along the facing wale, in steps of relaxed fabric: the seam is a fraction of the
+    /// last interval (one real course; [`Knit::toe_seam_steps`] of one on an even grid), so past
+    /// it the span's ends lie on the chords between the facing wale's points. On a graded grid
+    /// the line also gives each point its reach in steps and the relaxed fabric between a
+    /// span's ends.
+    fn along_every_wale(knit: &Knit, mut f: impl FnMut(PointId, &WaleLine)) {
+        let graded = knit.is_graded();
+        let last = knit.courses.saturating_sub(2);
+        let seam = match graded {
+            true => knit.toe_seam_steps() * knit.grid_rest_m()[1] / knit.course_interval(last),
+            false => knit.toe_seam_steps(),
+        };
         for w in 0..knit.wales {
             let path = knit.wale_path_over_toe(w);
             let own = knit.wale_chain(w).len();
-            // The toe seam is a fraction of a grid step of relaxed fabric (one on the real
-            // stitches): past it, the facing wale's points fall between whole steps from here.
-            let seam = knit.toe_seam_steps();
+            // Relaxed fabric to each point of the path, on a graded grid (over the seam, back
+            // along the facing wale).
+            let places: Vec<f64> = match graded {
+                true => {
+                    let mut places = knit.wale_chain_places(w);
+                    let end = places.last().copied().unwrap_or(0.0);
+                    if let Some(facing) = knit.toe_seam_partner(w) {
+                        let theirs = knit.wale_chain_places(facing);
+                        let total = theirs.last().copied().unwrap_or(0.0);
+                        let seam_m = seam * knit.course_interval(last);
+                        places.extend(theirs.iter().rev().map(|p| end + seam_m + total - p));
+                    }
+                    places
+                }
+                false => Vec::new(),
+            };
             let x = |k: usize| path.get(k).map(|q| knit.particles.x[q.index()]);
             let between = |k: usize, t: f64| match t > 1e-9 {
                 true => Some(x(k)? + (x(k + 1)? - x(k)?) * t),
                 false => x(k),
             };
+            // The place on the path `i` steps from the point `j`: a path index and the
+            // fraction on to the next. The toe seam is a fraction of a grid step of relaxed
+            // fabric (one on the real stitches): past it, the facing wale's points fall between
+            // whole steps from here.
+            let place = |j: usize, i: isize| -> Option<(usize, f64)> {
+                let target = usize::try_from(j as isize + i).ok()?;
+                if target < own {
+                    return Some((target, 0.0));
+                }
+                let past_last = (target + 1 - own) as f64;
+                if past_last < seam {
+                    return Some((own - 1, past_last / seam));
+                }
+                let on = past_last - seam;
+                Some((own + on.floor() as usize, on.fract()))
+            };
+            let relaxed_at = |(k, t): (usize, f64)| match t > 1e-9 {
+                true => Some(places.get(k)? + (places.get(k + 1)? - places.get(k)?) * t),
+                false => places.get(k).copied(),
+            };
             for (j, &p) in path.iter().take(own).enumerate() {
-                let line = |i: isize| {
-                    let target = usize::try_from(j as isize + i).ok()?;
-                    if target < own {
-                        return x(target);
+                let at = |i: isize| place(j, i).and_then(|(k, t)| between(k, t));
+                let relaxed = |ends: &Ends| {
+                    let span = |i: f64| place(j, i as isize).and_then(relaxed_at);
+                    match (span(-ends.back), span(ends.on)) {
+                        (Some(a), Some(b)) => b - a,
+                        _ => f64::NAN,
                     }
-                    let past_last = (target + 1 - own) as f64;
-                    if past_last < seam {
-                        return between(own - 1, past_last / seam);
+                };
+                // A point's step: the mean of its intervals along its own wale.
+                let step = match graded {
+                    true => {
+                        let (lo, hi) = (j.saturating_sub(1), (j + 1).min(own - 1));
+                        (places[hi] - places[lo]) / (hi - lo).max(1) as f64
                     }
-                    let on = past_last - seam;
-                    between(own + on.floor() as usize, on.fract())
+                    false => 0.0,
+                };
+                let line = WaleLine {
+                    at: &at,
+                    relaxed: graded.then_some(&relaxed as &dyn Fn(&Ends) -> f64),
+                    reach: (graded && step > 0.0).then(|| (MEASURE_SPAN_M / step).max(1.0)),
                 };
                 f(p, &line);
             }
         }
     }
+}
+
+/// One point's line along its wale ([`Spans::along_every_wale`]).
+struct WaleLine<'a> {
+    /// The fabric `i` whole steps on from the point (back where negative), `None` past the
+    /// line's ends.
+    at: &'a dyn Fn(isize) -> Option<Vec3>,
+    /// On a graded grid, the relaxed fabric between a span's ends, metres (on an even grid,
+    /// its steps times the grid's rest).
+    relaxed: Option<&'a dyn Fn(&Ends) -> f64>,
+    /// On a graded grid, [`MEASURE_SPAN_M`] in this point's steps (on an even grid, the grid's).
+    reach: Option<f64>,
 }
 
 /// Coverage at every point (see module docs), from the real yarns' loops: each stitch's loop
@@ -408,7 +480,7 @@ pub fn stress(knit: &Knit, [around, along]: &[Vec<f64>; 2]) -> Vec<Matrix3<f64>>
         *slot = t * t.transpose() * around[i];
     }
     Spans::along_every_wale(knit, |p, line| {
-        let t = tangent(reach_wale, line);
+        let t = tangent(line.reach.unwrap_or(reach_wale), line.at);
         if let Some(slot) = out.get_mut(p.index()) {
             *slot += t * t.transpose() * along[p.index()];
         }
@@ -697,6 +769,46 @@ pub(crate) mod tests {
         let (course, wale) = stretch(&flat(Pattern::Plain, 6, 0.0005, 1.5, 1.2));
         assert!(course.iter().all(|&s| (s - 1.5).abs() < 1e-12));
         assert!(wale.iter().all(|&s| (s - 1.2).abs() < 1e-12));
+    }
+
+    #[test]
+    fn a_graded_grid_reads_the_stretch_of_its_fabric() {
+        // A tube whose courses crowd towards one end (cells of 4, then down to 1 mm), stretched
+        // by 1.3 around and 1.6 along: every point reads that, over the same 8 mm of relaxed
+        // fabric as an even grid's; the fields weigh nothing by index.
+        let mut intervals = vec![0.004; 20];
+        intervals.extend([0.003, 0.002, 0.0015]);
+        intervals.extend(vec![0.001; 15]);
+        let places: Vec<f64> = std::iter::once(0.0)
+            .chain(intervals.iter().scan(0.0, |p, &r| {
+                *p += r;
+                Some(*p)
+            }))
+            .collect();
+        let (wales, radius, [around, along]) = (40, 0.03, [1.3, 1.6]);
+        let knit = Knit::grid(
+            wales,
+            places.len(),
+            true,
+            &Tile::of(Pattern::Plain),
+            std::f64::consts::TAU * radius / wales as f64 / around,
+            intervals[0],
+            |w, c| {
+                let t = std::f64::consts::TAU * w as f64 / wales as f64;
+                Vec3::new(radius * t.cos(), places[c] * along, radius * t.sin())
+            },
+        )
+        .with_course_intervals(&intervals);
+        assert!(knit.is_graded());
+        let (course, wale) = stretch(&knit);
+        for (i, (&sc, &sw)) in course.iter().zip(&wale).enumerate() {
+            assert!((sc - around).abs() < 2e-3, "point {i}: around {sc}");
+            assert!((sw - along).abs() < 1e-9, "point {i}: along {sw}");
+        }
+        // Each grid cell counts as its interval's share of an even one's.
+        let cells: f64 = knit.faces().iter().map(|f| f.stitches).sum();
+        let want = wales as f64 * places[places.len() - 1] / intervals[0];
+        assert!((cells - want).abs() < 1e-9 * want, "{cells} vs {want}");
     }
 
     #[test]

@@ -111,10 +111,19 @@ pub fn carry_to_leg(
         .map(|v| ends.iter().any(|end| end.beyond(v)))
         .collect();
     let spacing = mean_spacing(knit, Direction::Course).max(mean_spacing(knit, Direction::Wale));
+    // A graded grid's point stands for its ring's share of an even one's fabric.
+    let ring_shares: Option<Vec<f64>> = knit.is_graded().then(|| {
+        (0..knit.len())
+            .map(|i| match i < knit.grid_len() {
+                true => knit.grid_spring_factors(i / knit.wales)[0],
+                false => 1.0,
+            })
+            .collect()
+    });
     let points = Carrier {
         fields: per_point,
         at: &knit.particles.x,
-        weights: None,
+        weights: ring_shares.as_deref(),
         bandwidth: (SPACINGS_PER_KERNEL * spacing).max(TRANSFER_BANDWIDTH_M),
     };
     let n = samples_per_side(spacing);
@@ -178,9 +187,14 @@ impl CellSamples {
             .flat_map(|(u, wu)| lattice.clone().map(move |(v, wv)| (u, v, wu * wv)))
             .collect();
         let per_sample = 1.0 / (n * n) as f64;
+        // The toe seam's faces, sewn, count as a cell of the last course's.
+        let seam_face = knit.grid_spring_factors(knit.courses.saturating_sub(1))[0];
         for face in knit.faces() {
             let c = &face.corners;
-            let stitches = face.stitches.max(1.0);
+            let stitches = match face.stitches > 0.0 {
+                true => face.stitches,
+                false => seam_face,
+            };
             if let [a, b, cc, d] = c[..] {
                 // Corners in order round the face (`Knit::faces`), so the map is bilinear.
                 for &(u, v, share) in &cells {

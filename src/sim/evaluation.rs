@@ -249,7 +249,8 @@ fn force_pass<T: Send, S: Default + Send>(
     };
     let wale_start = courses * per_row;
     let x = &knit.particles.x;
-    // c1 by direction (course, wale) and yarn, looked up once rather than per spring.
+    // c1 by direction (course, wale) and yarn, looked up once rather than per spring; a graded
+    // grid's rows scale it ([`Knit::grid_spring_factors`]).
     let c1 = [Direction::Course, Direction::Wale]
         .map(|d| YarnKind::ALL.map(|yarn| terms.c1_of(knit, yarn, d)));
     let rows = rows_per_chunk(knit);
@@ -278,6 +279,7 @@ fn force_pass<T: Send, S: Default + Send>(
                 row.clear();
                 let (below, above) = (&x[c * wales..][..wales], &x[(c + 1) * wales..][..wales]);
                 let springs = &knit.springs[wale_start + c * wales..][..wales];
+                let factor = knit.grid_spring_factors(c)[1];
                 row.extend(springs.iter().enumerate().map(|(w, s)| {
                     debug_assert_eq!(
                         (s.a.index(), s.b.index()),
@@ -287,7 +289,7 @@ fn force_pass<T: Send, S: Default + Send>(
                     let c1 = if s.cut {
                         0.0
                     } else {
-                        c1[1][s.yarn.index() as usize]
+                        c1[1][s.yarn.index() as usize] * factor
                     };
                     SpringState::between(&below[w], &above[w], s.rest, c1)
                 }));
@@ -309,6 +311,7 @@ fn force_pass<T: Send, S: Default + Send>(
             {
                 let c = first + r;
                 let points = &x[c * wales..][..wales];
+                let factor = knit.grid_spring_factors(c)[0];
                 course.clear();
                 course.extend(
                     knit.springs[c * per_row..][..per_row]
@@ -321,7 +324,7 @@ fn force_pass<T: Send, S: Default + Send>(
                                 (s.a.index(), s.b.index()),
                                 (c * wales + w, c * wales + next)
                             );
-                            let c1 = c1[0][s.yarn.index() as usize];
+                            let c1 = c1[0][s.yarn.index() as usize] * factor;
                             let state = SpringState::between(&points[w], &points[next], s.rest, c1);
                             eval.add(&state, s.rest);
                             state

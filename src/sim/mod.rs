@@ -34,10 +34,11 @@ pub struct ForceTerms {
 
 impl ForceTerms {
     /// c1 of a spring of the knit: its yarn's stiffness, times the knit's factor for its
-    /// direction ([`Knit::stiffness_scale`]).
+    /// direction ([`Knit::stiffness_scale`]) and its row's on a graded grid
+    /// ([`Knit::spring_factor`]).
     pub fn c1(&self, knit: &Knit, spring: u32) -> f64 {
         let s = &knit.springs[spring as usize];
-        self.c1_of(knit, s.yarn, s.direction)
+        self.c1_of(knit, s.yarn, s.direction) * knit.spring_factor(spring as usize)
     }
 
     /// c1 of a spring of `yarn` along `direction` in the knit: its yarn's, or where the knit's
@@ -114,6 +115,69 @@ impl RelaxObserver for () {
 mod tests {
     use super::*;
     use crate::knit::pattern::{Pattern, Tile};
+
+    #[test]
+    fn a_graded_grids_springs_are_the_same_fabric_per_strain() {
+        // Courses 1, 0.5 and 0.25 apart: stretched by a strain along the wales, every wale
+        // spring pulls the same (shorter yarn, stiffer); stretched around, every ring pulls in
+        // proportion to the fabric it stands for (half its intervals either side).
+        let intervals = [1.0, 1.0, 0.5, 0.25, 0.25];
+        let knit = Knit::grid(
+            8,
+            6,
+            true,
+            &Tile::of(Pattern::Alternating),
+            1.0,
+            1.0,
+            |w, c| Vec3::new(w as f64, c as f64, 0.0),
+        )
+        .with_course_intervals(&intervals)
+        .with_stitch_shape(1.0, 1.0);
+        let terms = ForceTerms {
+            stiffness: [1.0, 10.0, 10.0],
+            connection_factor: None,
+        };
+        let strain = 0.1;
+        let fabric: Vec<f64> = (0..6)
+            .map(|c| match c {
+                0 => intervals[0],
+                5 => intervals[4],
+                _ => 0.5 * (intervals[c - 1] + intervals[c]),
+            })
+            .collect();
+        for (i, s) in knit.springs.iter().enumerate() {
+            let pull = terms.c1(&knit, i as u32) * strain * s.rest;
+            let (_, c) = knit.grid_coords(s.a);
+            let c1 = terms.c1_of(&knit, s.yarn, s.direction);
+            let want = match s.direction {
+                Direction::Wale => c1 * strain * intervals[0],
+                Direction::Course => c1 * strain * s.rest * fabric[c] / intervals[0],
+            };
+            assert!(
+                (pull - want).abs() < 1e-12 * want,
+                "spring {i}: {pull} vs {want}"
+            );
+            if s.direction == Direction::Wale {
+                assert_eq!(s.rest, intervals[c]);
+            }
+        }
+        // An even grid's factors are exactly 1.
+        let even = tube_of(1.0);
+        assert!(!even.is_graded());
+        assert!((0..even.springs.len()).all(|i| even.spring_factor(i) == 1.0));
+    }
+
+    fn tube_of(rest: f64) -> Knit {
+        Knit::grid(
+            8,
+            4,
+            true,
+            &Tile::of(Pattern::Alternating),
+            rest,
+            rest,
+            |w, c| Vec3::new(w as f64, c as f64, 0.0),
+        )
+    }
 
     #[test]
     fn a_toe_seam_shorter_than_a_step_is_the_same_fabric_per_strain() {

@@ -284,8 +284,15 @@ pub fn prolong(coarse: &Knit, fine: &mut Knit) {
         }
     };
     let x = &coarse.particles.x;
+    // Along the wales by relaxed fabric where either grid is graded (index fractions are that on
+    // even grids).
+    let graded = coarse.is_graded() || fine.is_graded();
+    let (coarse_places, fine_places) = (coarse.course_places(), fine.course_places());
     for c in 0..fc {
-        let (c0, c1, tc) = along(c, fc, cc);
+        let (c0, c1, tc) = match graded {
+            true => at_fraction(fraction_of(&fine_places, c), &coarse_places),
+            false => along(c, fc, cc),
+        };
         for w in 0..fw {
             let i = fine.point(w, c).index();
             if fine.particles.inv_mass[i] == 0.0 {
@@ -306,6 +313,11 @@ pub fn prolong(coarse: &Knit, fine: &mut Knit) {
 /// wales either side of it (interpolated around the course as [`prolong`] does).
 fn prolong_along_wales(coarse: &Knit, fine: &mut Knit) {
     let (cw, fw) = (coarse.wales, fine.wales);
+    let graded = coarse.is_graded() || fine.is_graded();
+    let coarse_places: Vec<Vec<f64>> = match graded {
+        true => (0..cw).map(|w| coarse.wale_chain_places(w)).collect(),
+        false => Vec::new(),
+    };
     let chains: Vec<Vec<Vec3>> = (0..cw)
         .map(|w| {
             let chain = coarse.wale_chain(w);
@@ -317,7 +329,10 @@ fn prolong_along_wales(coarse: &Knit, fine: &mut Knit) {
         .collect();
     let on_chain = |w: usize, fraction: f64| -> Vec3 {
         let chain = &chains[w];
-        let (i0, i1, t) = along_fraction(fraction, chain.len());
+        let (i0, i1, t) = match graded {
+            true => at_fraction(fraction, &coarse_places[w]),
+            false => along_fraction(fraction, chain.len()),
+        };
         chain[i0] * (1.0 - t) + chain[i1] * t
     };
     for w in 0..fw {
@@ -330,12 +345,19 @@ fn prolong_along_wales(coarse: &Knit, fine: &mut Knit) {
             along(w, fw, cw)
         };
         let last = (chain.len() - 1).max(1) as f64;
+        let places = match graded {
+            true => fine.wale_chain_places(w),
+            false => Vec::new(),
+        };
         for (k, p) in chain.iter().enumerate() {
             let i = p.index();
             if fine.particles.inv_mass[i] == 0.0 {
                 continue;
             }
-            let fraction = k as f64 / last;
+            let fraction = match graded {
+                true => fraction_of(&places, k),
+                false => k as f64 / last,
+            };
             fine.particles.x[i] = on_chain(w0, fraction) * (1.0 - tw) + on_chain(w1, fraction) * tw;
             fine.particles.v[i] = Vec3::zeros();
         }
@@ -351,6 +373,32 @@ fn along_fraction(fraction: f64, n: usize) -> (usize, usize, f64) {
     let t = fraction * (n - 1) as f64;
     let i0 = (t.floor() as usize).min(n - 2);
     (i0, i0 + 1, t - i0 as f64)
+}
+
+/// Point `i`'s fraction of the way along a line whose points lie at `places`.
+fn fraction_of(places: &[f64], i: usize) -> f64 {
+    let total = places.last().copied().unwrap_or(0.0);
+    match total > 0.0 {
+        true => places[i] / total,
+        false => 0.0,
+    }
+}
+
+/// A fraction 0–1 of the way along a line whose points lie at `places` (ascending from 0) as the
+/// two neighbouring points and the fraction between them.
+fn at_fraction(fraction: f64, places: &[f64]) -> (usize, usize, f64) {
+    let n = places.len();
+    if n < 2 {
+        return (0, 0, 0.0);
+    }
+    let at = fraction * places[n - 1];
+    let i0 = places.partition_point(|&p| p <= at).clamp(1, n - 1) - 1;
+    let span = places[i0 + 1] - places[i0];
+    let t = match span > 0.0 {
+        true => ((at - places[i0]) / span).clamp(0.0, 1.0),
+        false => 0.0,
+    };
+    (i0, i0 + 1, t)
 }
 
 /// Index `i` of `n_fine` points spread end to end, as the two neighbouring points of `n_coarse`
@@ -462,6 +510,30 @@ mod tests {
         for w in 0..16 {
             assert!(fine.particles.x[fine.point(w, 0).index()].y.abs() < 1e-12);
             assert!((fine.particles.x[fine.point(w, 8).index()].y - 1.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn a_graded_grid_takes_the_coarse_fabric_at_the_same_relaxed_place() {
+        // Coarse rings evenly up the fabric (height = relaxed fraction); the fine grid's
+        // courses crowd towards its end: each fine ring lands at its own relaxed fraction, not
+        // its index's.
+        let coarse = tube(8, 5);
+        let intervals = [0.3, 0.3, 0.2, 0.1, 0.05, 0.05];
+        let mut fine = tube(8, 7).with_course_intervals(&intervals);
+        assert!(fine.is_graded() && !coarse.is_graded());
+        prolong(&coarse, &mut fine);
+        let places = fine.course_places();
+        for c in 0..7 {
+            let y = fine.particles.x[fine.point(3, c).index()].y;
+            assert!((y - places[c] / places[6]).abs() < 1e-12, "{c}: {y}");
+        }
+        // And back: the coarse grid's rings from the graded one's.
+        let mut back = tube(8, 5);
+        prolong(&fine, &mut back);
+        for c in 0..5 {
+            let y = back.particles.x[back.point(3, c).index()].y;
+            assert!((y - c as f64 / 4.0).abs() < 1e-12, "{c}: {y}");
         }
     }
 }
