@@ -101,9 +101,13 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
                 d.pressure_mmhg.max
             ),
         };
+        let toe_tip = match d.tube.toe_tip_wale_spacing_m {
+            Some(rest) => format!(" ({:.1} along over the toe's tip)", rest / k.stitch_m.wale),
+            None => String::new(),
+        };
         say!(
             "knit: {:.0} needles × {:.0} courses of {}/{} den yarn, each grid cell {:.1} × {:.1} \
-             stitches{on_leg}",
+             stitches{toe_tip}{on_leg}",
             k.needles,
             k.courses,
             scene.yarns.nylon.denier,

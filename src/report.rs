@@ -304,8 +304,13 @@ pub struct TubeDetails {
     pub courses: usize,
     /// Rest length of a course spring, metres.
     pub rest_course_spacing_m: f64,
-    /// Rest length of a wale spring, metres.
+    /// Rest length of a wale spring, metres: the welt's, and every one's but over the toe's tip
+    /// on a grid graded finer there.
     pub rest_wale_spacing_m: f64,
+    /// On a grid graded finer over the toe's tip (a coarse grid of a stocking to the toe), the
+    /// rest length of its last wale springs, metres; absent where the courses are even.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub toe_tip_wale_spacing_m: Option<f64>,
     /// Relaxed length between the axis points, metres.
     pub relaxed_length_m: f64,
     /// Relaxed circumference, metres.

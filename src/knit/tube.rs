@@ -169,12 +169,30 @@ pub fn end_rings(knit: &Knit) -> Vec<bool> {
 /// Builds a whole stocking along `path` (top to toe): course 0 is the welt, held; the last
 /// course is closed by a toe seam; with [`TubeHeel::Pocket`], short rows over the back half at
 /// the middle of the heel (see [`heel_pocket_depths`]).
-pub fn build_stocking(spec: &TubeSpec, path: &TubePath, heel: TubeHeel) -> Knit {
+pub fn build_stocking(
+    spec: &TubeSpec,
+    path: &TubePath,
+    heel: TubeHeel,
+    spacing: CourseSpacing,
+) -> Knit {
     let (w_count, c_count) = (spec.wales, spec.courses);
     let tile = Tile::of(spec.pattern);
-    let [rest_course, rest_wale] = spec.rest_lengths();
+    let [rest_course, even] = spec.rest_lengths();
+    let intervals = match spacing {
+        CourseSpacing::Even => None,
+        CourseSpacing::FinerAtTheToe => toe_graded_intervals(spec),
+    }
+    .unwrap_or_else(|| vec![even; c_count.saturating_sub(1)]);
+    // The shaping's steps are the first interval's (the welt's, even on every grid).
+    let rest_wale = intervals.first().copied().unwrap_or(even);
+    // Each course starts as far along the path as it lies along the relaxed fabric.
+    let places = places_of(&intervals);
+    let graded = intervals.iter().any(|&r| r != even);
     let length = path.length();
-    let along = |c: usize| length * c as f64 / (c_count - 1).max(1) as f64;
+    let along = |c: usize| match graded {
+        true => length * places[c] / places[c_count - 1],
+        false => length * c as f64 / (c_count - 1).max(1) as f64,
+    };
     let rings: Vec<Vec<Point3<f64>>> = (0..c_count).map(|c| path.ring(along(c), w_count)).collect();
     let mut knit = Knit::grid(
         w_count,
@@ -185,11 +203,19 @@ pub fn build_stocking(spec: &TubeSpec, path: &TubePath, heel: TubeHeel) -> Knit 
         rest_wale,
         |w, c| rings[c][w].coords,
     )
+    .with_course_intervals(&intervals)
     .with_stitch_shape(spec.stitch_m[0], spec.stitch_m[1])
     .with_toe_seam(spec.stitch_m[1]);
     if heel == TubeHeel::Pocket {
         let [lo, hi] = path.heel_range();
-        let course = ((0.5 * (lo + hi) / length) * (c_count - 1) as f64).round() as usize;
+        let middle = 0.5 * (lo + hi);
+        let course = (0..c_count)
+            .min_by(|&a, &b| {
+                (along(a) - middle)
+                    .abs()
+                    .total_cmp(&(along(b) - middle).abs())
+            })
+            .unwrap_or(0);
         // `c_count ≥ 2` (tube.courses is checked, a real count takes at least 2), so the
         // pocket's course and the next one exist, as `with_short_rows` asserts.
         let course = course.min(c_count - 2);
@@ -209,6 +235,86 @@ pub fn build_stocking(spec: &TubeSpec, path: &TubePath, heel: TubeHeel) -> Knit 
         knit = knit.with_short_rows(course, depth.clone(), &tile, rest_course, rest_wale, place);
     }
     knit
+}
+
+/// How a stocking's courses are spread along its relaxed fabric.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CourseSpacing {
+    /// All one rest length apart: the real stitches, and the levels a fit starts from.
+    Even,
+    /// Finer over the toe's tip where an even grid's cells would be longer than
+    /// [`TOE_TIP_CELL_M`] ([`toe_graded_intervals`]): the grid a fit ends on.
+    FinerAtTheToe,
+}
+
+/// Longest cell, metres of relaxed fabric, a stocking's grid gives the toe's tip: the fabric
+/// wraps a tip of some 6 mm radius over its last 10–20 mm, and a cell much longer than a third
+/// of that cuts the tip, its points resting on the skin with their wale springs at different
+/// angles to it, so that the wale's tension jumps across them (docs/decisions/0071, 0073).
+pub const TOE_TIP_CELL_M: f64 = 0.002;
+/// Relaxed fabric at the toe's end over which the cells are [`TOE_TIP_CELL_M`], metres.
+pub const TOE_TIP_FABRIC_M: f64 = 0.02;
+/// Relaxed fabric over which the cells shrink from the grid's to the tip's, metres.
+pub const TOE_TIP_RAMP_M: f64 = 0.02;
+/// Most the tip's cells may be finer than the rest of the grid's.
+const MAX_TOE_GRADING: f64 = 4.0;
+
+/// The intervals (metres of relaxed fabric, welt to toe) of a stocking's courses graded finer
+/// over the toe's tip: `k` courses per even one over the last [`TOE_TIP_FABRIC_M`], rising
+/// linearly to it over the [`TOE_TIP_RAMP_M`] before, even above, with `k` such that the tip's
+/// cells are [`TOE_TIP_CELL_M`] (at most [`MAX_TOE_GRADING`]). The same courses in all, so the
+/// rest of the stocking's cells are a little longer than an even grid's. `None` where an even
+/// grid's cells are already that short, or the stocking too short to grade.
+pub fn toe_graded_intervals(spec: &TubeSpec) -> Option<Vec<f64>> {
+    let length = spec.relaxed_length_m;
+    let steps = spec.courses.checked_sub(1).filter(|&n| n >= 2)? as f64;
+    let (tip, ramp) = (TOE_TIP_FABRIC_M, TOE_TIP_RAMP_M);
+    if length / steps <= TOE_TIP_CELL_M || length <= 2.0 * (tip + ramp) {
+        return None;
+    }
+    // Courses per metre over the even courses' is 1 above the ramp and `k` over the tip, so the
+    // grid's even interval is `(length + (k − 1)(tip + ramp / 2)) / steps`, and the tip's that
+    // over `k`.
+    let graded = tip + 0.5 * ramp;
+    let room = TOE_TIP_CELL_M * steps - graded;
+    let k = match room > 0.0 {
+        true => ((length - graded) / room).clamp(1.0, MAX_TOE_GRADING),
+        false => MAX_TOE_GRADING,
+    };
+    let ramp_start = length - tip - ramp;
+    // Courses up to relaxed distance `s`, in even courses: the density's integral.
+    let count = |s: f64| {
+        let into_ramp = (s - ramp_start).clamp(0.0, ramp);
+        let into_tip = (s - length + tip).max(0.0);
+        s + (k - 1.0) * (0.5 * into_ramp * into_ramp / ramp + into_tip)
+    };
+    let total = count(length);
+    let places: Vec<f64> = (0..=steps as usize)
+        .map(|c| {
+            let target = total * c as f64 / steps;
+            let (mut lo, mut hi) = (0.0, length);
+            for _ in 0..100 {
+                let mid = 0.5 * (lo + hi);
+                if count(mid) < target {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            0.5 * (lo + hi)
+        })
+        .collect();
+    Some(places.windows(2).map(|p| p[1] - p[0]).collect())
+}
+
+/// Relaxed fabric from the first course to each course, from the intervals between them.
+fn places_of(intervals: &[f64]) -> Vec<f64> {
+    std::iter::once(0.0)
+        .chain(intervals.iter().scan(0.0, |place, &r| {
+            *place += r;
+            Some(*place)
+        }))
+        .collect()
 }
 
 /// Short rows per half of a heel pocket over each of `wales` wales, on a grid whose wale springs
@@ -366,4 +472,54 @@ fn enclosing_radii(
             r + (r * RADIAL_MARGIN).max(MIN_GAP_M)
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(courses: usize, length: f64) -> TubeSpec {
+        TubeSpec {
+            wales: 100,
+            courses,
+            pattern: Pattern::Alternating,
+            relaxed_circumference_m: 0.2,
+            relaxed_length_m: length,
+            stitch_m: [0.0005, 0.00074],
+        }
+    }
+
+    #[test]
+    fn a_coarse_stockings_courses_are_graded_finer_over_the_toes_tip() {
+        // 100 courses over 0.52 m of fabric: 5.3 mm cells even, too long for the tip.
+        let intervals = toe_graded_intervals(&spec(100, 0.52)).expect("graded");
+        assert_eq!(intervals.len(), 99);
+        let total: f64 = intervals.iter().sum();
+        assert!((total - 0.52).abs() < 1e-9, "{total}");
+        // Even above the ramp, never longer further on, the tip's cells as asked.
+        assert!(intervals.windows(2).all(|p| p[1] <= p[0] * (1.0 + 1e-9)));
+        let first = intervals[0];
+        assert!(first > 0.52 / 99.0 && first < 1.2 * 0.52 / 99.0, "{first}");
+        let tip = intervals[98];
+        assert!(
+            (tip - TOE_TIP_CELL_M).abs() < 0.02 * TOE_TIP_CELL_M,
+            "{tip}"
+        );
+        // The tip's fabric is in those cells: the last 20 mm in tip-sized ones.
+        let mut back = 0.0;
+        for &r in intervals.iter().rev() {
+            back += r;
+            if back > TOE_TIP_FABRIC_M - 1e-4 {
+                break;
+            }
+            assert!((r - tip).abs() < 1e-6 * tip, "{r} at {back}");
+        }
+        // Cells already short enough stay even, and so does a stocking too short to grade.
+        assert_eq!(toe_graded_intervals(&spec(300, 0.52)), None);
+        assert_eq!(toe_graded_intervals(&spec(10, 0.07)), None);
+        // A grid too coarse to reach the tip's cell grades as far as it may.
+        let coarse = toe_graded_intervals(&spec(20, 0.52)).expect("graded");
+        let ratio = coarse[0] / coarse[18];
+        assert!((ratio - MAX_TOE_GRADING).abs() < 1e-3, "{ratio}");
+    }
 }

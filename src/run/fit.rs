@@ -21,7 +21,7 @@ use crate::knit::path::{path_to_toe, TubePath};
 use crate::knit::settings::{check_grid_size, MAX_TUBE_POINTS};
 use crate::knit::tube::{
     build_stocking, build_tube, end_rings, heel_pocket_half_length_m, part_at, tube_axis,
-    Centreline, TubeSpec,
+    Centreline, CourseSpacing, TubeSpec,
 };
 use crate::knit::Fabric;
 use crate::knit::{Knit, TubeBottom, TubeHeel, RELAXED_LENGTH_FRACTION};
@@ -298,7 +298,7 @@ fn real_stitches(
         ..fit.spec
     };
     let mut real = match &fit.path {
-        Some(path) => build_stocking(&spec, path, scene.tube.heel),
+        Some(path) => build_stocking(&spec, path, scene.tube.heel, CourseSpacing::Even),
         None => build_tube(&spec, &fit.axis, &fit.leg.positions, &fit.leg.triangles),
     };
     let lock_axis = match &fit.path {
@@ -335,7 +335,8 @@ fn fit_details(
             .collect()
     };
     let fabric = scene.fabric();
-    let [around, along] = fabric.stitches_per_cell(spec.rest_lengths());
+    // The grid's own rests: a graded grid's welt is a little longer than an even one's.
+    let [around, along] = fabric.stitches_per_cell(knit.grid_rest_m());
     let (min, max) = leg.bounds();
     FitDetails {
         leg: LegDetails {
@@ -355,8 +356,11 @@ fn fit_details(
         tube: TubeDetails {
             wales: spec.wales,
             courses: spec.courses,
-            rest_course_spacing_m: spec.rest_lengths()[0],
-            rest_wale_spacing_m: spec.rest_lengths()[1],
+            rest_course_spacing_m: knit.grid_rest_m()[0],
+            rest_wale_spacing_m: knit.grid_rest_m()[1],
+            toe_tip_wale_spacing_m: knit
+                .is_graded()
+                .then(|| knit.course_interval(knit.courses - 2)),
             relaxed_length_m: spec.relaxed_length_m,
             relaxed_circumference_m: spec.relaxed_circumference_m,
             stiffness_scale: PerDirection {
@@ -967,7 +971,15 @@ impl<'a> Levels for TubeLevels<'a> {
             ..self.spec
         };
         match self.path {
-            Some(path) => build_stocking(&spec, path, self.heel),
+            // The grid the fit ends on resolves the toe's tip; the levels it starts from
+            // follow the real stitches' even courses (docs/decisions/0073).
+            Some(path) => {
+                let spacing = match [wales, courses] == [self.spec.wales, self.spec.courses] {
+                    true => CourseSpacing::FinerAtTheToe,
+                    false => CourseSpacing::Even,
+                };
+                build_stocking(&spec, path, self.heel, spacing)
+            }
             None => build_tube(&spec, self.axis, &self.leg.positions, &self.leg.triangles),
         }
     }
