@@ -20,8 +20,8 @@ use crate::export::{Output, YarnsWritten};
 use crate::knit::path::{path_to_toe, TubePath};
 use crate::knit::settings::{check_grid_size, MAX_TUBE_POINTS};
 use crate::knit::tube::{
-    build_stocking, build_tube, end_rings, heel_pocket_half_length_m, part_at, tube_axis,
-    Centreline, CourseSpacing, TubeSpec,
+    build_stocking, build_tube, end_rings, heel_pocket_half_length_m, part_at,
+    toe_graded_intervals, tube_axis, Centreline, CourseSpacing, TubeSpec,
 };
 use crate::knit::Fabric;
 use crate::knit::{Knit, TubeBottom, TubeHeel, RELAXED_LENGTH_FRACTION};
@@ -563,7 +563,9 @@ pub fn solve_fit(
     };
     let (mut knit, solver) = match scene.solver.method {
         SolverMethod::Paper => {
-            let mut knit = clock.time(Stage::KnitTube, || levels.knit(spec.wales, spec.courses));
+            let mut knit = clock.time(Stage::KnitTube, || {
+                levels.knit(spec.wales, spec.courses, true)
+            });
             progress.begin("fit", scene.solver.max_steps as u64);
             let stats = clock.time(Stage::Fit, || {
                 let contact = levels.constraints(&knit);
@@ -964,7 +966,7 @@ struct TubeLevels<'a> {
 }
 
 impl<'a> Levels for TubeLevels<'a> {
-    fn knit(&mut self, wales: usize, courses: usize) -> Knit {
+    fn knit(&mut self, wales: usize, courses: usize, finest: bool) -> Knit {
         let spec = TubeSpec {
             wales,
             courses,
@@ -974,7 +976,7 @@ impl<'a> Levels for TubeLevels<'a> {
             // The grid the fit ends on resolves the toe's tip; the levels it starts from
             // follow the real stitches' even courses (docs/decisions/0073).
             Some(path) => {
-                let spacing = match [wales, courses] == [self.spec.wales, self.spec.courses] {
+                let spacing = match finest {
                     true => CourseSpacing::FinerAtTheToe,
                     false => CourseSpacing::Even,
                 };
@@ -1002,10 +1004,24 @@ impl<'a> Levels for TubeLevels<'a> {
     fn grid_sizes(&self, wales: usize, courses: usize) -> Vec<(usize, usize)> {
         // A heel and a toe need rings a few centimetres apart at most, and a foot rests where
         // its coarse levels leave it: a grid starts where the real count does, where it can.
-        match self.path {
-            Some(_) => grid_sizes_following(self.real_count, wales, courses, STOCKING_COARSEST),
-            None => grid_sizes_down_to(wales, courses, COARSEST),
+        let Some(_) = self.path else {
+            return grid_sizes_down_to(wales, courses, COARSEST);
+        };
+        let mut sizes = grid_sizes_following(self.real_count, wales, courses, STOCKING_COARSEST);
+        // A grid graded at the toe's tip that is also one of the real count's levels (courses
+        // following the stitch) solves that level, even, first: so it starts where the real
+        // count's level rests, as an N×N grid does from the level with its wales.
+        let [real_wales, real_courses] = self.real_count;
+        let chain = grid_sizes_down_to(real_wales, real_courses, STOCKING_COARSEST);
+        let spec = TubeSpec {
+            wales,
+            courses,
+            ..self.spec
+        };
+        if chain.contains(&(wales, courses)) && toe_graded_intervals(&spec).is_some() {
+            sizes.insert(sizes.len() - 1, (wales, courses));
         }
+        sizes
     }
 
     fn accept(&mut self, knit: &Knit) -> Result<()> {

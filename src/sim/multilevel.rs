@@ -73,8 +73,9 @@ pub const HAND_ON_RESIDUAL_FLOOR: f64 = 1e-2;
 /// caller knows what is knitted and what it touches.
 pub trait Levels {
     /// The knit of a `wales × courses` grid, at its starting positions (used as they are on the
-    /// coarsest level; finer levels are overwritten by interpolation).
-    fn knit(&mut self, wales: usize, courses: usize) -> Knit;
+    /// coarsest level; finer levels are overwritten by interpolation); `finest` for the grid
+    /// the fit ends on.
+    fn knit(&mut self, wales: usize, courses: usize, finest: bool) -> Knit;
     /// Fresh constraints for `knit` (per-point state belongs to one level), keeping any counters
     /// the caller reports.
     fn constraints(&mut self, knit: &Knit) -> &mut dyn Constraints;
@@ -211,7 +212,7 @@ pub fn relax_multilevel(
     let sizes = levels.grid_sizes(wales, courses);
     for (n, &(w, c)) in sizes.iter().enumerate() {
         let finest = n + 1 == sizes.len();
-        let mut knit = levels.knit(w, c);
+        let mut knit = levels.knit(w, c, finest);
         if let Some(coarse) = &coarser {
             prolong(coarse, &mut knit);
         }
