@@ -9,6 +9,7 @@ use serde::Serialize;
 
 use crate::base::YarnKind;
 use crate::export::{Output, YarnsWritten};
+use crate::knit::tube::TOE_TIP_CELL_M;
 use crate::knit::{Stretch, TubeBottom, TubeTop};
 use crate::preview::RenderMode;
 use crate::scene::{Effect, Scene};
@@ -446,13 +447,19 @@ impl Plan {
                 );
             }
             SolverMethod::Multilevel => {
+                // The grid a stocking ends on, graded at the toe's tip (docs/decisions/0073).
+                let graded = format!(
+                    "; its last grid graded to {:.0} mm cells over the toe's tip where even \
+                     ones are longer",
+                    1e3 * TOE_TIP_CELL_M
+                );
                 let grids = match scene.tube.courses {
                     // Courses left out: known, and so the levels, once the leg's length is.
                     None => format!(
                         "up to {grid}: an open tube on grids halving down to {COARSEST} a side; \
                          a stocking to the toe on the real stitch count's levels with no more \
                          wales than it, else from its coarsest level if that is the coarser \
-                         grid, else on grids halving down to {STOCKING_COARSEST} a side"
+                         grid, else on grids halving down to {STOCKING_COARSEST} a side{graded}"
                     ),
                     Some(courses) => {
                         let chain = |coarsest: usize| -> String {
@@ -468,7 +475,7 @@ impl Plan {
                         let stocking = format!(
                             "on the real stitch count's levels with no more wales than {grid}, \
                              whatever their courses, then {grid}; where it has none, from its \
-                             coarsest level if that is the coarser grid, else on grids {}",
+                             coarsest level if that is the coarser grid, else on grids {}{graded}",
                             chain(STOCKING_COARSEST)
                         );
                         let tube = format!("on grids {}", chain(COARSEST));
@@ -721,7 +728,8 @@ mod tests {
             why.ends_with(
                 "on the real stitch count's levels with no more wales than 150×150, whatever \
                  their courses, then 150×150; where it has none, from its coarsest level if \
-                 that is the coarser grid, else on grids 75×76 → 150×150"
+                 that is the coarser grid, else on grids 75×76 → 150×150; its last grid graded \
+                 to 2 mm cells over the toe's tip where even ones are longer"
             ),
             "{why}"
         );
@@ -729,7 +737,7 @@ mod tests {
         (scene.tube.wales, scene.tube.courses) = (100, Some(100));
         let why = fit_why(&scene);
         assert!(
-            why.ends_with("the coarser grid, else on grids 50×51 → 100×100"),
+            why.contains("the coarser grid, else on grids 50×51 → 100×100; its last grid graded"),
             "{why}"
         );
         (scene.tube.wales, scene.tube.courses) = (wales, courses);
