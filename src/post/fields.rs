@@ -361,11 +361,13 @@ impl Spans {
             };
             for (j, &p) in path.iter().take(own).enumerate() {
                 let at = |i: isize| place(j, i).and_then(|(k, t)| between(k, t));
+                // The ends lie on the path, so their places are known; the first interval's
+                // steps would do otherwise.
                 let relaxed = |ends: &Ends| {
                     let span = |i: f64| place(j, i as isize).and_then(relaxed_at);
                     match (span(-ends.back), span(ends.on)) {
                         (Some(a), Some(b)) => b - a,
-                        _ => f64::NAN,
+                        _ => ends.steps * knit.grid_rest_m()[1],
                     }
                 };
                 // A point's step: the mean of its intervals along its own wale.
@@ -775,7 +777,7 @@ pub(crate) mod tests {
     fn a_graded_grid_reads_the_stretch_of_its_fabric() {
         // A tube whose courses crowd towards one end (cells of 4, then down to 1 mm), stretched
         // by 1.3 around and 1.6 along: every point reads that, over the same 8 mm of relaxed
-        // fabric as an even grid's; the fields weigh nothing by index.
+        // fabric as an even grid's, whatever its cells.
         let mut intervals = vec![0.004; 20];
         intervals.extend([0.003, 0.002, 0.0015]);
         intervals.extend(vec![0.001; 15]);

@@ -78,19 +78,12 @@ const CLEARANCE_SAMPLES: [[f64; 3]; 4] = [
 
 /// Lifts `mesh` (the stocking surface) [`STOCKING_LIFT_M`] along its vertex normals, then lifts
 /// the corners of any triangle a point of which is closer than [`STOCKING_CLEARANCE_M`] to the
-/// skin by twice what it lacks, up to four times, so that the leg's flat faces never
+/// skin by twice what it lacks, along the skin's outward normal, up to four times, so that the leg's flat faces never
 /// poke through it and no viewer mixes the two up. Returns how many triangles still dip closer
 /// (a handful of 45,000 on the sample feet at 150×150, in the toes' clefts, still clear of the
 /// skin by a fifth of the clearance or more). Points the surface repeats (its texture's seam)
 /// move together. The same surface for the same input, whatever the thread count.
 pub fn lift_clear_of(mesh: &mut SurfaceMesh, collider: &Collider) -> usize {
-    let lift = |mesh: &mut SurfaceMesh, by: &[f64]| {
-        for ((p, n), &d) in mesh.positions.iter_mut().zip(&mesh.normals).zip(by) {
-            for k in 0..3 {
-                p[k] += d * f64::from(n[k]);
-            }
-        }
-    };
     // A vertex repeated for the texture's seam (the same point, the same normal) must move with
     // its twin, or the surface would open there.
     let mut first_at: HashMap<[u64; 3], usize> = HashMap::new();
@@ -101,7 +94,11 @@ pub fn lift_clear_of(mesh: &mut SurfaceMesh, collider: &Collider) -> usize {
                 .or_insert(v)
         })
         .collect();
-    lift(mesh, &vec![STOCKING_LIFT_M; mesh.positions.len()]);
+    for (p, n) in mesh.positions.iter_mut().zip(&mesh.normals) {
+        for k in 0..3 {
+            p[k] += STOCKING_LIFT_M * f64::from(n[k]);
+        }
+    }
     // Each round checks the triangles whose corners the round before moved (all, at first).
     let mut checked: Vec<usize> = (0..mesh.triangles.len()).collect();
     let mut dipping = 0;
@@ -149,7 +146,18 @@ pub fn lift_clear_of(mesh: &mut SurfaceMesh, collider: &Collider) -> usize {
         for v in 0..by.len() {
             by[v] = by[twin_of[v]];
         }
-        lift(mesh, &by);
+        // Along the skin's outward normal at each corner's closest point, not the corner's own
+        // normal: where slack fabric crumples (a toe seam's corners, over a graded toe's fine
+        // cells) a vertex normal can lie along the skin or point into it, and lifting along it
+        // would deepen the dip round after round. Twins, at one place, go the same way.
+        for (v, &d) in by.iter().enumerate() {
+            if d > 0.0 {
+                let out = collider.closest(&Point3::from(mesh.positions[v])).outward;
+                for k in 0..3 {
+                    mesh.positions[v][k] += d * out[k];
+                }
+            }
+        }
         checked = (0..mesh.triangles.len())
             .filter(|&t| mesh.triangles[t].iter().any(|&v| by[v as usize] > 0.0))
             .collect();
@@ -161,7 +169,7 @@ pub fn lift_clear_of(mesh: &mut SurfaceMesh, collider: &Collider) -> usize {
 /// pocket's short rows, the toe seam that closes it) triangulated, with a vertex per knit point
 /// and the points of the first wale repeated where a face wraps round to it, so texture
 /// coordinates run 0–1 without a jump (u = wale / wales, v = 1 − course / (courses − 1), from
-/// [`Knit::fabric_coords`]); per vertex, the yarn point's attributes and its fields (density,
+/// [`Knit::fabric_coords`]; on a graded grid v follows the relaxed fabric instead); per vertex, the yarn point's attributes and its fields (density,
 /// stretch, coverage: what a sheer shader on this surface needs). With the coverage, the vertex
 /// colours are white and their opacity is the coverage clamped to 0–1 (a rendering aid: the
 /// `coverage` attribute stays as it is); without it (no fields measured), no colours. Only the
@@ -196,6 +204,7 @@ pub fn stocking_surface(
         texcoords: Vec::with_capacity(knit.len() + courses),
         of_point: vec![0; knit.len()],
         wrapped: vec![None; knit.len()],
+        places: knit.is_graded().then(|| knit.course_places()),
     };
     for c in 0..courses {
         for w in 0..wales {
@@ -281,6 +290,9 @@ struct Vertices<'a> {
     of_point: Vec<u32>,
     /// Per knit point of the first wale of a closed knit, its repeat at u = 1.
     wrapped: Vec<Option<u32>>,
+    /// On a graded grid, each course's relaxed place, which v follows so that a texture's
+    /// stitches keep their size over the toe's finer cells.
+    places: Option<Vec<f64>>,
 }
 
 impl Vertices<'_> {
@@ -296,9 +308,16 @@ impl Vertices<'_> {
     fn push(&mut self, p: PointId, u: f32) -> u32 {
         let [_, course] = self.knit.fabric_coords(p);
         let last_course = self.knit.courses.saturating_sub(1).max(1);
+        let along = match &self.places {
+            Some(places) => {
+                let c = (course.floor() as usize).min(last_course - 1);
+                let place = places[c] + (places[c + 1] - places[c]) * (course - c as f64);
+                (place / places[last_course]) as f32
+            }
+            None => course as f32 / last_course as f32,
+        };
         self.source.push(p);
-        self.texcoords
-            .push([u, 1.0 - course as f32 / last_course as f32]);
+        self.texcoords.push([u, 1.0 - along]);
         (self.source.len() - 1) as u32
     }
 }

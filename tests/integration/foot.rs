@@ -213,7 +213,9 @@ fn measure_whole_stocking(leg: &std::path::Path, heel: &str) -> WholeStocking {
     );
     let grid = Grid::of(&points, 0.01);
     let toe_gap_m = grid.nearest(&tip, &points);
-    // Two course spacings: the mean distance between courses along the wales on the foot.
+    // Two course spacings: the median distance between courses along the wales on the foot
+    // (a coarse grid's courses are graded finer over the toe's tip, so the mean would be less
+    // than most of the foot's).
     let index = |e: &ply_rs_bw::ply::DefaultElement, k: &str| match e[k] {
         ply_rs_bw::ply::Property::Int(i) => i as usize,
         ref other => panic!("{k}: {other:?}"),
@@ -222,14 +224,15 @@ fn measure_whole_stocking(leg: &std::path::Path, heel: &str) -> WholeStocking {
         ply_rs_bw::ply::Property::UChar(d) => d,
         ref other => panic!("direction: {other:?}"),
     };
-    let foot_wales: Vec<f64> = yarns.payload["edge"]
+    let mut foot_wales: Vec<f64> = yarns.payload["edge"]
         .iter()
         .filter(|e| direction(e) == 1)
         .map(|e| (points[index(e, "vertex1")], points[index(e, "vertex2")]))
         .filter(|(a, _)| (a - sole).dot(&up) < ankle_height)
         .map(|(a, b)| (b - a).norm())
         .collect();
-    let reach_m = 2.0 * foot_wales.iter().sum::<f64>() / foot_wales.len() as f64;
+    foot_wales.sort_by(f64::total_cmp);
+    let reach_m = 2.0 * foot_wales[foot_wales.len() / 2];
     // The dressed foot's skin from the sole to the ankle (not the other foot).
     let skin = knitfit::leg::load_leg(leg, Units::Metres, UpChoice::Auto).unwrap();
     let forefoot = Forefoot::of(&skin, tip, forward);

@@ -105,7 +105,10 @@ fn a_whole_stockings_fields_are_the_same_on_coarse_grids_and_at_the_real_stitch_
     for grid in ["100", "100x100"] {
         let (dir, report) = fit(&leg, grid, &[]);
         let tip = report["details"]["tube"]["toe_tip_wale_spacing_m"].as_f64();
-        assert!(tip.is_some_and(|m| (m - 0.002).abs() < 1e-4), "{grid}: {tip:?}");
+        assert!(
+            tip.is_some_and(|m| (m - 0.002).abs() < 1e-4),
+            "{grid}: {tip:?}"
+        );
         let c = leg_fields(&dir.path().join("out"));
         assert_fields_agree(&c, &b, &format!("{grid} against 400x{courses}"));
     }
