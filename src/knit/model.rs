@@ -350,6 +350,20 @@ impl Knit {
         }
     }
 
+    /// On a graded grid, the fabric each point stands for as a share of an even grid's point:
+    /// its ring's ([`Knit::grid_spring_factors`]), 1 for a short row's; `None` on an even grid,
+    /// whose points are alike.
+    pub fn point_fabric_shares(&self) -> Option<Vec<f64>> {
+        self.is_graded().then(|| {
+            (0..self.len())
+                .map(|i| match i < self.grid_len() {
+                    true => self.grid_spring_factors(i / self.wales)[0],
+                    false => 1.0,
+                })
+                .collect()
+        })
+    }
+
     /// True when the courses are not all one rest length apart (a graded grid).
     pub fn is_graded(&self) -> bool {
         if self.courses < 3 || self.wales == 0 {

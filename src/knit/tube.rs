@@ -209,13 +209,16 @@ pub fn build_stocking(
     if heel == TubeHeel::Pocket {
         let [lo, hi] = path.heel_range();
         let middle = 0.5 * (lo + hi);
-        let course = (0..c_count)
-            .min_by(|&a, &b| {
-                (along(a) - middle)
-                    .abs()
-                    .total_cmp(&(along(b) - middle).abs())
-            })
-            .unwrap_or(0);
+        let course = match graded {
+            true => (0..c_count)
+                .min_by(|&a, &b| {
+                    (along(a) - middle)
+                        .abs()
+                        .total_cmp(&(along(b) - middle).abs())
+                })
+                .unwrap_or(0),
+            false => ((middle / length) * (c_count - 1) as f64).round() as usize,
+        };
         // `c_count ≥ 2` (tube.courses is checked, a real count takes at least 2), so the
         // pocket's course and the next one exist, as `with_short_rows` asserts.
         let course = course.min(c_count - 2);
@@ -304,6 +307,10 @@ pub fn toe_graded_intervals(spec: &TubeSpec) -> Option<Vec<f64>> {
             0.5 * (lo + hi)
         })
         .collect();
+    // The ends exactly where they are, not where the bisection left them.
+    let mut places = places;
+    places[0] = 0.0;
+    places[steps as usize] = length;
     Some(places.windows(2).map(|p| p[1] - p[0]).collect())
 }
 

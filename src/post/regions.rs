@@ -125,7 +125,11 @@ pub fn stretch_by_region(
     regions: &[Region],
     stretch_course: &[f64],
     stretch_wale: &[f64],
+    fabric_shares: Option<&[f64]>,
 ) -> Vec<RegionStretch> {
+    // Each point weighs the fabric it stands for (a graded grid's toe tip has more, smaller
+    // cells); alike on an even grid.
+    let share = |i: usize| fabric_shares.map_or(1.0, |s| s[i]);
     Region::ALL
         .iter()
         .filter_map(|&region| {
@@ -135,19 +139,18 @@ pub fn stretch_by_region(
             if points.is_empty() {
                 return None;
             }
-            let n = points.len() as f64;
-            let mean = |values: &[f64]| points.iter().map(|&i| values[i]).sum::<f64>() / n;
-            let areas: Vec<f64> = points
-                .iter()
-                .map(|&i| stretch_course[i] * stretch_wale[i])
-                .collect();
+            let n: f64 = points.iter().map(|&i| share(i)).sum();
+            let mean = |value: &dyn Fn(usize) -> f64| {
+                points.iter().map(|&i| share(i) * value(i)).sum::<f64>() / n
+            };
+            let area = |i: usize| stretch_course[i] * stretch_wale[i];
             Some(RegionStretch {
                 region,
                 points: points.len(),
-                course: mean(stretch_course),
-                wale: mean(stretch_wale),
-                area: areas.iter().sum::<f64>() / n,
-                max_area: areas.iter().copied().fold(0.0, f64::max),
+                course: mean(&|i| stretch_course[i]),
+                wale: mean(&|i| stretch_wale[i]),
+                area: mean(&area),
+                max_area: points.iter().map(|&i| area(i)).fold(0.0, f64::max),
             })
         })
         .collect()

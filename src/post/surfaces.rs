@@ -78,11 +78,11 @@ const CLEARANCE_SAMPLES: [[f64; 3]; 4] = [
 
 /// Lifts `mesh` (the stocking surface) [`STOCKING_LIFT_M`] along its vertex normals, then lifts
 /// the corners of any triangle a point of which is closer than [`STOCKING_CLEARANCE_M`] to the
-/// skin by twice what it lacks, along the skin's outward normal, up to four times, so that the leg's flat faces never
-/// poke through it and no viewer mixes the two up. Returns how many triangles still dip closer
-/// (a handful of 45,000 on the sample feet at 150×150, in the toes' clefts, still clear of the
-/// skin by a fifth of the clearance or more). Points the surface repeats (its texture's seam)
-/// move together. The same surface for the same input, whatever the thread count.
+/// skin by twice what it lacks, along the skin's outward normal, up to four times, so that the
+/// leg's flat faces never poke through it and no viewer mixes the two up. Returns how many
+/// triangles still dip closer (a handful of 45,000 on the sample feet at 150×150, in the toes'
+/// clefts, still clear of the skin by a fifth of the clearance or more). Points the surface
+/// repeats (its texture's seam) move together. The same surface for the same input, whatever the thread count.
 pub fn lift_clear_of(mesh: &mut SurfaceMesh, collider: &Collider) -> usize {
     // A vertex repeated for the texture's seam (the same point, the same normal) must move with
     // its twin, or the surface would open there.
@@ -169,8 +169,9 @@ pub fn lift_clear_of(mesh: &mut SurfaceMesh, collider: &Collider) -> usize {
 /// pocket's short rows, the toe seam that closes it) triangulated, with a vertex per knit point
 /// and the points of the first wale repeated where a face wraps round to it, so texture
 /// coordinates run 0–1 without a jump (u = wale / wales, v = 1 − course / (courses − 1), from
-/// [`Knit::fabric_coords`]; on a graded grid v follows the relaxed fabric instead); per vertex, the yarn point's attributes and its fields (density,
-/// stretch, coverage: what a sheer shader on this surface needs). With the coverage, the vertex
+/// [`Knit::fabric_coords`]; on a graded grid v follows the relaxed fabric instead); per vertex,
+/// the yarn point's attributes and its fields (density, stretch, coverage: what a sheer shader
+/// on this surface needs). With the coverage, the vertex
 /// colours are white and their opacity is the coverage clamped to 0–1 (a rendering aid: the
 /// `coverage` attribute stays as it is); without it (no fields measured), no colours. Only the
 /// knit's own points are used: `yarns` may hold points the penetration fix inserted after them.

@@ -112,14 +112,7 @@ pub fn carry_to_leg(
         .collect();
     let spacing = mean_spacing(knit, Direction::Course).max(mean_spacing(knit, Direction::Wale));
     // A graded grid's point stands for its ring's share of an even one's fabric.
-    let ring_shares: Option<Vec<f64>> = knit.is_graded().then(|| {
-        (0..knit.len())
-            .map(|i| match i < knit.grid_len() {
-                true => knit.grid_spring_factors(i / knit.wales)[0],
-                false => 1.0,
-            })
-            .collect()
-    });
+    let ring_shares = knit.point_fabric_shares();
     let points = Carrier {
         fields: per_point,
         at: &knit.particles.x,

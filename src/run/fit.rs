@@ -409,7 +409,8 @@ fn fit_details(
             Some(landmarks) => {
                 let regions = regions(knit, &fit.centreline, fit.path.as_ref(), landmarks);
                 let (course, wale) = fields::stretch(knit);
-                stretch_by_region(&regions, &course, &wale)
+                let shares = knit.point_fabric_shares();
+                stretch_by_region(&regions, &course, &wale, shares.as_deref())
             }
             None => Vec::new(),
         },
@@ -609,6 +610,7 @@ pub fn solve_fit(
             &centreline,
             landmarks.as_ref(),
             level,
+            &course_places(&knit, level.courses),
         ));
     }
     // A fit that ran out of steps is written, and says where it had not settled.
@@ -618,7 +620,7 @@ pub fn solve_fit(
             &axis,
             &centreline,
             named.as_deref(),
-            level.courses,
+            &course_places(&knit, level.courses),
             unsettled,
         );
         unsettled_words(&at, unsettled, level, scene.solver.tolerance)
@@ -1171,6 +1173,15 @@ fn choose_axis(
 /// (a heavy knee is about 40 cm around: 1.6 cm a side at 24).
 const COARSE_GRID_WALES: usize = 40;
 
+/// Where a level of `courses` courses has each along its fabric: the knit's relaxed places
+/// where it is that level (a graded grid's courses crowd over the toe's tip), else evenly.
+fn course_places(knit: &Knit, courses: usize) -> Vec<f64> {
+    match knit.courses == courses && knit.is_graded() {
+        true => knit.course_places(),
+        false => (0..courses).map(|c| c as f64).collect(),
+    }
+}
+
 /// Where on the stocking a level's courses stopped out of balance, in words.
 struct Whereabouts {
     /// The courses, and how far along the stocking they lie: "courses 140–148 of 150 (70–75 cm
@@ -1190,11 +1201,13 @@ impl Whereabouts {
         axis: &Axis,
         centreline: &Centreline,
         landmarks: Option<&Landmarks>,
-        courses: usize,
+        places: &[f64],
         at: &OutOfBalance,
     ) -> Whereabouts {
-        let last = courses.saturating_sub(1).max(1) as f64;
-        let [from, to] = at.courses.map(|c| c as f64 / last * centreline.length());
+        let courses = places.len();
+        let last = places.last().copied().filter(|&p| p > 0.0).unwrap_or(1.0);
+        let place = |c: usize| places.get(c).copied().unwrap_or(last);
+        let [from, to] = at.courses.map(|c| place(c) / last * centreline.length());
         let to_the_toe = centreline.length() > axis.length() + 1e-9;
         let [first, last] = at.courses;
         let along = format!(
@@ -1299,11 +1312,12 @@ fn stalled(
     centreline: &Centreline,
     landmarks: Option<&Landmarks>,
     level: &LevelStats,
+    places: &[f64],
 ) -> Error {
     let stall = level.stall.expect("a stalled level says where");
     let named = landmarks_or_found(scene, leg, landmarks);
     let landmarks = named.as_deref();
-    let at = Whereabouts::of(axis, centreline, landmarks, level.courses, &stall);
+    let at = Whereabouts::of(axis, centreline, landmarks, places, &stall);
     let place = format!("{} are out of balance{}", at.courses, at.worst);
     let (to_the_toe, at_foot) = (at.to_the_toe, at.at_foot);
     let circumference = scene.fabric().relaxed_circumference_m();
@@ -1588,6 +1602,7 @@ mod tests {
             &centreline,
             placed.landmarks.as_ref(),
             &level,
+            &(0..level.courses).map(|c| c as f64).collect::<Vec<_>>(),
         )
         .to_string();
         for expected in [
@@ -1603,6 +1618,28 @@ mod tests {
             );
         }
         assert_eq!(message.lines().count(), 1, "{message}");
+    }
+
+    #[test]
+    fn a_graded_grids_courses_are_placed_along_its_fabric_in_words() {
+        // Courses crowding towards the end: the last three lie in the last 10 cm of a metre,
+        // not the last 29 as their index would say.
+        let axis = Axis {
+            bottom: [0.0, 0.0, 0.0],
+            top: [0.0, 1.0, 0.0],
+            source: AxisSource::Scene,
+        };
+        let places = [0.0, 0.2, 0.4, 0.6, 0.8, 0.9, 0.95, 1.0];
+        let at = OutOfBalance {
+            courses: [5, 7],
+            worst_point: [0.0, 0.9, 0.0],
+            worst_force_step: 0.1,
+        };
+        let words = Whereabouts::of(&axis, &Centreline::straight(&axis), None, &places, &at);
+        assert_eq!(
+            words.courses,
+            "courses 5–7 of 8 (90–100 cm up the stocking from its bottom end)"
+        );
     }
 
     #[test]

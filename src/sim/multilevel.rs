@@ -288,7 +288,10 @@ pub fn prolong(coarse: &Knit, fine: &mut Knit) {
     // Along the wales by relaxed fabric where either grid is graded (index fractions are that on
     // even grids).
     let graded = coarse.is_graded() || fine.is_graded();
-    let (coarse_places, fine_places) = (coarse.course_places(), fine.course_places());
+    let (coarse_places, fine_places) = match graded {
+        true => (coarse.course_places(), fine.course_places()),
+        false => (Vec::new(), Vec::new()),
+    };
     for c in 0..fc {
         let (c0, c1, tc) = match graded {
             true => at_fraction(fraction_of(&fine_places, c), &coarse_places),

@@ -44,7 +44,8 @@ fn heel_stretch(fit: &SolvedFit) -> f64 {
     let landmarks = fit.landmarks.as_ref().unwrap();
     let regions = regions(&fit.knit, &fit.centreline, fit.path.as_ref(), landmarks);
     let (course, wale) = stretch(&fit.knit);
-    stretch_by_region(&regions, &course, &wale)
+    let shares = fit.knit.point_fabric_shares();
+    stretch_by_region(&regions, &course, &wale, shares.as_deref())
         .into_iter()
         .find(|r| r.region == Region::Heel)
         .expect("a heel region")
