@@ -260,7 +260,7 @@ pub const TOE_TIP_FABRIC_M: f64 = 0.02;
 /// Relaxed fabric over which the cells shrink from the grid's to the tip's, metres.
 pub const TOE_TIP_RAMP_M: f64 = 0.02;
 /// Most the tip's cells may be finer than the rest of the grid's.
-const MAX_TOE_GRADING: f64 = 4.0;
+pub const MAX_TOE_GRADING: f64 = 4.0;
 
 /// The intervals (metres of relaxed fabric, welt to toe) of a stocking's courses graded finer
 /// over the toe's tip: `k` courses per even one over the last [`TOE_TIP_FABRIC_M`], rising
