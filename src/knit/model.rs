@@ -325,15 +325,10 @@ impl Knit {
 
     /// Relaxed fabric from the first course to each course along the wale, metres.
     pub fn course_places(&self) -> Vec<f64> {
-        let mut place = 0.0;
-        let mut places = Vec::with_capacity(self.courses);
-        for c in 0..self.courses {
-            places.push(place);
-            if c + 1 < self.courses {
-                place += self.course_interval(c);
-            }
-        }
-        places
+        let intervals: Vec<f64> = (0..self.courses.saturating_sub(1))
+            .map(|c| self.course_interval(c))
+            .collect();
+        places_along(&intervals)
     }
 
     /// [`Knit::grid_spring_factors`] of spring `s`: its row's for a grid spring, 1 for the
@@ -774,19 +769,13 @@ impl Knit {
             match pocket {
                 Some(rows) if rows.course == c => {
                     // The short rows' springs are the shaping's, one first interval each.
-                    let step = self.grid_rest_m()[1];
+                    let step = self.course_interval(0);
                     steps.extend(std::iter::repeat_n(step, 2 * rows.depth[w] + 1));
                 }
                 _ => steps.push(self.course_interval(c)),
             }
         }
-        let mut place = 0.0;
-        std::iter::once(0.0)
-            .chain(steps.into_iter().map(|r| {
-                place += r;
-                place
-            }))
-            .collect()
+        places_along(&steps)
     }
 
     /// [`Knit::wale_chain`] of wale `w`, and where a toe seam joins it to another wale, on over
@@ -948,6 +937,17 @@ impl Knit {
                 .collect(),
         }
     }
+}
+
+/// Where points lie along a line, from its first, whose steps are `intervals` long (one more
+/// place than intervals): a wale's relaxed fabric to each of its courses.
+pub fn places_along(intervals: &[f64]) -> Vec<f64> {
+    std::iter::once(0.0)
+        .chain(intervals.iter().scan(0.0, |place, &r| {
+            *place += r;
+            Some(*place)
+        }))
+        .collect()
 }
 
 /// Per-point lists in a compressed layout (start offsets, then all entries), from `entries`,

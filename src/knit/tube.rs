@@ -12,7 +12,9 @@
 //!
 //! The grid is usually coarser than the stitches (150×150 points for a stocking of some 400
 //! wales), and its cells need not have the stitch's shape: the springs are scaled so that the
-//! tube is the knit's fabric at any grid size ([`Knit::with_stitch_shape`]).
+//! tube is the knit's fabric at any grid size ([`Knit::with_stitch_shape`]). The grid a
+//! stocking's fit ends on has its courses graded finer over the toe's tip where even ones would
+//! be too long to wrap it ([`toe_graded_intervals`], docs/decisions/0073).
 //!
 //! Each ring clears the part of the leg that goes around the axis at its height (the loop of the
 //! cross-section around the axis point, [`crate::leg::slice::enclosing_radii`]), not every
@@ -21,6 +23,7 @@
 
 use nalgebra::Point3;
 
+use super::model::places_along;
 use super::path::{PathPart, TubePath};
 use super::settings::{TubeBottom, TubeHeel, TubeTop};
 use super::{Knit, Pattern, Tile};
@@ -186,7 +189,7 @@ pub fn build_stocking(
     // The shaping's steps are the first interval's (the welt's, even on every grid).
     let rest_wale = intervals.first().copied().unwrap_or(even);
     // Each course starts as far along the path as it lies along the relaxed fabric.
-    let places = places_of(&intervals);
+    let places = places_along(&intervals);
     let graded = intervals.iter().any(|&r| r != even);
     let length = path.length();
     let along = |c: usize| match graded {
@@ -312,16 +315,6 @@ pub fn toe_graded_intervals(spec: &TubeSpec) -> Option<Vec<f64>> {
     places[0] = 0.0;
     places[steps as usize] = length;
     Some(places.windows(2).map(|p| p[1] - p[0]).collect())
-}
-
-/// Relaxed fabric from the first course to each course, from the intervals between them.
-fn places_of(intervals: &[f64]) -> Vec<f64> {
-    std::iter::once(0.0)
-        .chain(intervals.iter().scan(0.0, |place, &r| {
-            *place += r;
-            Some(*place)
-        }))
-        .collect()
 }
 
 /// Short rows per half of a heel pocket over each of `wales` wales, on a grid whose wale springs

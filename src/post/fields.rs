@@ -781,12 +781,7 @@ pub(crate) mod tests {
         let mut intervals = vec![0.004; 20];
         intervals.extend([0.003, 0.002, 0.0015]);
         intervals.extend(vec![0.001; 15]);
-        let places: Vec<f64> = std::iter::once(0.0)
-            .chain(intervals.iter().scan(0.0, |p, &r| {
-                *p += r;
-                Some(*p)
-            }))
-            .collect();
+        let places = crate::knit::model::places_along(&intervals);
         let (wales, radius, [around, along]) = (40, 0.03, [1.3, 1.6]);
         let knit = Knit::grid(
             wales,

@@ -1205,9 +1205,9 @@ impl Whereabouts {
         at: &OutOfBalance,
     ) -> Whereabouts {
         let courses = places.len();
-        let last = places.last().copied().filter(|&p| p > 0.0).unwrap_or(1.0);
-        let place = |c: usize| places.get(c).copied().unwrap_or(last);
-        let [from, to] = at.courses.map(|c| place(c) / last * centreline.length());
+        let total = places.last().copied().filter(|&p| p > 0.0).unwrap_or(1.0);
+        let place = |c: usize| places.get(c).copied().unwrap_or(total);
+        let [from, to] = at.courses.map(|c| place(c) / total * centreline.length());
         let to_the_toe = centreline.length() > axis.length() + 1e-9;
         let [first, last] = at.courses;
         let along = format!(
