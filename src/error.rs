@@ -27,6 +27,11 @@ pub enum Error {
         field: String,
         message: String,
     },
+    /// A settings value the run cannot use, found by a check that needs the leg (its length,
+    /// its foot): the field as the scene spells it, and what is wrong. A command reports it
+    /// under the scene file, or the flag that set the value ([`crate::scene::LoadedScene::refusal`]).
+    #[error("{}: {}", .0.field, .0.message)]
+    Settings(crate::base::settings::Invalid),
     /// The leg file cannot be used: not glTF, no triangles, compressed geometry, bad values, or
     /// implausible units.
     #[error("{path}: {message}")]
@@ -174,6 +179,7 @@ impl Error {
             Error::Read { .. }
             | Error::SceneSyntax { .. }
             | Error::InvalidScene { .. }
+            | Error::Settings(_)
             | Error::InvalidArgument { .. }
             | Error::Leg { .. }
             | Error::RenderInput { .. }

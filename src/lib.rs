@@ -11,6 +11,7 @@ pub mod base;
 pub mod draw;
 pub mod error;
 pub mod export;
+pub mod fit;
 pub mod knit;
 pub mod leg;
 pub mod limits;
@@ -21,6 +22,7 @@ pub mod report;
 pub mod run;
 pub mod scene;
 pub mod sim;
+pub mod stage;
 
 pub use error::{Error, Result};
 pub use scene::Scene;

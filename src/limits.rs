@@ -97,6 +97,58 @@ pub struct FitSize<'a> {
     pub solved_on: Option<[usize; 2]>,
 }
 
+/// What a fit's memory estimate reads besides its grid and its leg: the files it writes, the
+/// preview's size, and the limits it is held to.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FitMemory {
+    /// The scene's `limits`.
+    pub limits: Limits,
+    /// The outputs that write files (a fit's plan has them).
+    pub outputs: Vec<Output>,
+    /// Pixels of the preview (`render.width × render.height`), if one is written.
+    pub preview_pixels: u64,
+}
+
+/// Courses per wale the memory estimate takes where the scene leaves the courses out, before
+/// the stocking's length is known: 1.6–2.0 on the samples' stockings to the toe.
+pub const COURSES_PER_WALE_ESTIMATE: usize = 2;
+
+impl FitMemory {
+    /// The check of a fit on a `tube` grid (wales, courses) over a leg of `leg_triangles`,
+    /// relaxed first on the larger level `solved_on` where it has one, its tube real stitches
+    /// drawn as loops where `loops`.
+    pub fn check(
+        &self,
+        tube: [usize; 2],
+        leg_triangles: usize,
+        solved_on: Option<[usize; 2]>,
+        loops: bool,
+    ) -> MemoryCheck {
+        let size = FitSize {
+            tube,
+            leg_triangles,
+            outputs: &self.outputs,
+            preview_pixels: self.preview_pixels,
+            loops,
+            solved_on,
+        };
+        MemoryCheck::fit(&size, &self.limits)
+    }
+
+    /// The check made before the leg is decoded, of `wales` by `courses` (left out: up to
+    /// [`COURSES_PER_WALE_ESTIMATE`] times the wales, as on the samples' stockings to the toe;
+    /// checked again once known) over the triangles the leg file declares.
+    pub fn before_the_leg(
+        &self,
+        wales: usize,
+        courses: Option<usize>,
+        declared_triangles: usize,
+    ) -> MemoryCheck {
+        let courses = courses.unwrap_or(COURSES_PER_WALE_ESTIMATE * wales);
+        self.check([wales, courses], declared_triangles, None, false)
+    }
+}
+
 /// The peak memory a fit is estimated to need, by part, in bytes.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct MemoryEstimate {

@@ -3,18 +3,22 @@
 //! The run executes exactly these stages (its clock records each against the plan) and the
 //! report lists them, so nothing runs that the scene did not ask for.
 
-use std::fmt;
-
 use serde::Serialize;
 
 use crate::base::YarnKind;
 use crate::export::{Output, YarnsWritten};
+use crate::fit::{
+    FitSettings, LoadSettings, PlaceSettings, ProductSettings, RealStitches, SolveSettings,
+};
 use crate::knit::tube::TOE_TIP_CELL_M;
-use crate::knit::{Stretch, TubeBottom, TubeTop};
+use crate::knit::{TubeBottom, TubeTop};
+use crate::leg::AxisSource;
+use crate::limits::FitMemory;
 use crate::preview::RenderMode;
-use crate::scene::{Effect, Scene};
+use crate::scene::{Effect, LoadedScene, Scene, LEG_AXIS};
 use crate::sim::multilevel::{grid_sizes_down_to, COARSEST, STOCKING_COARSEST};
 use crate::sim::{ForceTerms, SolverMethod};
+use crate::stage::{File, FitFile, PatchFile, Stage};
 
 /// Where `tube.bottom` puts the stocking's start, in words.
 pub fn tube_bottom_words(bottom: Option<TubeBottom>) -> String {
@@ -38,113 +42,8 @@ pub fn tube_top_words(top: TubeTop) -> String {
     }
 }
 
-/// One step of a run: what the plan lists, the run executes and the report records.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Stage {
-    /// Read the leg file and check the fit's memory estimate before decoding it.
-    LoadLeg,
-    /// Find the leg to dress and its landmarks (only where no axis is given).
-    FindLandmarks,
-    /// Convert the given axis to world space, or place it on the landmarks; check the leg goes
-    /// around it.
-    FindAxis,
-    /// Build the contact queries' structure over the leg.
-    BuildCollider,
-    /// The paper's solver only: knit the tube at the asked-for size (the multilevel solver knits
-    /// each of its grids inside [`Stage::Fit`]).
-    KnitTube,
-    /// Relax the tube onto the leg with sliding contact.
-    Fit,
-    /// Move out any point a cached tangent plane let dip below the offset.
-    ExactContactPass,
-    /// Measure the deepest yarn point inside the leg against the exact triangles.
-    CheckPenetration,
-    /// Stitch density, stretch and coverage per leg vertex.
-    LegAttributes,
-    /// Build the knit at the real stitch count and lay it on the skin in the fitted grid.
-    LayStitches,
-    /// Every real stitch as a loop polyline.
-    KnitLoops,
-    /// Reroute yarn segments that cut through the leg over the skin (paper §6.3).
-    PenetrationFix,
-    /// The knit as `stocking.glb`'s sheer surface, lifted clear of the skin.
-    StockingSurface,
-    /// Build a fresh patch for one stretch of the patch experiment.
-    KnitPatch(Stretch),
-    /// Relax that patch with its edges held.
-    RelaxPatch(Stretch),
-    /// Stitch shapes of every relaxed patch.
-    MeasureStitches,
-    /// `knitfit render`: read a fit's `stocking.glb`.
-    ReadStocking,
-    /// Encode one file in memory.
-    Encode(File),
-    /// Ray-trace the yarn-level preview and encode it.
-    RenderPreview,
-    /// Write every file, each to a temporary name then renamed.
-    WriteFiles,
-}
-
-impl fmt::Display for Stage {
-    /// The stage's name, as in `knitfit plan` and `report.json` (`relax course=1.5`).
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            Stage::LoadLeg => f.write_str("load leg"),
-            Stage::FindLandmarks => f.write_str("find landmarks"),
-            Stage::FindAxis => f.write_str("find axis"),
-            Stage::BuildCollider => f.write_str("build collider"),
-            Stage::KnitTube => f.write_str("knit tube"),
-            Stage::Fit => f.write_str("fit"),
-            Stage::ExactContactPass => f.write_str("exact contact pass"),
-            Stage::CheckPenetration => f.write_str("check penetration"),
-            Stage::LegAttributes => f.write_str("leg attributes"),
-            Stage::LayStitches => f.write_str("lay stitches"),
-            Stage::KnitLoops => f.write_str("knit loops"),
-            Stage::PenetrationFix => f.write_str("penetration fix"),
-            Stage::StockingSurface => f.write_str("stocking surface"),
-            Stage::KnitPatch(stretch) => write!(f, "knit {stretch}"),
-            Stage::RelaxPatch(stretch) => write!(f, "relax {stretch}"),
-            Stage::MeasureStitches => f.write_str("measure stitches"),
-            Stage::ReadStocking => f.write_str("read stocking.glb"),
-            Stage::Encode(file) => write!(f, "encode {}", file.name()),
-            Stage::RenderPreview => f.write_str("render preview"),
-            Stage::WriteFiles => f.write_str("write files"),
-        }
-    }
-}
-
-impl Serialize for Stage {
-    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
-        serializer.collect_str(self)
-    }
-}
-
-/// A file a fit encodes (the preview is rendered in [`Stage::RenderPreview`] instead).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FitFile {
-    /// `stocking.glb`: the leg, the yarns and the stocking surface.
-    StockingGlb,
-    /// `stocking.ply`: the yarn points and segments.
-    StockingPly,
-    /// `leg.ply`: the leg with its attributes.
-    LegPly,
-    /// `density.png`: the leg coloured by stitch density.
-    DensityPicture,
-}
-
-/// A file the patch experiment encodes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PatchFile {
-    /// `patch.ply`: the relaxed patches' yarns.
-    Ply,
-    /// `patch.glb`: the same as glTF lines.
-    Glb,
-    /// `patch.png`: the stitch picture.
-    Picture,
-}
-
 /// The files a fit can encode, in the order it writes them, with the output that asks for
-/// each: the one table from output kind to file (the writers are `run::fit`'s).
+/// each: the one table from output kind to file (the writers are `fit::products`'s).
 pub const FIT_FILES: [(Output, FitFile); 4] = [
     (Output::Glb, FitFile::StockingGlb),
     (Output::Ply, FitFile::StockingPly),
@@ -163,44 +62,6 @@ pub const PATCH_FILES: [(Output, PatchFile); 3] = [
 pub const PREVIEW_FILE: &str = "preview.png";
 /// The report's file name.
 pub const REPORT_FILE: &str = "report.json";
-
-/// A file one of the commands encodes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum File {
-    /// A fit's.
-    Fit(FitFile),
-    /// The patch experiment's.
-    Patch(PatchFile),
-}
-
-impl File {
-    /// The file's name in the output directory.
-    pub fn name(self) -> &'static str {
-        match self {
-            File::Fit(FitFile::StockingGlb) => "stocking.glb",
-            File::Fit(FitFile::StockingPly) => "stocking.ply",
-            File::Fit(FitFile::LegPly) => "leg.ply",
-            File::Fit(FitFile::DensityPicture) => "density.png",
-            File::Patch(PatchFile::Ply) => "patch.ply",
-            File::Patch(PatchFile::Glb) => "patch.glb",
-            File::Patch(PatchFile::Picture) => "patch.png",
-        }
-    }
-}
-
-impl FitFile {
-    /// The file's name in the output directory.
-    pub fn name(self) -> &'static str {
-        File::Fit(self).name()
-    }
-}
-
-impl PatchFile {
-    /// The file's name in the output directory.
-    pub fn name(self) -> &'static str {
-        File::Patch(self).name()
-    }
-}
 
 /// The files a fit of `scene` encodes, in order.
 pub fn fit_files(scene: &Scene) -> Vec<FitFile> {
@@ -629,6 +490,64 @@ fn preview_reason(scene: &Scene, asked_by: &str) -> String {
         r.height,
         r.spp
     )
+}
+
+impl Plan {
+    /// What each stage of this plan's fit of `loaded` is given: the parts of the scene each
+    /// stage owns, the force terms, the outputs the memory estimate counts, and the products
+    /// the plan's stages make.
+    pub fn fit_settings(&self, loaded: &LoadedScene) -> FitSettings {
+        let scene = &loaded.scene;
+        let axis_source = match loaded.set_by(LEG_AXIS) {
+            Some(_) => AxisSource::CommandLine,
+            None => AxisSource::Scene,
+        };
+        let real_stitches = match (self.has(Stage::LayStitches), self.has(Stage::KnitLoops)) {
+            (false, _) => RealStitches::None,
+            (true, false) => RealStitches::Crossings,
+            (true, true) => RealStitches::Loops,
+        };
+        let picture = Stage::Encode(File::Fit(FitFile::DensityPicture));
+        let render = &scene.render;
+        FitSettings {
+            load: LoadSettings {
+                units: scene.leg.units,
+                up: scene.leg.up_axis,
+            },
+            place: PlaceSettings {
+                axis: scene.leg.axis.map(|axis| (axis, axis_source)),
+                side: scene.leg.side,
+            },
+            tube: scene.tube.clone(),
+            fabric: scene.fabric(),
+            pattern: scene.knit.pattern,
+            memory: FitMemory {
+                limits: scene.limits.clone(),
+                outputs: self.files.iter().map(|file| file.output).collect(),
+                preview_pixels: u64::from(render.width) * u64::from(render.height),
+            },
+            solve: SolveSettings {
+                solver: scene.solver.clone(),
+                forces: self.forces,
+                contact: scene.contact.method,
+                offset_m: scene.contact.offset(&scene.yarns),
+                heel: scene.tube.heel,
+                support_ratio: scene.yarns.support.stiffness / scene.yarns.nylon.stiffness,
+                side: scene.leg.side,
+            },
+            measure: self.has(Stage::LegAttributes),
+            products: Some(ProductSettings {
+                yarns_written: scene.yarns_written(),
+                real_stitches,
+                penetration_fix: self.has(Stage::PenetrationFix),
+                stocking_surface: self.has(Stage::StockingSurface),
+                // The pictures are seen from the character's front where a view draws it.
+                pictured: self.has(picture)
+                    || self.has(Stage::RenderPreview) && render.camera.is_none(),
+                colours: scene.yarns.each(|yarn| yarn.colour),
+            }),
+        }
+    }
 }
 
 /// The force terms the effects switch on.

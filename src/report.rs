@@ -15,7 +15,7 @@ use crate::leg::{
     Axis, AxisSource, Cleaned, ContactMethod, Landmarks, Leg, Side, ThighTopKind, Units, UpAxis,
 };
 use crate::limits::MemoryCheck;
-use crate::plan::{Plan, PlannedStage, Stage};
+use crate::plan::{Plan, PlannedStage};
 use crate::post::lattice::LaidStitches;
 use crate::post::penetration::PenetrationStats;
 use crate::post::regions::RegionStretch;
@@ -25,6 +25,7 @@ use crate::preview::PreviewStats;
 use crate::scene::Effect;
 use crate::sim::contact::ContactCounters;
 use crate::sim::{LevelStats, RelaxStats};
+use crate::stage::{timed, Stage, StageTimes};
 
 /// One stage as it ran.
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -559,20 +560,9 @@ impl StageClock {
         }
     }
 
-    /// Runs `work` as `stage` and records its wall time with the plan's reason. A stage the plan
-    /// does not list is a bug in the run, not in its input.
+    /// Runs `work` as `stage` and records its wall time with the plan's reason.
     pub fn time<T>(&mut self, stage: Stage, work: impl FnOnce() -> T) -> T {
-        let planned = self.planned.iter().find(|p| p.stage == stage);
-        debug_assert!(planned.is_some(), "stage {stage} runs but is not planned");
-        let why = planned.map(|p| p.why.clone()).unwrap_or_default();
-        let start = Instant::now();
-        let out = work();
-        self.records.push(StageRecord {
-            name: stage,
-            why,
-            seconds: start.elapsed().as_secs_f64(),
-        });
-        out
+        timed(self, stage, work)
     }
 
     /// The stages recorded so far, in order.
@@ -592,5 +582,19 @@ impl StageClock {
     /// Seconds since the clock started.
     pub fn wall_seconds(&self) -> f64 {
         self.started.elapsed().as_secs_f64()
+    }
+}
+
+impl StageTimes for StageClock {
+    /// Records `stage` with the plan's reason. A stage the plan does not list is a bug in the
+    /// run, not in its input.
+    fn record(&mut self, stage: Stage, seconds: f64) {
+        let planned = self.planned.iter().find(|p| p.stage == stage);
+        debug_assert!(planned.is_some(), "stage {stage} runs but is not planned");
+        self.records.push(StageRecord {
+            name: stage,
+            why: planned.map(|p| p.why.clone()).unwrap_or_default(),
+            seconds,
+        });
     }
 }

@@ -132,6 +132,19 @@ impl Scene {
         self.outputs.contains(&output)
     }
 
+    /// The check of a scene that `knitfit patch` runs, besides [`Scene::validate`]: a patch's
+    /// points are its stitches already, so no `outputs` may ask for its real stitches.
+    pub fn check_for_patch(&self) -> std::result::Result<(), Invalid> {
+        match self.yarns_written() {
+            YarnsWritten::Grid => Ok(()),
+            _ => Err(Invalid::new(
+                "outputs",
+                "\"stitches\" and \"loops\" lay a fit's real stitches on the leg; a patch's \
+                 points are its stitches already: leave them out for knitfit patch",
+            )),
+        }
+    }
+
     /// Checks every value; the error names the field as a dotted path from the scene's top.
     pub fn validate(&self) -> std::result::Result<(), Invalid> {
         self.knit.validate().map_err(|e| e.within("knit"))?;
@@ -332,6 +345,15 @@ impl LoadedScene {
         }
     }
 
+    /// `error` as this scene's: a settings value refused by a check that needed the leg
+    /// ([`Error::Settings`]) is reported under the scene file or the flag that set it.
+    pub fn named(&self, error: Error) -> Error {
+        match error {
+            Error::Settings(invalid) => self.refusal(invalid),
+            other => other,
+        }
+    }
+
     /// The files this scene reads (the scene file): none may be replaced by an output.
     pub fn inputs(&self) -> Vec<PathBuf> {
         self.path.iter().cloned().collect()
@@ -339,7 +361,7 @@ impl LoadedScene {
 
     /// The error for a value the scene's checks refuse: the last flag's that set one of the
     /// fields it is about, else the scene file's.
-    fn refusal(&self, invalid: Invalid) -> Error {
+    pub fn refusal(&self, invalid: Invalid) -> Error {
         let set_by_flag = |o: &&Override| invalid.fields().any(|f| o.touches(f));
         match self.overrides.iter().rev().find(set_by_flag) {
             Some(o) => Error::InvalidArgument {

@@ -212,7 +212,7 @@ impl Knit {
         position: impl Fn(usize, usize) -> Vec3,
     ) -> Knit {
         // Within `u32`: a grid is at most `MAX_TUBE_POINTS` (`TubeSettings::validate`), and the
-        // fit refuses a real stitch count past it (`run::fit`); patches are smaller still.
+        // fit refuses a real stitch count past it (`fit::size`); patches are smaller still.
         let n = wales * courses;
         let id = |w: usize, c: usize| PointId((c * wales + w) as u32);
         let mut x = Vec::with_capacity(n);

@@ -379,7 +379,32 @@ pub fn check_grid_size(wales: usize, courses: usize) -> Result<(), String> {
     Ok(())
 }
 
+/// Fewest wales or courses a stocking to the toe is fitted on: below it the rings are
+/// centimetres apart over the heel and the toe. Its coarse levels may go to
+/// `sim::multilevel::STOCKING_COARSEST`, as they only start the next level.
+pub const SMALLEST_STOCKING: usize = 60;
+
 impl TubeSettings {
+    /// Refuses a grid too coarse for a stocking to the toe; the error names `wales` (and
+    /// `courses`) under `tube`. Courses left out are taken at the fewest allowed here, and
+    /// checked again once the stocking's length gives them.
+    pub fn check_to_the_toe(&self) -> Result<(), Invalid> {
+        let (wales, courses) = (self.wales, self.courses.unwrap_or(SMALLEST_STOCKING));
+        if wales.min(courses) >= SMALLEST_STOCKING {
+            return Ok(());
+        }
+        Err(Invalid::new(
+            "wales",
+            format!(
+                "at {wales}×{courses} the rings would be centimetres apart over the heel and the \
+                 toe, where such a coarse fit chatters instead of settling; give at least \
+                 {SMALLEST_STOCKING}×{SMALLEST_STOCKING} (--resolution, tube.wales and \
+                 tube.courses)"
+            ),
+        )
+        .with(&["courses"]))
+    }
+
     /// Checks every value; the error names the field under `tube`.
     pub fn validate(&self) -> Result<(), Invalid> {
         let w = self.wales;

@@ -23,6 +23,18 @@ pub enum AxisSource {
     Landmarks,
 }
 
+impl AxisSource {
+    /// Who placed the axis, as a message names it: the flag or field that gave it (`--axis`,
+    /// `leg.axis`), or "the axis placed on the landmarks".
+    pub fn describe(self) -> &'static str {
+        match self {
+            AxisSource::CommandLine => "--axis",
+            AxisSource::Scene => "leg.axis",
+            AxisSource::Landmarks => "the axis placed on the landmarks",
+        }
+    }
+}
+
 /// The stocking's axis, world space (metres, Y up).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Axis {

@@ -14,6 +14,7 @@
 use serde::Serialize;
 
 use crate::base::Direction;
+use crate::error::{Error, Result};
 use crate::knit::tube::Centreline;
 use crate::knit::{Knit, PointId};
 
@@ -120,6 +121,41 @@ pub fn bunched_courses(knit: &Knit, centreline: &Centreline) -> (usize, Option<u
         furthest = furthest.max(h);
     }
     (count, first)
+}
+
+/// How many of `knit`'s courses came to rest below a course before them; refused as
+/// [`Error::Bunched`] above [`MAX_BUNCHED_FRACTION`] of them.
+pub fn refuse_bunched(
+    knit: &Knit,
+    centreline: &Centreline,
+    circumference_m: f64,
+    support_ratio: f64,
+) -> Result<usize> {
+    let (bunched, first) = bunched_courses(knit, centreline);
+    match first.filter(|_| bunched as f64 > MAX_BUNCHED_FRACTION * knit.courses as f64) {
+        Some(course) => Err(Error::Bunched {
+            course,
+            bunched,
+            courses: knit.courses,
+            place: {
+                // Where the courses from the first out of order on came to rest.
+                let along: Vec<f64> = (course..knit.courses)
+                    .map(|c| centreline.course_along(knit, c))
+                    .collect();
+                let lo = along.iter().copied().fold(f64::INFINITY, f64::min);
+                let hi = along.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                format!(
+                    "gathered {:.0}–{:.0} cm along the stocking from its {} end",
+                    100.0 * lo.max(0.0),
+                    100.0 * hi.max(0.0),
+                    if knit.has_toe_seam() { "top" } else { "bottom" }
+                )
+            },
+            ratio: support_ratio,
+            circumference_m,
+        }),
+        None => Ok(bunched),
+    }
 }
 
 /// The largest fraction of a fit's courses that may be out of order ([`bunched_courses`])

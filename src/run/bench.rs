@@ -17,18 +17,18 @@ pub mod stocking;
 
 use std::path::{Path, PathBuf};
 
-use super::fit::{solve_fit, FitInputs, SolvedFit};
 use super::{NoProgress, Progress};
 use crate::draw::bench_plot::{self, Curve};
 use crate::error::Result;
 use crate::export;
+use crate::fit::{self, FitSettings, SolvedFit};
 use crate::knit::TubeBottom;
-use crate::leg::AxisSource;
 use crate::limits::{peak_memory, reset_peak_memory};
-use crate::plan::{Plan, Stage};
+use crate::plan::Plan;
 use crate::report::StageClock;
-use crate::scene::{Scene, BUNDLED_SCENE_DIR};
+use crate::scene::{LoadedScene, Scene, BUNDLED_SCENE_DIR, BUNDLED_SCENE_NAME};
 use crate::sim::SolverMethod;
+use crate::stage::Stage;
 use stocking::StockingRow;
 
 /// Tolerance of the reference fits: a hundred times tighter than the tightest swept.
@@ -267,22 +267,25 @@ fn fit_case(base: &Scene, case: &BenchCase) -> Result<(SolvedFit, f64, Option<u6
     scene.solver.method = case.solver;
     scene.solver.tolerance = case.tolerance;
     let plan = Plan::fit(&scene);
-    let inputs = FitInputs {
-        leg: Path::new(BUNDLED_SCENE_DIR).join(case.leg),
-        axis_source: AxisSource::Scene,
+    let loaded = LoadedScene {
+        scene,
+        name: BUNDLED_SCENE_NAME.into(),
+        path: None,
+        overrides: Vec::new(),
+    };
+    // The solve alone: the fields are measured after the case's peak memory is read.
+    let settings = FitSettings {
+        measure: false,
+        products: None,
+        ..plan.fit_settings(&loaded)
     };
     reset_peak_memory();
     let mut clock = StageClock::new(&plan);
-    let fit = solve_fit(
-        &scene,
-        &plan,
-        &inputs,
-        crate::scene::BUNDLED_SCENE_NAME,
-        &mut clock,
-        &mut NoProgress,
-    )?;
+    let leg = Path::new(BUNDLED_SCENE_DIR).join(case.leg);
+    let (leg, _) = fit::load(&leg, &settings, &mut clock)?;
+    let fitted = fit::fit(leg, &settings, &mut clock, &mut NoProgress)?;
     let seconds = clock.seconds_in(&[Stage::Fit, Stage::ExactContactPass]);
-    Ok((fit, seconds, peak_memory()))
+    Ok((fitted.solved, seconds, peak_memory()))
 }
 
 /// How a reference fit went: a case measured against a reference that did not converge is
@@ -341,7 +344,9 @@ impl Reference {
 /// The stitch density on the leg's vertices, stitches per cm².
 fn leg_density(fit: &SolvedFit, scene: &Scene) -> Vec<f64> {
     let terms = Plan::fit(scene).forces;
-    fit.fields(&scene.fabric(), &terms).1.stitch_density
+    fit::measure::fields(fit, &scene.fabric(), &terms)
+        .on_leg
+        .stitch_density
 }
 
 /// One curve per leg, solver and resolution: error against time over the tolerances.

@@ -22,36 +22,10 @@ pub use render::{run_render, run_spp_sweep, Sweep};
 
 use crate::error::Result;
 use crate::export::atomic;
-use crate::plan::{Plan, Stage};
+use crate::plan::Plan;
 use crate::report::{Metrics, Report, StageClock};
-
-/// Receives progress of long stages.
-pub trait Progress {
-    /// A stage of up to `total` steps begins.
-    fn begin(&mut self, stage: &str, total: u64);
-    /// The current stage reached `position` with the given residual.
-    fn advance(&mut self, position: u64, residual: f64);
-    /// The current stage ended.
-    fn end(&mut self);
-}
-
-/// Progress that goes nowhere (tests, `-q`).
-pub struct NoProgress;
-
-impl Progress for NoProgress {
-    fn begin(&mut self, _stage: &str, _total: u64) {}
-    fn advance(&mut self, _position: u64, _residual: f64) {}
-    fn end(&mut self) {}
-}
-
-/// Feeds solver steps to a [`Progress`].
-struct StepProgress<'a>(&'a mut dyn Progress);
-
-impl crate::sim::RelaxObserver for StepProgress<'_> {
-    fn on_step(&mut self, step: usize, residual: f64) {
-        self.0.advance(step as u64, residual);
-    }
-}
+use crate::stage::Stage;
+pub use crate::stage::{NoProgress, Progress};
 
 /// What a command wrote: its report (as written) and every file, the report last.
 #[derive(Debug)]

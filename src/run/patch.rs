@@ -4,18 +4,20 @@
 
 use std::path::Path;
 
-use super::{Outcome, Progress, Run, StepProgress};
+use super::{Outcome, Progress, Run};
 use crate::base::YarnGeometry;
 use crate::draw::patch_picture::{self, Panel, PictureStyle};
-use crate::error::{Error, Result};
-use crate::export::{self, YarnsWritten};
+use crate::error::Result;
+use crate::export;
 use crate::knit::patch::{build_patch, PatchSpec};
 use crate::knit::{Knit, Stretch, StretchAxis};
-use crate::plan::{patch_files, File, PatchFile, Plan, Stage};
+use crate::plan::{patch_files, Plan};
 use crate::post::{measure_stitches, StitchStats};
 use crate::report::{Metrics, PatchDetails, PatchRun};
 use crate::scene::{LoadedScene, Scene};
 use crate::sim::{relax, RelaxStats};
+use crate::stage::StepProgress;
+use crate::stage::{File, PatchFile, Stage};
 
 /// One relaxed patch.
 struct Relaxed {
@@ -35,16 +37,7 @@ pub fn run_patch(
     progress: &mut dyn Progress,
 ) -> Result<Outcome<PatchDetails>> {
     let scene = &loaded.scene;
-    if scene.yarns_written() != YarnsWritten::Grid {
-        // A patch's grid is its stitches: there is no coarser grid to lay real ones in.
-        return Err(Error::InvalidScene {
-            path: loaded.name.clone(),
-            field: "outputs".into(),
-            message: "\"stitches\" and \"loops\" lay a fit's real stitches on the leg; a \
-                      patch's points are its stitches already: leave them out for knitfit patch"
-                .into(),
-        });
-    }
+    scene.check_for_patch().map_err(|e| loaded.refusal(e))?;
     let plan = Plan::patch(scene);
     let mut run = Run::new(&plan, out_dir, loaded.inputs());
     run.prepare()?;

@@ -2,7 +2,7 @@
 //! force terms, stages with why each runs, what is left out and why, files) and, for a fit, the
 //! memory estimate against the limit ([`crate::limits`]) and where the stocking goes. Reads the
 //! scene and the leg file; unless the memory check would refuse the fit, decodes the leg and
-//! finds its landmarks and axis as the fit does ([`place_axis`]), so a plan refuses a leg the
+//! finds its landmarks and axis as the fit does ([`fit::place()`]), so a plan refuses a leg the
 //! fit would refuse. Simulates nothing and writes nothing.
 
 use std::path::{Path, PathBuf};
@@ -10,12 +10,12 @@ use std::path::{Path, PathBuf};
 use nalgebra::Point3;
 use serde::Serialize;
 
-use super::fit::{memory_check, place_axis, FitInputs};
 use crate::error::Result;
+use crate::fit;
 use crate::leg::{decode_leg, read_leg_file, Axis, Landmarks, Leg, ThighTopKind, Units, UpAxis};
 use crate::limits::{MemoryCheck, MemoryEstimate, MemoryLimit};
 use crate::plan::{LeftOut, Plan, PlannedStage};
-use crate::report::{stocking_extent, LandmarkDetails, LandmarkRing, StageClock};
+use crate::report::{stocking_extent, LandmarkDetails, LandmarkRing};
 use crate::scene::{Effect, LoadedScene};
 use crate::sim::ForceTerms;
 
@@ -73,26 +73,29 @@ pub struct Placed {
 /// unless the fit would be refused for memory first, the fit's refusals of the decoded leg as
 /// well (implausible height, no landmarks, an axis the leg does not go around).
 pub fn plan_fit(loaded: &LoadedScene, out_dir: &Path) -> Result<PlanOutcome> {
-    let scene = &loaded.scene;
-    let plan = Plan::fit(scene);
-    let inputs = FitInputs::of(loaded);
-    let file = read_leg_file(&inputs.leg)?;
+    let plan = Plan::fit(&loaded.scene);
+    let settings = plan.fit_settings(loaded);
+    let leg_path = loaded.leg_path();
+    let file = read_leg_file(&leg_path)?;
     let triangles = file.declared_triangles();
     // As the fit does: the memory check before the leg is decoded.
-    let memory = memory_check(scene, &plan, triangles);
-    let placement = if memory.enforce(&inputs.leg.display().to_string()).is_err() {
+    let tube = &settings.tube;
+    let memory = settings
+        .memory
+        .before_the_leg(tube.wales, tube.courses, triangles);
+    let placement = if memory.enforce(&leg_path.display().to_string()).is_err() {
         Placement::NotDecoded
     } else {
-        let leg = decode_leg(file, scene.leg.units, scene.leg.up_axis)?;
-        // The fit's own stages, on a clock nobody reads.
-        let placed = place_axis(scene, &inputs, &leg, &mut StageClock::new(&plan))?;
+        let leg = decode_leg(file, settings.load.units, settings.load.up)?;
+        // The fit's own stage, untimed.
+        let placed = fit::place(&leg, &settings.place, tube, &mut ())?;
         let mut shown = Placed::new(&leg, placed.landmarks.as_ref(), placed.axis);
         shown.to_the_toe_m = placed.path.as_ref().map(|p| p.length());
         Placement::Placed(Box::new(shown))
     };
     Ok(PlanOutcome {
         memory: Some(memory),
-        leg: Some((inputs.leg, triangles)),
+        leg: Some((leg_path, triangles)),
         placement: Some(placement),
         files: files(&plan, out_dir),
         scene: loaded.name.clone(),

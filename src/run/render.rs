@@ -14,10 +14,11 @@ use crate::base::{Stance, SurfaceMesh};
 use crate::error::{Error, Result};
 use crate::export::gltf::read::read_stocking_glb;
 use crate::leg::landmarks::stance_of;
-use crate::plan::{Plan, Stage};
+use crate::plan::Plan;
 use crate::preview::{render_prepared, PreparedScene, PreviewInput};
 use crate::report::{Metrics, RenderDetails};
 use crate::scene::{LoadedScene, Scene};
+use crate::stage::Stage;
 
 /// Samples per pixel of the sweep's reference.
 const REFERENCE_SPP: u32 = 64;

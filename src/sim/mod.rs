@@ -13,6 +13,7 @@ pub mod forces;
 pub mod multilevel;
 pub mod relax;
 pub mod settings;
+pub mod stall;
 
 pub use accelerated::{relax_accelerated, LevelStats, Polish};
 pub use multilevel::{relax_multilevel, Levels, MultilevelStats};

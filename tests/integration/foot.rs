@@ -5,44 +5,28 @@
 use nalgebra::{Point3, Vector3};
 
 use knitfit::base::YarnKind;
+use knitfit::fit::{PlaceSettings, SolvedFit};
 use knitfit::knit::tube::end_rings;
 use knitfit::knit::{TubeBottom, TubeHeel};
-use knitfit::leg::AxisSource;
 use knitfit::leg::{Units, UpChoice};
-use knitfit::plan::Plan;
 use knitfit::post::fields::stretch;
 use knitfit::post::regions::{regions, stretch_by_region, Region};
-use knitfit::report::StageClock;
-use knitfit::run::fit::{solve_fit, FitInputs, SolvedFit};
-use knitfit::run::NoProgress;
 use knitfit::scene::Scene;
 
-use crate::support::sample;
+use crate::support::{sample, solve_on};
 
 fn to_the_toe(leg: &std::path::Path, heel: TubeHeel) -> SolvedFit {
     let mut scene = Scene::load(None).unwrap();
     scene.tube.bottom = Some(TubeBottom::Toe);
     scene.tube.heel = heel;
-    let plan = Plan::fit(&scene);
-    let inputs = FitInputs {
-        leg: leg.to_path_buf(),
-        axis_source: AxisSource::Scene,
-    };
-    solve_fit(
-        &scene,
-        &plan,
-        &inputs,
-        "test",
-        &mut StageClock::new(&plan),
-        &mut NoProgress,
-    )
-    .unwrap()
+    solve_on(leg, &scene)
 }
 
 /// The mean area stretch (course × wale) of the knit's heel region.
 fn heel_stretch(fit: &SolvedFit) -> f64 {
-    let landmarks = fit.landmarks.as_ref().unwrap();
-    let regions = regions(&fit.knit, &fit.centreline, fit.path.as_ref(), landmarks);
+    let p = &fit.placement;
+    let landmarks = p.landmarks.as_ref().unwrap();
+    let regions = regions(&fit.knit, &p.centreline, p.path.as_ref(), landmarks);
     let (course, wale) = stretch(&fit.knit);
     let shares = fit.knit.point_fabric_shares();
     stretch_by_region(&regions, &course, &wale, shares.as_deref())
@@ -69,7 +53,7 @@ fn a_stocking_to_the_toe_converges_on_the_leg_and_reaches_the_toe_tip() {
         .filter(|(_, s)| s.yarn == YarnKind::Seam)
         .count();
     assert_eq!(seams, knit.wales / 2 - 1);
-    let foot = fit.landmarks.as_ref().unwrap().foot.unwrap();
+    let foot = fit.placement.landmarks.as_ref().unwrap().foot.unwrap();
     let tip = Point3::from(foot.toe_tip);
     let nearest = knit
         .particles
@@ -386,21 +370,12 @@ fn the_toe_box_is_convex_and_holds_every_toe() {
         "makehuman_body.glb",
     ] {
         let scene = Scene::load(None).unwrap();
-        let leg_path = sample(foot);
-        let leg = knitfit::leg::decode_leg(
-            knitfit::leg::read_leg_file(&leg_path).unwrap(),
-            Units::Metres,
-            UpChoice::Auto,
-        )
-        .unwrap();
-        let inputs = FitInputs {
-            leg: leg_path,
-            axis_source: AxisSource::Scene,
+        let leg = knitfit::leg::load_leg(&sample(foot), Units::Metres, UpChoice::Auto).unwrap();
+        let place = PlaceSettings {
+            axis: None,
+            side: scene.leg.side,
         };
-        let plan = Plan::fit(&scene);
-        let placed =
-            knitfit::run::fit::place_axis(&scene, &inputs, &leg, &mut StageClock::new(&plan))
-                .unwrap();
+        let placed = knitfit::fit::place(&leg, &place, &scene.tube, &mut ()).unwrap();
         let path = placed.path.expect("a path to the toe");
         let (positions, triangles) = path
             .box_the_toes(&leg.positions, &leg.triangles)

@@ -2,15 +2,12 @@
 //! run says which solver ran and what it did.
 
 use knitfit::base::Direction;
-use knitfit::leg::AxisSource;
+use knitfit::fit::SolvedFit;
 use knitfit::plan::Plan;
-use knitfit::report::StageClock;
-use knitfit::run::fit::{solve_fit, FitInputs, SolvedFit};
-use knitfit::run::NoProgress;
 use knitfit::scene::Scene;
 use knitfit::sim::SolverMethod;
 
-use crate::support::{fit, sample_legs, OPEN_TUBE};
+use crate::support::{fit, sample_legs, solve_on, OPEN_TUBE};
 
 fn solve(leg: &std::path::Path, method: SolverMethod, tolerance: f64) -> (SolvedFit, Scene) {
     solve_grid(leg, method, tolerance, (60, 60))
@@ -33,26 +30,14 @@ fn solve_grid(
 }
 
 fn solve_scene(leg: &std::path::Path, scene: Scene) -> (SolvedFit, Scene) {
-    let inputs = FitInputs {
-        leg: leg.to_path_buf(),
-        axis_source: AxisSource::Scene,
-    };
-    let plan = Plan::fit(&scene);
-    let fit = solve_fit(
-        &scene,
-        &plan,
-        &inputs,
-        "test",
-        &mut StageClock::new(&plan),
-        &mut NoProgress,
-    )
-    .unwrap();
-    (fit, scene)
+    (solve_on(leg, &scene), scene)
 }
 
 fn leg_density(fit: &SolvedFit, scene: &Scene) -> Vec<f64> {
     let terms = Plan::fit(scene).forces;
-    fit.fields(&scene.fabric(), &terms).1.stitch_density
+    knitfit::fit::measure::fields(fit, &scene.fabric(), &terms)
+        .on_leg
+        .stitch_density
 }
 
 #[test]
@@ -233,7 +218,7 @@ fn a_grid_of_long_thin_cells_fits_without_folding_the_tube() {
     let stitch = scene.knit.course_spacing_m / scene.knit.wale_spacing_m;
     assert!((course * cell / stitch - 1.0).abs() < 1e-12 && (course * wale - 1.0).abs() < 1e-12);
     // A wale spring pointing down the axis is a fold.
-    let axis = fit.axis.direction();
+    let axis = fit.placement.axis.direction();
     let wales: Vec<_> = knit
         .springs
         .iter()

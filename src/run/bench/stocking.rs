@@ -21,11 +21,11 @@ use crate::export::gltf::read_stocking_glb;
 use crate::export::Output;
 use crate::knit::{TubeBottom, TubeHeel};
 use crate::limits::{peak_memory, reset_peak_memory};
-use crate::plan::{FitFile, Stage};
 use crate::report::{FitDetails, Report};
 use crate::run::{run_fit, NoProgress, Progress};
 use crate::scene::{LoadedScene, Scene, BUNDLED_SCENE_NAME};
 use crate::sim::SolverMethod;
+use crate::stage::{FitFile, Stage};
 
 /// The leg the whole stocking is fitted to, in `samples/`: the MakeHuman leg with its foot.
 pub const STOCKING_LEG: &str = "makehuman_leg_foot.glb";

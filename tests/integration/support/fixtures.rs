@@ -8,7 +8,11 @@ use std::path::{Path, PathBuf};
 use knitfit::base::{SurfaceMesh, Vec3};
 use knitfit::export::gltf::{write_nodes_glb, GlbNode};
 use knitfit::export::ply::write_mesh_ply;
+use knitfit::fit::{FitSettings, SolvedFit};
 use knitfit::leg::{load_leg, Leg, Units, UpAxis, UpChoice};
+use knitfit::plan::Plan;
+use knitfit::scene::{LoadedScene, Scene};
+use knitfit::stage::NoProgress;
 use nalgebra::{Matrix4, Point3};
 use ply_rs_bw::ply::{DefaultElement, Encoding};
 
@@ -49,6 +53,26 @@ pub fn procedural_leg() -> PathBuf {
 /// A sample leg loaded as glTF says: metres, +Y up.
 pub fn load_sample(path: &Path) -> Leg {
     load_leg(path, Units::Metres, UpChoice::Axis(UpAxis::PosY)).unwrap()
+}
+
+/// The stocking `scene` fits onto the leg file `leg`, solved and nothing more (no fields, no
+/// products): the fit library's one call, as a script would make it.
+pub fn solve_on(leg: &Path, scene: &Scene) -> SolvedFit {
+    let loaded = LoadedScene {
+        scene: scene.clone(),
+        name: "test".into(),
+        path: None,
+        overrides: Vec::new(),
+    };
+    let settings = FitSettings {
+        measure: false,
+        products: None,
+        ..Plan::fit(scene).fit_settings(&loaded)
+    };
+    let (leg, _) = knitfit::fit::load(leg, &settings, &mut ()).unwrap();
+    knitfit::fit::fit(leg, &settings, &mut (), &mut NoProgress)
+        .unwrap()
+        .solved
 }
 
 /// A leg made of `positions` and `triangles`, in metres with +Y up, named `name`.

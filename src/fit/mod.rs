@@ -1,0 +1,159 @@
+//! The fit as a library: a leg in, the stocking fitted onto it out (Sakaguchi & Miyata §6), in
+//! typed stages, each given the settings it owns and never the whole scene:
+//!
+//! 1. [`load()`]: the leg file read, the fit's memory checked, the leg decoded;
+//! 2. [`place()`]: the leg's landmarks, the stocking's axis and, to the toe, its path;
+//! 3. [`size()`]: the tube's grid and relaxed size on that path, and the scene's values that
+//!    need the leg checked;
+//! 4. [`solve()`]: the tube knitted and relaxed onto the leg with sliding contact, and the rest
+//!    state checked (a stall says where and why: [`crate::sim::stall`]);
+//! 5. [`measure`]: density, coverage, stretch, tension and pressure per point and per leg
+//!    vertex, in the real stocking's units at any grid;
+//! 6. [`products()`]: the yarns, the real stitches, the stocking surface, and the files' bytes.
+//!
+//! [`fit()`] runs 2–6 in one call. `knitfit fit`, `bench`, `plan` and the tests call the same
+//! functions: a command builds the [`FitSettings`] from its scene and plan
+//! ([`crate::plan::Plan::fit_settings`]) and times each stage on its clock ([`StageTimes`]).
+//!
+//! ```
+//! use knitfit::{fit, leg, plan::Plan, scene::LoadedScene, stage::NoProgress};
+//!
+//! let mut scene = LoadedScene::load(None, Vec::new())?; // the bundled scene and leg
+//! scene.scene.tube.wales = 60; // a coarse grid, for a quick example
+//! let settings = Plan::fit(&scene.scene).fit_settings(&scene);
+//! let leg = leg::load_leg(&scene.leg_path(), settings.load.units, settings.load.up)?;
+//! let fitted = fit::fit(leg, &settings, &mut (), &mut NoProgress)?;
+//! assert!(fitted.solved.solver.converged() && fitted.solved.max_penetration_m == 0.0);
+//! let density = &fitted.fields.on_leg.stitch_density; // stitches per cm², per leg vertex
+//! assert!(density.iter().any(|&d| d > 0.0));
+//! # Ok::<(), knitfit::Error>(())
+//! ```
+
+mod levels;
+pub mod measure;
+pub mod place;
+pub mod products;
+pub mod size;
+pub mod solve;
+
+use std::path::Path;
+
+pub use measure::Fields;
+pub use place::{place, PlaceSettings, Placement};
+pub use products::{products, ProductSettings, Products};
+pub use size::{size, RealStitches, SizedTube};
+pub use solve::{solve, SolveSettings, SolvedFit, SolverRun};
+
+use crate::error::Result;
+use crate::knit::{Fabric, Pattern, TubeSettings};
+use crate::leg::{decode_leg, read_leg_file, Leg, Units, UpChoice};
+use crate::limits::{FitMemory, MemoryCheck};
+use crate::stage::{timed, Progress, Stage, StageTimes};
+
+/// What each stage of a fit is given: the parts of the scene it owns, and what the plan decided
+/// (the force terms, which products to make).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FitSettings {
+    /// How the leg file is read.
+    pub load: LoadSettings,
+    /// Where the stocking goes.
+    pub place: PlaceSettings,
+    /// The scene's `tube`: its grid, relaxed size, ends and heel.
+    pub tube: TubeSettings,
+    /// The real stocking the grid stands for.
+    pub fabric: Fabric,
+    /// The knit's pattern.
+    pub pattern: Pattern,
+    /// What the memory estimate reads besides the grid and the leg.
+    pub memory: FitMemory,
+    /// The solver, contact and force terms.
+    pub solve: SolveSettings,
+    /// Measure the fields ([`Stage::LegAttributes`]); without, [`Fitted::fields`] is empty.
+    pub measure: bool,
+    /// The products to make; `None` makes none.
+    pub products: Option<ProductSettings>,
+}
+
+/// How a leg file is read: the scene's `leg.units` and `leg.up_axis`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LoadSettings {
+    /// Units of the file's coordinates.
+    pub units: Units,
+    /// Which file axis points up, or found from the anatomy.
+    pub up: UpChoice,
+}
+
+/// A fitted stocking: the knit at rest on its leg, its fields and its products.
+pub struct Fitted {
+    /// The knit at rest on the leg, and what the solver did.
+    pub solved: SolvedFit,
+    /// Its fields, where measured.
+    pub fields: Fields,
+    /// Its products, where asked for.
+    pub products: Option<Products>,
+}
+
+/// Reads the leg file at `path`, refuses a fit too large for memory before the leg is decoded
+/// or a knit allocated, then decodes it: stage [`Stage::LoadLeg`]. Returns the leg and the
+/// memory check made.
+pub fn load(
+    path: &Path,
+    settings: &FitSettings,
+    times: &mut dyn StageTimes,
+) -> Result<(Leg, MemoryCheck)> {
+    timed(times, Stage::LoadLeg, || {
+        let file = read_leg_file(path)?;
+        let memory = settings.memory.before_the_leg(
+            settings.tube.wales,
+            settings.tube.courses,
+            file.declared_triangles(),
+        );
+        memory.enforce(&path.display().to_string())?;
+        let leg = decode_leg(file, settings.load.units, settings.load.up)?;
+        Ok((leg, memory))
+    })
+}
+
+/// Fits a stocking onto `leg` with `settings`: places, sizes and solves it, then measures it
+/// and makes its products where `settings` asks; each stage timed in `times`, the solver's
+/// steps told to `progress`.
+///
+/// Errors: each stage's (see [`place()`], [`size()`], [`solve()`]).
+pub fn fit(
+    leg: Leg,
+    settings: &FitSettings,
+    times: &mut dyn StageTimes,
+    progress: &mut dyn Progress,
+) -> Result<Fitted> {
+    let placement = place(&leg, &settings.place, &settings.tube, times)?;
+    let real_stitches = settings
+        .products
+        .as_ref()
+        .map_or(RealStitches::None, |p| p.real_stitches);
+    let tube = size(
+        &placement,
+        &leg,
+        &settings.tube,
+        &settings.fabric,
+        settings.pattern,
+        &settings.memory,
+        real_stitches,
+    )?;
+    let solved = solve(leg, placement, tube, &settings.solve, times, progress)?;
+    let forces = &settings.solve.forces;
+    let fields = match settings.measure {
+        true => timed(times, Stage::LegAttributes, || {
+            measure::fields(&solved, &settings.fabric, forces)
+        }),
+        false => Fields::default(),
+    };
+    let products = settings
+        .products
+        .as_ref()
+        .map(|wanted| products(&solved, &fields, &settings.fabric, forces, wanted, times));
+    Ok(Fitted {
+        solved,
+        fields,
+        products,
+    })
+}

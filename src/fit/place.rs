@@ -1,0 +1,166 @@
+//! Where the stocking goes on a leg: the leg's landmarks ([`crate::leg::landmarks`]), the
+//! stocking's axis, given or placed on them by `tube.bottom` and `tube.top`
+//! ([`crate::knit::tube::tube_axis`]), and for a stocking to the toe its path down the leg,
+//! around the heel and along the foot ([`crate::knit::path`]). The stages
+//! [`Stage::FindLandmarks`] and [`Stage::FindAxis`] of a fit; `knitfit plan` runs the same, so a
+//! plan shows what the fit will dress or refuses what it will refuse.
+//!
+//! An axis is only a stocking's if the leg goes around it ([`leaves_mesh`]): one typed with a
+//! wrong coordinate, or between two legs, is refused rather than fitted onto air.
+
+use nalgebra::{Point3, Vector3};
+
+use crate::error::{Error, Result};
+use crate::knit::path::{path_to_toe, TubePath};
+use crate::knit::tube::{tube_axis, Centreline};
+use crate::knit::{TubeBottom, TubeSettings};
+use crate::leg::{find_landmarks, leaves_mesh, Axis, AxisSource, Landmarks, Leg, LegAxis, Side};
+use crate::stage::{timed, Stage, StageTimes};
+
+/// What the place stage reads of the scene: the leg's `axis` (if given, and who gave it) and its
+/// `side`; the rest is the tube's (`tube.bottom`, `tube.top`, and its grid, which a stocking to
+/// the toe must not be too coarse for).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlaceSettings {
+    /// `leg.axis`, in the leg file's coordinates, and whether the scene or `--axis` set it;
+    /// `None` places the stocking on the leg's landmarks.
+    pub axis: Option<(LegAxis, AxisSource)>,
+    /// `leg.side`: which leg to dress where the file holds both.
+    pub side: Side,
+}
+
+/// Where a fit's stocking goes: the landmarks it was placed on, its axis, and for a stocking to
+/// the toe its path over the foot.
+#[derive(Clone, Debug)]
+pub struct Placement {
+    /// The leg's landmarks (none where the scene gives the axis).
+    pub landmarks: Option<Landmarks>,
+    /// The stocking's axis (to the toe: its leg part, from the ankle up).
+    pub axis: Axis,
+    /// The path of a stocking to the toe.
+    pub path: Option<TubePath>,
+    /// The stocking's centreline, from course 0 to the last course: the path's, or the axis.
+    pub centreline: Centreline,
+}
+
+impl Placement {
+    /// The direction the held end ring(s) may not move along: the path's at the welt, or the
+    /// axis's.
+    pub fn lock_axis(&self) -> Vector3<f64> {
+        match &self.path {
+            Some(path) => path.stations[0].t,
+            None => self.axis.direction(),
+        }
+    }
+}
+
+/// Finds the landmarks of `leg` where `place` gives no axis, places the stocking's axis, and
+/// for a stocking to the toe its path; timed as [`Stage::FindLandmarks`] and
+/// [`Stage::FindAxis`] in `times`.
+///
+/// Errors: [`Error::Leg`] when the landmarks cannot be found, the axis cannot be placed on them,
+/// the leg does not go around it, or the stocking cannot be taken to the toe.
+pub fn place(
+    leg: &Leg,
+    place: &PlaceSettings,
+    tube: &TubeSettings,
+    times: &mut dyn StageTimes,
+) -> Result<Placement> {
+    let landmarks = match place.axis {
+        Some(_) => None,
+        None => Some(timed(times, Stage::FindLandmarks, || {
+            find_landmarks(&leg.positions, &leg.triangles, leg.up, place.side).map_err(|message| {
+                Error::Leg {
+                    path: leg.path.clone(),
+                    message: format!("cannot find the leg's landmarks: {message}"),
+                }
+            })
+        })?),
+    };
+    let (axis, path) = timed(times, Stage::FindAxis, || -> Result<_> {
+        let axis = choose_axis(leg, place, tube, landmarks.as_ref())?;
+        let path = match (tube.bottom, &landmarks) {
+            (Some(TubeBottom::Ankle), _) => None,
+            (Some(TubeBottom::Toe), None) => {
+                return Err(Error::Leg {
+                    path: leg.path.clone(),
+                    message: "tube.bottom is \"toe\", but leg.axis gives a straight tube; set \
+                              tube.bottom to \"ankle\", or leave leg.axis out so the stocking \
+                              follows the leg's landmarks"
+                        .into(),
+                })
+            }
+            // Absent: to the toe where the leg has a foot.
+            (None, None) => None,
+            (None, Some(l)) if l.foot.is_none() => None,
+            (_, Some(l)) => Some(stocking_path(leg, tube, l)?),
+        };
+        Ok((axis, path))
+    })?;
+    let centreline = match &path {
+        Some(path) => Centreline::of_path(path),
+        None => Centreline::straight(&axis),
+    };
+    Ok(Placement {
+        landmarks,
+        axis,
+        path,
+        centreline,
+    })
+}
+
+/// The axis from `place` (converted from file coordinates), or placed on the landmarks by
+/// `tube.bottom` and `tube.top`; refused where the leg does not go around it.
+fn choose_axis(
+    leg: &Leg,
+    place: &PlaceSettings,
+    tube: &TubeSettings,
+    landmarks: Option<&Landmarks>,
+) -> Result<Axis> {
+    let fail = |message: String| Error::Leg {
+        path: leg.path.clone(),
+        message,
+    };
+    let axis = match (&place.axis, landmarks) {
+        (Some((given, source)), _) => {
+            let bottom = leg.world_from_file(&Point3::from(given.bottom));
+            let top = leg.world_from_file(&Point3::from(given.top));
+            Axis {
+                bottom: bottom.coords.into(),
+                top: top.coords.into(),
+                source: *source,
+            }
+        }
+        (None, Some(landmarks)) => {
+            let bottom = tube.bottom.unwrap_or(TubeBottom::Ankle);
+            tube_axis(landmarks, bottom, tube.top).map_err(fail)?
+        }
+        (None, None) => unreachable!("landmarks are found whenever no axis is given"),
+    };
+    if let Some(at) = leaves_mesh(leg, &axis) {
+        return Err(fail(format!(
+            "{} runs outside the leg {:.0}% of the way from its bottom end to its top: it \
+             misses the leg, or runs between two legs; check its coordinates (file units, {} up)",
+            axis.source.describe(),
+            100.0 * at,
+            leg.up_axis.name()
+        )));
+    }
+    Ok(axis)
+}
+
+/// The path of a stocking to the toe on `landmarks`, its top where `tube.top` puts it.
+fn stocking_path(leg: &Leg, tube: &TubeSettings, landmarks: &Landmarks) -> Result<TubePath> {
+    let fail = |message: String| Error::Leg {
+        path: leg.path.clone(),
+        message: format!(
+            "cannot take the stocking to the toe: {message}; or set tube.bottom to \"ankle\" \
+             (--bottom ankle) for a stocking that ends there"
+        ),
+    };
+    tube.check_to_the_toe()
+        .map_err(|invalid| fail(invalid.message))?;
+    let axis = tube_axis(landmarks, TubeBottom::Toe, tube.top).map_err(fail)?;
+    let top_s = axis.top().coords.dot(&Vector3::from(landmarks.up));
+    path_to_toe(landmarks, top_s, &leg.positions, &leg.triangles).map_err(fail)
+}
