@@ -643,7 +643,7 @@ pub fn measure_fields(
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::knit::fabric::yarn_diameter_m;
+    use crate::knit::nylon::yarn_diameter_m;
     use crate::knit::{Pattern, Tile};
     use crate::leg::{Collider, ContactMethod};
 

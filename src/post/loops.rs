@@ -607,7 +607,7 @@ mod tests {
     use std::f64::consts::TAU;
 
     use super::*;
-    use crate::knit::fabric::yarn_diameter_m;
+    use crate::knit::nylon::yarn_diameter_m;
     use crate::knit::{Pattern, Tile};
     use crate::post::fields;
 
