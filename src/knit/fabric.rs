@@ -8,9 +8,8 @@
 //!   (`knit.course_spacing_m`, `knit.wale_spacing_m`). The grid's springs are homogenized so that
 //!   it is the stitch's membrane at any size ([`crate::knit::Knit::with_stitch_shape`]), so the
 //!   fitted shape, and with it every field, converges as the grid is refined.
-//! * **Yarn diameter** from its denier (grams per 9 km) as a solid nylon filament bundle of
-//!   density [`NYLON_DENSITY_KG_M3`]: `d = √(4 · denier / (9000 m · ρ · π))`, about 35 µm at
-//!   10 den, 50 µm at 20, 70 µm at 40.
+//! * **Yarn diameter** of each yarn, from its denier as a solid nylon filament bundle
+//!   ([`Yarn::diameter_m`](super::Yarn::diameter_m), [`super::nylon`]).
 //! * **Loop stiffness.** A knitted loop stretches by bending its legs, not by stretching its yarn
 //!   (the elastica loop of Postle & Munden, J. Textile Inst. 58, 1967); we take each leg as a
 //!   cantilever one course long, so one nylon stitch resists `k = 3 E I / b³` newtons per metre
@@ -25,23 +24,11 @@
 
 use crate::base::{PerYarn, YarnKind};
 
+use super::nylon::NYLON_MODULUS_PA;
 use super::settings::{KnitSettings, TubeSettings, Yarns};
 
-/// Density of nylon 6,6 (and nylon 6), kg/m³: 1.14 g/cm³.
-pub const NYLON_DENSITY_KG_M3: f64 = 1140.0;
-/// Young's modulus of drawn nylon 6,6 filament, pascals: about 3 GPa (an initial modulus of
-/// some 2.5–3.5 N/tex at 1.14 g/cm³; Morton & Hearle, *Physical Properties of Textile Fibres*).
-pub const NYLON_MODULUS_PA: f64 = 3.0e9;
 /// Pascals per millimetre of mercury, the unit hosiery pressure is quoted in.
 pub const PA_PER_MMHG: f64 = 133.322;
-/// Metres of yarn that weigh its denier in grams.
-const DENIER_LENGTH_M: f64 = 9000.0;
-
-/// Diameter of a nylon yarn of `denier` (grams per 9 km), metres.
-pub fn yarn_diameter_m(denier: f64) -> f64 {
-    let mass_per_metre = denier * 1e-3 / DENIER_LENGTH_M;
-    (4.0 * mass_per_metre / (NYLON_DENSITY_KG_M3 * std::f64::consts::PI)).sqrt()
-}
 
 /// The real stocking: stitch, yarns, loop stiffness (see module docs).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -66,12 +53,12 @@ impl Fabric {
             Some(c) => c / course,
             None => knit.needles as f64,
         };
-        let d = yarn_diameter_m(yarns.nylon.denier);
+        let d = yarns.nylon.diameter_m();
         let second_moment = std::f64::consts::PI * d.powi(4) / 64.0;
         Fabric {
             needles,
             stitch_m: [course, wale],
-            yarn_diameter_m: YarnKind::ALL.map(|k| yarn_diameter_m(yarns.get(k).denier)),
+            yarn_diameter_m: YarnKind::ALL.map(|k| yarns.get(k).diameter_m()),
             loop_stiffness_n_per_m: 3.0 * NYLON_MODULUS_PA * second_moment / wale.powi(3),
         }
     }
@@ -126,15 +113,6 @@ impl Fabric {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn denier_gives_the_diameters_hosiery_is_quoted_at() {
-        // 35 µm at 10 den, 50 µm at 20, 70 µm at 40 (solid nylon, 1.14 g/cm³).
-        for (denier, micrometres) in [(10.0, 35.3), (20.0, 49.9), (40.0, 70.5)] {
-            let d = yarn_diameter_m(denier) * 1e6;
-            assert!((d - micrometres).abs() < 0.1, "{denier} den: {d} µm");
-        }
-    }
 
     #[test]
     fn a_cell_of_the_real_stitch_is_one_stitch_and_a_coarser_one_more() {

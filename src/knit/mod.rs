@@ -3,6 +3,7 @@
 
 pub mod fabric;
 pub mod model;
+pub mod nylon;
 pub mod patch;
 pub mod path;
 pub mod pattern;

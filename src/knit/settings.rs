@@ -5,6 +5,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use super::nylon::yarn_diameter_m;
 use super::Pattern;
 use crate::base::settings::{self, Invalid};
 use crate::base::{PerYarn, YarnKind};
@@ -98,7 +99,7 @@ pub struct Yarn {
     /// 1 for nylon, 10 for support.
     pub stiffness: f64,
     /// Yarn size, denier (grams per 9 km); its diameter follows from nylon's density
-    /// ([`super::fabric::yarn_diameter_m`]): the contact offset (nylon), the coverage and every
+    /// ([`Yarn::diameter_m`]): the contact offset (nylon), the coverage and every
     /// picture. Under 10 is ultra-sheer, 15–20 sheer, 30–40 semi-opaque, 50 and up opaque.
     pub denier: f64,
     /// Linear-RGB base colour, each channel 0–1.
@@ -107,9 +108,15 @@ pub struct Yarn {
 }
 
 impl Yarn {
-    /// The yarn's radius, metres, from its denier ([`super::fabric::yarn_diameter_m`]).
+    /// The yarn's diameter, metres, from its denier as solid nylon
+    /// ([`super::nylon::yarn_diameter_m`]).
+    pub fn diameter_m(&self) -> f64 {
+        yarn_diameter_m(self.denier)
+    }
+
+    /// The yarn's radius, metres: half its [`diameter_m`](Yarn::diameter_m).
     pub fn radius_m(&self) -> f64 {
-        super::fabric::yarn_diameter_m(self.denier) / 2.0
+        self.diameter_m() / 2.0
     }
 }
 

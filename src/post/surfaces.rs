@@ -427,7 +427,7 @@ mod tests {
 
     /// The fields of `knit` as a 20-den stocking's, of the paper's two yarns.
     fn surface_fields(knit: &Knit) -> KnitFields {
-        let d = crate::knit::fabric::yarn_diameter_m;
+        let d = crate::knit::nylon::yarn_diameter_m;
         let fabric = crate::knit::Fabric {
             needles: 400.0,
             stitch_m: [0.0005, 0.00074],

@@ -14,6 +14,7 @@
 //! stocking to the toe: bench.md's section "Whole stocking (to the toe)".
 
 pub mod stocking;
+mod table;
 
 use std::path::{Path, PathBuf};
 
@@ -30,6 +31,7 @@ use crate::scene::{LoadedScene, Scene, BUNDLED_SCENE_DIR, BUNDLED_SCENE_NAME};
 use crate::sim::SolverMethod;
 use crate::stage::Stage;
 use stocking::StockingRow;
+use table::{mib, CSV_HEADER};
 
 /// Tolerance of the reference fits: a hundred times tighter than the tightest swept.
 pub const REFERENCE_TOLERANCE: f64 = 1e-6;
@@ -399,10 +401,6 @@ pub fn machine() -> String {
     )
 }
 
-fn mib(bytes: Option<u64>) -> String {
-    bytes.map_or("n/a".into(), |b| format!("{:.0}", b as f64 / 1048576.0))
-}
-
 /// `bench.md`: the table, what was left out, and how to read it.
 fn markdown(
     rows: &[BenchRow],
@@ -557,15 +555,6 @@ fn same_accuracy(rows: &[BenchRow]) -> Vec<(&BenchRow, &BenchRow)> {
         })
         .collect()
 }
-
-/// `bench.csv`'s columns. The last four came with the whole stockings, after the sweep's so
-/// that a reader of those still finds them where it did: `bottom` (`ankle` for the sweep, whose
-/// bundled scene ends there; `toe`), `heel` (empty where there is none to choose),
-/// `whole_seconds` (the whole run, whole stockings only) and `reach_m` (toe tip to the nearest
-/// yarn point).
-const CSV_HEADER: &str = "leg,wales,courses,points,solver,tolerance,seconds,iterations,residual,\
-                          max_move,converged,max_penetration_m,peak_memory_bytes,density_error,\
-                          rms_distance_m,bottom,heel,whole_seconds,reach_m\n";
 
 /// `bench.csv`'s header and the sweep's lines, one per case, SI units.
 fn csv(rows: &[BenchRow]) -> String {

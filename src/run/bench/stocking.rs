@@ -27,6 +27,8 @@ use crate::scene::{LoadedScene, Scene, BUNDLED_SCENE_NAME};
 use crate::sim::SolverMethod;
 use crate::stage::{FitFile, Stage};
 
+use super::table::mib;
+
 /// The leg the whole stocking is fitted to, in `samples/`: the MakeHuman leg with its foot.
 pub const STOCKING_LEG: &str = "makehuman_leg_foot.glb";
 
@@ -293,7 +295,7 @@ pub fn markdown(rows: &[StockingRow]) -> String {
 fn table_row(row: &StockingRow) -> String {
     let c = &row.case;
     let (grid, heel) = (c.grid(), c.heel.name());
-    let mib = super::mib(row.peak_memory_bytes);
+    let mib = mib(row.peak_memory_bytes);
     match &row.result {
         StockingResult::Fitted(f) => format!(
             "| {grid} | {heel} | {} | {:.2} | {:.2} | {:.2} | {} | {:.1e} | {} | {:.4} | {} | \
@@ -359,7 +361,7 @@ fn csv_row(row: &StockingRow) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::super::CSV_HEADER;
+    use super::super::table::CSV_HEADER;
     use super::*;
 
     fn row(result: StockingResult) -> StockingRow {
