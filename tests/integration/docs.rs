@@ -45,22 +45,38 @@ fn link_targets(text: &str) -> Vec<String> {
     targets
 }
 
+/// The README is what a newcomer reads in three minutes: at most this many lines, the
+/// measurements in docs/RESULTS.md.
+const README_MAX_LINES: usize = 80;
+
 #[test]
 fn the_readme_is_short_starts_with_the_two_commands_and_links_every_doc() {
     let readme = read(&root().join("README.md"));
     let lines = readme.lines().count();
-    assert!(lines <= 150, "README.md has {lines} lines");
+    assert!(
+        lines <= README_MAX_LINES,
+        "README.md has {lines} lines, over {README_MAX_LINES}: move detail to docs/GUIDE.md or docs/RESULTS.md"
+    );
     let top: String = readme.lines().take(8).collect::<Vec<_>>().join("\n");
     assert!(top.contains("cargo run --release"), "{top}");
     assert!(top.contains("cargo test --release"), "{top}");
     let links = link_targets(&readme);
-    for doc in [
-        "docs/GUIDE.md",
-        "docs/SOLVERS.md",
-        "ARCHITECTURE.md",
-        "CHANGELOG.md",
-        "docs/decisions/README.md",
-    ] {
+    // Every other Markdown file at the root and in docs/, and the decisions' index.
+    let mut docs = vec!["docs/decisions/README.md".to_string()];
+    for dir in [".", "docs"] {
+        for entry in std::fs::read_dir(root().join(dir)).unwrap() {
+            let path = entry.unwrap().path();
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            if path.extension().is_some_and(|e| e == "md") && name != "README.md" {
+                docs.push(if dir == "." {
+                    name
+                } else {
+                    format!("{dir}/{name}")
+                });
+            }
+        }
+    }
+    for doc in &docs {
         assert!(
             links.iter().any(|l| l == doc),
             "README.md does not link {doc}"
