@@ -205,3 +205,93 @@ fn solvers_md_embeds_the_bench_tables_as_the_bench_wrote_them() {
         );
     }
 }
+
+/// The decision records' files, `NNNN-title.md`, sorted.
+fn decision_records() -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(root().join("docs/decisions"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".md") && n != "README.md")
+        .collect();
+    names.sort();
+    names
+}
+
+/// A record's status, as its `- Status:` line begins: `accepted`, `rejected` or `superseded`,
+/// and whether it is an accepted record of findings.
+fn record_status(name: &str) -> (String, bool) {
+    let text = read(&root().join("docs/decisions").join(name));
+    let status = text
+        .lines()
+        .find_map(|l| l.strip_prefix("- Status: "))
+        .unwrap_or_else(|| panic!("docs/decisions/{name} has no `- Status:` line"));
+    let word: String = status
+        .chars()
+        .take_while(|c| c.is_ascii_alphabetic())
+        .collect();
+    (word, status.starts_with("accepted (findings"))
+}
+
+#[test]
+fn the_decisions_index_lists_every_record_once_and_counts_them_right() {
+    let index = read(&root().join("docs/decisions/README.md"));
+    let records = decision_records();
+    // A record is listed by a list item that begins with its link: `- [0001](0001-….md) …`.
+    let listed: Vec<String> = index
+        .lines()
+        .filter_map(|l| l.strip_prefix("- ["))
+        .filter_map(|l| l.split_once("](").map(|(_, rest)| rest))
+        .filter_map(|rest| rest.split_once(')').map(|(target, _)| target.to_string()))
+        .collect();
+    for record in &records {
+        let times = listed.iter().filter(|l| *l == record).count();
+        assert_eq!(
+            times, 1,
+            "docs/decisions/README.md lists {record} {times} times, not once"
+        );
+    }
+    for item in &listed {
+        assert!(
+            records.contains(item),
+            "docs/decisions/README.md lists {item}, which is no record"
+        );
+    }
+    // The index's line of counts is the records' own statuses.
+    let statuses: Vec<(String, bool)> = records.iter().map(|r| record_status(r)).collect();
+    let count = |word: &str| statuses.iter().filter(|(w, _)| w == word).count();
+    let findings = statuses.iter().filter(|(_, f)| *f).count();
+    let counts = format!(
+        "{} records: {} accepted ({findings} of them findings), {} rejected, {} superseded.",
+        records.len(),
+        count("accepted"),
+        count("rejected"),
+        count("superseded"),
+    );
+    assert_eq!(
+        count("accepted") + count("rejected") + count("superseded"),
+        records.len(),
+        "a record's status is none of accepted, rejected, superseded: {statuses:?}"
+    );
+    assert!(
+        index.contains(&counts),
+        "docs/decisions/README.md should say \"{counts}\""
+    );
+    // The status the index gives a record is the record's own.
+    for line in index.lines().filter(|l| l.starts_with("- [")) {
+        let record = line[line.find("](").unwrap() + 2..line.find(')').unwrap()].to_string();
+        let (word, findings) = record_status(&record);
+        let said = if line.contains(") *rejected:*") {
+            "rejected"
+        } else if line.contains(") *superseded by ") {
+            "superseded"
+        } else {
+            "accepted"
+        };
+        assert_eq!(said, word, "docs/decisions/README.md: {line}");
+        assert_eq!(
+            line.contains(") *findings:*"),
+            findings,
+            "docs/decisions/README.md: {line}"
+        );
+    }
+}
