@@ -295,3 +295,44 @@ fn the_decisions_index_lists_every_record_once_and_counts_them_right() {
         );
     }
 }
+
+#[test]
+fn the_changelog_has_one_line_entries_and_one_section_per_kind() {
+    let changelog = read(&root().join("CHANGELOG.md"));
+    let kinds = [
+        "Added",
+        "Changed",
+        "Deprecated",
+        "Removed",
+        "Fixed",
+        "Security",
+    ];
+    let mut sections: Vec<&str> = Vec::new();
+    let mut in_entry = false;
+    for (n, line) in changelog.lines().enumerate() {
+        let n = n + 1;
+        if line.starts_with("## ") {
+            sections.clear();
+        } else if let Some(kind) = line.strip_prefix("### ") {
+            assert!(
+                kinds.contains(&kind),
+                "CHANGELOG.md:{n}: `### {kind}` is not one of Keep a Changelog's {kinds:?}"
+            );
+            assert!(
+                !sections.contains(&kind),
+                "CHANGELOG.md:{n}: a second `### {kind}` in one release"
+            );
+            sections.push(kind);
+        }
+        // An entry is one line: the line after it starts another entry, or is blank.
+        assert!(
+            !(in_entry && line.starts_with(' ')),
+            "CHANGELOG.md:{n}: an entry goes on over more than one line"
+        );
+        in_entry = line.starts_with("- ");
+        assert!(
+            !line.contains("(was "),
+            "CHANGELOG.md:{n}: a figure from before (\"(was …)\") belongs in the decision record"
+        );
+    }
+}
