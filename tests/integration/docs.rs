@@ -45,22 +45,38 @@ fn link_targets(text: &str) -> Vec<String> {
     targets
 }
 
+/// The README is what a newcomer reads in three minutes: at most this many lines, the
+/// measurements in docs/RESULTS.md.
+const README_MAX_LINES: usize = 80;
+
 #[test]
 fn the_readme_is_short_starts_with_the_two_commands_and_links_every_doc() {
     let readme = read(&root().join("README.md"));
     let lines = readme.lines().count();
-    assert!(lines <= 150, "README.md has {lines} lines");
+    assert!(
+        lines <= README_MAX_LINES,
+        "README.md has {lines} lines, over {README_MAX_LINES}: move detail to docs/GUIDE.md or docs/RESULTS.md"
+    );
     let top: String = readme.lines().take(8).collect::<Vec<_>>().join("\n");
     assert!(top.contains("cargo run --release"), "{top}");
     assert!(top.contains("cargo test --release"), "{top}");
     let links = link_targets(&readme);
-    for doc in [
-        "docs/GUIDE.md",
-        "docs/SOLVERS.md",
-        "ARCHITECTURE.md",
-        "CHANGELOG.md",
-        "docs/decisions/README.md",
-    ] {
+    // Every other Markdown file at the root and in docs/, and the decisions' index.
+    let mut docs = vec!["docs/decisions/README.md".to_string()];
+    for dir in [".", "docs"] {
+        for entry in std::fs::read_dir(root().join(dir)).unwrap() {
+            let path = entry.unwrap().path();
+            let name = path.file_name().unwrap().to_string_lossy().into_owned();
+            if path.extension().is_some_and(|e| e == "md") && name != "README.md" {
+                docs.push(if dir == "." {
+                    name
+                } else {
+                    format!("{dir}/{name}")
+                });
+            }
+        }
+    }
+    for doc in &docs {
         assert!(
             links.iter().any(|l| l == doc),
             "README.md does not link {doc}"
@@ -186,6 +202,137 @@ fn solvers_md_embeds_the_bench_tables_as_the_bench_wrote_them() {
             &solvers[body_start..end],
             read(&root().join("docs").join(file)),
             "docs/SOLVERS.md's copy of docs/{file} differs: run python3 tools/embed_bench.py"
+        );
+    }
+}
+
+/// The decision records' files, `NNNN-title.md`, sorted.
+fn decision_records() -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(root().join("docs/decisions"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".md") && n != "README.md")
+        .collect();
+    names.sort();
+    names
+}
+
+/// A record's status, as its `- Status:` line begins: `accepted`, `rejected` or `superseded`,
+/// and whether it is an accepted record of findings.
+fn record_status(name: &str) -> (String, bool) {
+    let text = read(&root().join("docs/decisions").join(name));
+    let status = text
+        .lines()
+        .find_map(|l| l.strip_prefix("- Status: "))
+        .unwrap_or_else(|| panic!("docs/decisions/{name} has no `- Status:` line"));
+    let word: String = status
+        .chars()
+        .take_while(|c| c.is_ascii_alphabetic())
+        .collect();
+    (word, status.starts_with("accepted (findings"))
+}
+
+#[test]
+fn the_decisions_index_lists_every_record_once_and_counts_them_right() {
+    let index = read(&root().join("docs/decisions/README.md"));
+    let records = decision_records();
+    // A record is listed by a list item that begins with its link: `- [0001](0001-….md) …`.
+    let listed: Vec<String> = index
+        .lines()
+        .filter_map(|l| l.strip_prefix("- ["))
+        .filter_map(|l| l.split_once("](").map(|(_, rest)| rest))
+        .filter_map(|rest| rest.split_once(')').map(|(target, _)| target.to_string()))
+        .collect();
+    for record in &records {
+        let times = listed.iter().filter(|l| *l == record).count();
+        assert_eq!(
+            times, 1,
+            "docs/decisions/README.md lists {record} {times} times, not once"
+        );
+    }
+    for item in &listed {
+        assert!(
+            records.contains(item),
+            "docs/decisions/README.md lists {item}, which is no record"
+        );
+    }
+    // The index's line of counts is the records' own statuses.
+    let statuses: Vec<(String, bool)> = records.iter().map(|r| record_status(r)).collect();
+    let count = |word: &str| statuses.iter().filter(|(w, _)| w == word).count();
+    let findings = statuses.iter().filter(|(_, f)| *f).count();
+    let counts = format!(
+        "{} records: {} accepted ({findings} of them findings), {} rejected, {} superseded.",
+        records.len(),
+        count("accepted"),
+        count("rejected"),
+        count("superseded"),
+    );
+    assert_eq!(
+        count("accepted") + count("rejected") + count("superseded"),
+        records.len(),
+        "a record's status is none of accepted, rejected, superseded: {statuses:?}"
+    );
+    assert!(
+        index.contains(&counts),
+        "docs/decisions/README.md should say \"{counts}\""
+    );
+    // The status the index gives a record is the record's own.
+    for line in index.lines().filter(|l| l.starts_with("- [")) {
+        let record = line[line.find("](").unwrap() + 2..line.find(')').unwrap()].to_string();
+        let (word, findings) = record_status(&record);
+        let said = if line.contains(") *rejected:*") {
+            "rejected"
+        } else if line.contains(") *superseded by ") {
+            "superseded"
+        } else {
+            "accepted"
+        };
+        assert_eq!(said, word, "docs/decisions/README.md: {line}");
+        assert_eq!(
+            line.contains(") *findings:*"),
+            findings,
+            "docs/decisions/README.md: {line}"
+        );
+    }
+}
+
+#[test]
+fn the_changelog_has_one_line_entries_and_one_section_per_kind() {
+    let changelog = read(&root().join("CHANGELOG.md"));
+    let kinds = [
+        "Added",
+        "Changed",
+        "Deprecated",
+        "Removed",
+        "Fixed",
+        "Security",
+    ];
+    let mut sections: Vec<&str> = Vec::new();
+    let mut in_entry = false;
+    for (n, line) in changelog.lines().enumerate() {
+        let n = n + 1;
+        if line.starts_with("## ") {
+            sections.clear();
+        } else if let Some(kind) = line.strip_prefix("### ") {
+            assert!(
+                kinds.contains(&kind),
+                "CHANGELOG.md:{n}: `### {kind}` is not one of Keep a Changelog's {kinds:?}"
+            );
+            assert!(
+                !sections.contains(&kind),
+                "CHANGELOG.md:{n}: a second `### {kind}` in one release"
+            );
+            sections.push(kind);
+        }
+        // An entry is one line: the line after it starts another entry, or is blank.
+        assert!(
+            !(in_entry && line.starts_with(' ')),
+            "CHANGELOG.md:{n}: an entry goes on over more than one line"
+        );
+        in_entry = line.starts_with("- ");
+        assert!(
+            !line.contains("(was "),
+            "CHANGELOG.md:{n}: a figure from before (\"(was …)\") belongs in the decision record"
         );
     }
 }

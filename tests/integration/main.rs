@@ -10,6 +10,7 @@ mod fit;
 mod foot;
 mod fuzz;
 mod golden;
+mod guide;
 mod hard_cases;
 mod layers;
 mod limits;
