@@ -9,6 +9,7 @@ use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use serde_json::json;
 
+use knitfit::base::GridSize;
 use knitfit::run::Progress;
 use knitfit::scene::{LoadedScene, Override, LEG_AXIS, LEG_FILE};
 use knitfit::Error;
@@ -235,7 +236,7 @@ impl FitArgs {
             let (wales, courses) = match text.trim().parse::<usize>() {
                 Ok(wales) => (wales, serde_json::Value::Null),
                 Err(_) => {
-                    let [wales, courses] =
+                    let GridSize { wales, courses } =
                         parse_grid("--resolution", text).map_err(|_| Error::InvalidArgument {
                             flag: "--resolution".into(),
                             message: format!(
@@ -361,15 +362,15 @@ impl RenderArgs {
     }
 }
 
-/// Parses `AxB` into two counts (the scene checks their range).
-fn parse_grid(flag: &str, text: &str) -> Result<[usize; 2], Error> {
+/// Parses `AxB` into a grid (the scene checks its range).
+fn parse_grid(flag: &str, text: &str) -> Result<GridSize, Error> {
     let bad = || Error::InvalidArgument {
         flag: flag.into(),
         message: format!("expected two counts such as 150x150, got {text:?}"),
     };
     let (a, b) = text.split_once(['x', 'X']).ok_or_else(bad)?;
     let parse = |s: &str| s.trim().parse::<usize>().map_err(|_| bad());
-    Ok([parse(a)?, parse(b)?])
+    Ok(GridSize::new(parse(a)?, parse(b)?))
 }
 
 /// Parses `BX,BY,BZ,TX,TY,TZ` (the scene checks the points).
@@ -559,7 +560,7 @@ mod tests {
             panic!("not a patch")
         };
         let s = args.load().unwrap().scene;
-        assert_eq!(s.patch.size, [8, 6]);
+        assert_eq!(s.patch.size, GridSize::new(8, 6));
         let stretches: Vec<String> = s.patch.stretch.iter().map(|s| s.to_string()).collect();
         assert_eq!(stretches, ["course=2", "wale=1.25"]);
 

@@ -11,6 +11,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::base::settings::Invalid;
+use crate::base::GridSize;
 use crate::error::{Error, Result};
 use crate::export::Output;
 
@@ -82,8 +83,8 @@ pub const FALLBACK_LIMIT_GIB: f64 = 8.0;
 /// What a fit's memory grows with.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct FitSize<'a> {
-    /// Tube points around and along (`tube.wales`, `tube.courses`).
-    pub tube: [usize; 2],
+    /// The tube's grid (`tube.wales` by `tube.courses`).
+    pub tube: GridSize,
     /// Triangles the leg file declares.
     pub leg_triangles: usize,
     /// The outputs that write files (a fit's plan has them).
@@ -94,7 +95,7 @@ pub struct FitSize<'a> {
     pub loops: bool,
     /// A level with more points than the tube that the solver relaxes first, if any: an N×N
     /// stocking follows the real count's levels up to its wales (docs/decisions/0072).
-    pub solved_on: Option<[usize; 2]>,
+    pub solved_on: Option<GridSize>,
 }
 
 /// What a fit's memory estimate reads besides its grid and its leg: the files it writes, the
@@ -114,14 +115,14 @@ pub struct FitMemory {
 pub const COURSES_PER_WALE_ESTIMATE: usize = 2;
 
 impl FitMemory {
-    /// The check of a fit on a `tube` grid (wales, courses) over a leg of `leg_triangles`,
+    /// The check of a fit on a `tube` grid over a leg of `leg_triangles`,
     /// relaxed first on the larger level `solved_on` where it has one, its tube real stitches
     /// drawn as loops where `loops`.
     pub fn check(
         &self,
-        tube: [usize; 2],
+        tube: GridSize,
         leg_triangles: usize,
-        solved_on: Option<[usize; 2]>,
+        solved_on: Option<GridSize>,
         loops: bool,
     ) -> MemoryCheck {
         let size = FitSize {
@@ -145,7 +146,12 @@ impl FitMemory {
         declared_triangles: usize,
     ) -> MemoryCheck {
         let courses = courses.unwrap_or(COURSES_PER_WALE_ESTIMATE * wales);
-        self.check([wales, courses], declared_triangles, None, false)
+        self.check(
+            GridSize::new(wales, courses),
+            declared_triangles,
+            None,
+            false,
+        )
     }
 }
 
@@ -154,10 +160,10 @@ impl FitMemory {
 pub struct MemoryEstimate {
     /// Tube size, wales × courses (for messages).
     #[serde(skip)]
-    pub tube: [usize; 2],
+    pub tube: GridSize,
     /// [`FitSize::solved_on`] (for messages).
     #[serde(skip)]
-    pub solved_on: Option<[usize; 2]>,
+    pub solved_on: Option<GridSize>,
     /// Tube points (wales × courses).
     pub tube_points: u64,
     /// Triangles the leg file declares.
@@ -177,7 +183,7 @@ pub struct MemoryEstimate {
 impl MemoryEstimate {
     /// The estimate for a fit of this size.
     pub fn fit(size: &FitSize) -> MemoryEstimate {
-        let points = size.tube[0] as f64 * size.tube[1] as f64;
+        let points = size.tube.wales as f64 * size.tube.courses as f64;
         let triangles = size.leg_triangles as f64;
         let writes = |output| size.outputs.contains(&output);
         let mut tube = SOLVE_BYTES_PER_POINT;
@@ -206,7 +212,7 @@ impl MemoryEstimate {
         // The solver's part on the larger level it relaxes first; the files' on the tube.
         let solved = size
             .solved_on
-            .map_or(points, |[w, c]| (w as f64 * c as f64).max(points));
+            .map_or(points, |g| (g.wales as f64 * g.courses as f64).max(points));
         let tube = points * tube + (solved - points) * SOLVE_BYTES_PER_POINT;
         // f64 → u64 saturates, so an absurd size reads as "more than any machine has".
         let (base_bytes, tube_bytes) = (BASE_BYTES as u64, tube as u64);
@@ -379,13 +385,13 @@ impl MemoryCheck {
         } else {
             "lower --resolution (tube.wales, tube.courses)"
         };
-        let first = e.solved_on.map_or(String::new(), |[w, c]| {
-            format!(", relaxed first on the real stitch count's {w}×{c} level,")
+        let first = e.solved_on.map_or(String::new(), |level| {
+            format!(", relaxed first on the real stitch count's {level} level,")
         });
         Err(self.too_large(
             format!(
-                "a fit of {}×{} points{first} on {leg_name} ({} triangles)",
-                e.tube[0], e.tube[1], e.leg_triangles
+                "a fit of {} points{first} on {leg_name} ({} triangles)",
+                e.tube, e.leg_triangles
             ),
             how_to_override,
         ))
@@ -400,8 +406,8 @@ impl MemoryCheck {
         let e = &self.estimate;
         Err(self.too_large(
             format!(
-                "the real stitches of this stocking, {}×{}, on {leg_name}",
-                e.tube[0], e.tube[1]
+                "the real stitches of this stocking, {}, on {leg_name}",
+                e.tube
             ),
             "ask for fewer knit.needles or a larger stitch (knit.wale_spacing_m), or leave \
              \"stitches\", \"loops\" and \"preview\" out of outputs",
@@ -453,7 +459,7 @@ mod tests {
 
     fn size(outputs: &[Output]) -> FitSize<'_> {
         FitSize {
-            tube: [150, 150],
+            tube: GridSize::new(150, 150),
             leg_triangles: 10_000,
             outputs,
             preview_pixels: 768 * 768,
@@ -466,7 +472,7 @@ mod tests {
     fn the_estimate_grows_with_the_tube_the_leg_and_the_outputs() {
         let small = MemoryEstimate::fit(&size(&[]));
         let larger_tube = MemoryEstimate::fit(&FitSize {
-            tube: [300, 150],
+            tube: GridSize::new(300, 150),
             ..size(&[])
         });
         assert_eq!(larger_tube.tube_bytes, 2 * small.tube_bytes);
@@ -493,9 +499,9 @@ mod tests {
         };
         let plain = through(None);
         let extra = (150.0 * 150.0 * SOLVE_BYTES_PER_POINT) as u64;
-        assert_eq!(through(Some([150, 300])), plain + extra);
+        assert_eq!(through(Some(GridSize::new(150, 300))), plain + extra);
         assert_eq!(
-            through(Some([100, 100])),
+            through(Some(GridSize::new(100, 100))),
             plain,
             "a smaller level costs nothing more"
         );
@@ -504,7 +510,7 @@ mod tests {
     #[test]
     fn an_absurd_tube_saturates_instead_of_overflowing() {
         let e = MemoryEstimate::fit(&FitSize {
-            tube: [usize::MAX / 2, usize::MAX / 2],
+            tube: GridSize::new(usize::MAX / 2, usize::MAX / 2),
             leg_triangles: usize::MAX,
             ..size(&[Output::Ply])
         });

@@ -180,8 +180,8 @@ fn patch(args: PatchArgs, quiet: bool) -> Result<ExitCode, Error> {
     if !quiet {
         say!(
             "patch {}x{}: {} relaxation(s), {} steps, residual {:.2e}, {} in {:.2} s",
-            scene.patch.size[0],
-            scene.patch.size[1],
+            scene.patch.size.wales,
+            scene.patch.size.courses,
             report.details.patches.len(),
             m.steps,
             m.residual,

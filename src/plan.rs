@@ -5,7 +5,7 @@
 
 use serde::Serialize;
 
-use crate::base::YarnKind;
+use crate::base::{GridSize, YarnKind};
 use crate::export::{Output, YarnsWritten};
 use crate::fit::{
     FitSettings, LoadSettings, PlaceSettings, ProductSettings, RealStitches, SolveSettings,
@@ -324,9 +324,8 @@ impl Plan {
                     ),
                     Some(courses) => {
                         let chain = |coarsest: usize| -> String {
-                            let sizes = grid_sizes_down_to(wales, courses, coarsest);
-                            let grids: Vec<String> =
-                                sizes.iter().map(|(w, c)| format!("{w}×{c}")).collect();
+                            let sizes = grid_sizes_down_to(GridSize::new(wales, courses), coarsest);
+                            let grids: Vec<String> = sizes.iter().map(|g| g.to_string()).collect();
                             grids.join(" → ")
                         };
                         // A stocking to the toe coarsens less (its heel and toe need rings a

@@ -8,6 +8,7 @@ use std::time::Instant;
 use nalgebra::{Point3, Vector3};
 use serde::Serialize;
 
+use crate::base::GridSize;
 use crate::export::YarnsWritten;
 use crate::knit::{Pattern, Stretch, TubeBottom, TubeHeel};
 use crate::leg::landmarks::Ring;
@@ -505,7 +506,7 @@ pub struct YarnValues {
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct PatchDetails {
     /// `patch.size`, `[wales, courses]`.
-    pub size: [usize; 2],
+    pub size: GridSize,
     /// `knit.pattern`.
     pub pattern: Pattern,
     /// One entry per stretch, in the scene's order.

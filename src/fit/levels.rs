@@ -6,6 +6,7 @@
 
 use nalgebra::Vector3;
 
+use crate::base::GridSize;
 use crate::error::Result;
 use crate::knit::path::TubePath;
 use crate::knit::tube::{
@@ -39,8 +40,8 @@ pub(super) struct TubeLevels<'a> {
     pub offset: f64,
     /// Support yarn's stiffness over nylon's, for the bunched refusal.
     pub support_ratio: f64,
-    /// The real stitch count (wales, courses), whose levels a stocking's grids follow.
-    pub real_count: [usize; 2],
+    /// The real stitch count, whose levels a stocking's grids follow.
+    pub real_count: GridSize,
     /// Contact of the level being solved.
     pub contact: Option<LegContact<'a>>,
     /// Counters of the levels solved before it.
@@ -48,12 +49,8 @@ pub(super) struct TubeLevels<'a> {
 }
 
 impl Levels for TubeLevels<'_> {
-    fn knit(&mut self, wales: usize, courses: usize, finest: bool) -> Knit {
-        let spec = TubeSpec {
-            wales,
-            courses,
-            ..self.spec
-        };
+    fn knit(&mut self, grid: GridSize, finest: bool) -> Knit {
+        let spec = TubeSpec { grid, ..self.spec };
         match self.path {
             // The grid the fit ends on resolves the toe's tip; the levels it starts from
             // follow the real stitches' even courses (docs/decisions/0073).
@@ -83,25 +80,20 @@ impl Levels for TubeLevels<'_> {
         ))
     }
 
-    fn grid_sizes(&self, wales: usize, courses: usize) -> Vec<(usize, usize)> {
+    fn grid_sizes(&self, grid: GridSize) -> Vec<GridSize> {
         // A heel and a toe need rings a few centimetres apart at most, and a foot rests where
         // its coarse levels leave it: a grid starts where the real count does, where it can.
         let Some(_) = self.path else {
-            return grid_sizes_down_to(wales, courses, COARSEST);
+            return grid_sizes_down_to(grid, COARSEST);
         };
-        let mut sizes = grid_sizes_following(self.real_count, wales, courses, STOCKING_COARSEST);
+        let mut sizes = grid_sizes_following(self.real_count, grid, STOCKING_COARSEST);
         // A grid graded at the toe's tip that is also one of the real count's levels (courses
         // following the stitch) solves that level, even, first: so it starts where the real
         // count's level rests, as an N×N grid does from the level with its wales.
-        let [real_wales, real_courses] = self.real_count;
-        let chain = grid_sizes_down_to(real_wales, real_courses, STOCKING_COARSEST);
-        let spec = TubeSpec {
-            wales,
-            courses,
-            ..self.spec
-        };
-        if chain.contains(&(wales, courses)) && toe_graded_intervals(&spec).is_some() {
-            sizes.insert(sizes.len() - 1, (wales, courses));
+        let chain = grid_sizes_down_to(self.real_count, STOCKING_COARSEST);
+        let spec = TubeSpec { grid, ..self.spec };
+        if chain.contains(&grid) && toe_graded_intervals(&spec).is_some() {
+            sizes.insert(sizes.len() - 1, grid);
         }
         sizes
     }

@@ -162,10 +162,8 @@ pub fn knit_yarns(knit: &Knit, fabric: &Fabric, forces: &ForceTerms) -> YarnGeom
 /// and laid in it on the skin ([`lay_stitches`]).
 fn real_stitches(fit: &SolvedFit) -> (Knit, LaidStitches) {
     let placement = &fit.placement;
-    let [wales, courses] = fit.real_count;
     let spec = TubeSpec {
-        wales,
-        courses,
+        grid: fit.real_count,
         ..fit.spec
     };
     let mut real = match &placement.path {

@@ -7,6 +7,7 @@
 //! under the scene file or the flag that set it.
 
 use crate::base::settings::{number, Invalid};
+use crate::base::GridSize;
 use crate::error::{Error, Result};
 use crate::knit::settings::{check_grid_size, MAX_TUBE_POINTS};
 use crate::knit::tube::{heel_pocket_half_length_m, TubeSpec};
@@ -23,9 +24,8 @@ use super::Placement;
 pub struct SizedTube {
     /// The grid and relaxed size of the tube.
     pub spec: TubeSpec,
-    /// The real stitch count (wales, courses) of the stocking, whose levels a stocking's grids
-    /// follow.
-    pub real_count: [usize; 2],
+    /// The real stitch count of the stocking, whose levels a stocking's grids follow.
+    pub real_count: GridSize,
     /// The check of the grid's memory, where it was made here.
     pub memory: Option<MemoryCheck>,
 }
@@ -65,10 +65,8 @@ pub fn size(
     let spec = checked.spec;
     // Courses left out, or a larger level, are known only now: the estimate made before the
     // leg was read is replaced.
-    let checked_memory = (tube.courses.is_none() || checked.solved_on.is_some()).then(|| {
-        let tube = [spec.wales, spec.courses];
-        memory.check(tube, leg_triangles, checked.solved_on, false)
-    });
+    let checked_memory = (tube.courses.is_none() || checked.solved_on.is_some())
+        .then(|| memory.check(spec.grid, leg_triangles, checked.solved_on, false));
     if let Some(check) = &checked_memory {
         check.enforce(&leg_name)?;
     }
@@ -94,7 +92,7 @@ pub struct OnLeg {
     /// The tube, its relaxed length and courses known.
     pub spec: TubeSpec,
     /// The real stitch count's level relaxed first, where larger than the tube's grid.
-    pub solved_on: Option<[usize; 2]>,
+    pub solved_on: Option<GridSize>,
 }
 
 /// The checks of the scene's `tube` (and `knit`) that need the leg: on a stocking whose
@@ -132,9 +130,10 @@ pub fn check_on_leg(
         }
     };
     let wales = tube.wales;
-    let courses = tube
-        .courses
-        .unwrap_or_else(|| fabric.grid_courses(wales, relaxed_length_m));
+    let grid = GridSize::new(
+        wales,
+        (tube.courses).unwrap_or_else(|| fabric.grid_courses(wales, relaxed_length_m)),
+    );
     if tube.courses.is_none() {
         let refuse = |message: String| {
             Invalid::new(
@@ -145,39 +144,31 @@ pub fn check_on_leg(
                 ),
             )
         };
-        check_grid_size(wales, courses).map_err(refuse)?;
+        check_grid_size(grid).map_err(refuse)?;
         if to_toe {
-            let grid = TubeSettings {
-                courses: Some(courses),
+            let given = TubeSettings {
+                courses: Some(grid.courses),
                 ..tube.clone()
             };
-            grid.check_to_the_toe().map_err(|e| refuse(e.message))?;
+            given.check_to_the_toe().map_err(|e| refuse(e.message))?;
         }
     }
     // A stocking with fewer courses than the stitch's is relaxed first on the real count's
     // level with its wales, which has more points (`grid_sizes_following`).
     let real = fabric.real_count(relaxed_length_m);
     let solved_on = to_toe
-        .then(|| {
-            largest_level(&grid_sizes_following(
-                real,
-                wales,
-                courses,
-                STOCKING_COARSEST,
-            ))
-        })
-        .filter(|&[w, c]| w.saturating_mul(c) > wales * courses);
-    if let Some([w, c]) = solved_on {
-        check_grid_size(w, c).map_err(|message| {
+        .then(|| largest_level(&grid_sizes_following(real, grid, STOCKING_COARSEST)))
+        .filter(|level| level.points() > grid.points());
+    if let Some(level) = solved_on {
+        check_grid_size(level).map_err(|message| {
             Invalid::new(
                 "tube",
-                format!("relaxed first on the real stitch count's {w}×{c} level: {message}"),
+                format!("relaxed first on the real stitch count's {level} level: {message}"),
             )
         })?;
     }
     let spec = TubeSpec {
-        wales,
-        courses,
+        grid,
         pattern,
         relaxed_circumference_m: fabric.relaxed_circumference_m(),
         relaxed_length_m,
@@ -203,7 +194,6 @@ pub fn check_on_leg(
         ));
     }
     if real_stitches != RealStitches::None {
-        let [w, c] = real;
         // Point ids are 32-bit, and drawn as loops each stitch is `SAMPLES_PER_LOOP` points: a
         // bound on the count, not on memory, so `allow_large` does not lift it.
         let (most, what) = match real_stitches {
@@ -213,11 +203,11 @@ pub fn check_on_leg(
             ),
             _ => (MAX_TUBE_POINTS, "points a knit's 32-bit indices can number"),
         };
-        if w.checked_mul(c).is_none_or(|n| n > most) {
+        if real.points() > most {
             return Err(Invalid::new(
                 "knit",
                 format!(
-                    "the real stitches of this stocking, {w}×{c}, are over the {most} {what}; \
+                    "the real stitches of this stocking, {real}, are over the {most} {what}; \
                      ask for fewer knit.needles or a larger stitch (knit.course_spacing_m, \
                      knit.wale_spacing_m)"
                 ),

@@ -10,6 +10,7 @@
 
 use nalgebra::Point3;
 
+use crate::base::GridSize;
 use crate::error::{Error, Result};
 use crate::knit::tube::{Centreline, TubeSpec};
 use crate::knit::{Knit, TubeHeel};
@@ -65,8 +66,8 @@ pub struct SolvedFit {
     pub spec: TubeSpec,
     /// Its heel (a stocking to the toe's).
     pub heel: TubeHeel,
-    /// The real stitch count (wales, courses) the tube stands for.
-    pub real_count: [usize; 2],
+    /// The real stitch count the tube stands for.
+    pub real_count: GridSize,
     /// Distance kept between yarn centre line and skin, metres.
     pub offset: f64,
     /// The knit at rest on the leg, after the exact contact pass.
@@ -146,9 +147,7 @@ pub fn solve(
     };
     let (mut knit, run) = match solver.method {
         SolverMethod::Paper => {
-            let mut knit = timed(times, Stage::KnitTube, || {
-                levels.knit(spec.wales, spec.courses, true)
-            });
+            let mut knit = timed(times, Stage::KnitTube, || levels.knit(spec.grid, true));
             progress.begin("fit", solver.max_steps as u64);
             let stats = timed(times, Stage::Fit, || {
                 let contact = levels.constraints(&knit);
@@ -168,8 +167,7 @@ pub fn solve(
             let solved = timed(times, Stage::Fit, || {
                 relax_multilevel(
                     &mut levels,
-                    spec.wales,
-                    spec.courses,
+                    spec.grid,
                     &settings.forces,
                     solver.tolerance,
                     solver.max_steps,

@@ -22,7 +22,7 @@
 //!   newtons per metre of relaxed fabric (`c̄1` the mean stiffness of the course yarns), divided
 //!   by the wale stretch per metre of fitted fabric; along the leg, `a` and `b` trade places.
 
-use crate::base::{PerYarn, YarnKind};
+use crate::base::{GridSize, PerYarn, YarnKind};
 
 use super::nylon::NYLON_MODULUS_PA;
 use super::settings::{KnitSettings, TubeSettings, Yarns};
@@ -70,11 +70,11 @@ impl Fabric {
 
     /// The real stitch count of a stocking `relaxed_length_m` long: its wales around (the
     /// needles, at least 3) and its courses (one per relaxed wale spacing, both ends included).
-    pub fn real_count(&self, relaxed_length_m: f64) -> [usize; 2] {
+    pub fn real_count(&self, relaxed_length_m: f64) -> GridSize {
         // `as usize` saturates, and the `+ 1` must too: a stitch of 1e-300 m would wrap to 0
         // courses. The caller refuses a count over the 32-bit bound.
         let courses = ((relaxed_length_m / self.stitch_m[1]).round() as usize).saturating_add(1);
-        [(self.needles.round() as usize).max(3), courses.max(2)]
+        GridSize::new((self.needles.round() as usize).max(3), courses.max(2))
     }
 
     /// Courses of a grid of `wales` around on a stocking `relaxed_length_m` long when the scene
@@ -84,7 +84,10 @@ impl Fabric {
     /// toe has cells 1.75–2× as many stitches long as wide, and its courses, not its wales, decide
     /// the fit over the toes (docs/decisions/0069). At least 2; at the needles, the real count.
     pub fn grid_courses(&self, wales: usize, relaxed_length_m: f64) -> usize {
-        let [real_wales, real_courses] = self.real_count(relaxed_length_m);
+        let GridSize {
+            wales: real_wales,
+            courses: real_courses,
+        } = self.real_count(relaxed_length_m);
         let intervals = (real_courses - 1) as f64 * wales as f64 / real_wales as f64;
         // `as usize` saturates; the caller checks the grid's size.
         (intervals.round() as usize).saturating_add(1).max(2)
@@ -137,7 +140,7 @@ mod tests {
         );
         // 0.5187 m of relaxed stocking is 701 real courses of 0.74 mm (700 intervals).
         let length = 700.0 * 0.00074;
-        assert_eq!(fabric.real_count(length), [400, 701]);
+        assert_eq!(fabric.real_count(length), GridSize::new(400, 701));
         assert_eq!(
             fabric.grid_courses(400, length),
             701,

@@ -6,16 +6,14 @@
 //! centre. Relaxation then lets the free points follow.
 
 use super::{Knit, Pattern, Tile};
-use crate::base::Vec3;
+use crate::base::{GridSize, Vec3};
 use crate::knit::{Stretch, StretchAxis};
 
 /// Size, pattern and rest spacing of a flat patch.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PatchSpec {
-    /// Points along a course.
-    pub wales: usize,
-    /// Points along a wale.
-    pub courses: usize,
+    /// Points along a course (wales) by points along a wale (courses).
+    pub grid: GridSize,
     /// Knit pattern (yarn kinds of the springs).
     pub pattern: Pattern,
     /// Rest length of course springs, metres.
@@ -27,11 +25,12 @@ pub struct PatchSpec {
 /// Builds the patch at rest, then pins the two edges that `stretch` pulls and moves them apart.
 pub fn build_patch(spec: &PatchSpec, stretch: Stretch) -> Knit {
     let (lc, lw) = (spec.course_spacing_m, spec.wale_spacing_m);
-    let cx = (spec.wales as f64 - 1.0) / 2.0;
-    let cy = (spec.courses as f64 - 1.0) / 2.0;
+    let GridSize { wales, courses } = spec.grid;
+    let cx = (wales as f64 - 1.0) / 2.0;
+    let cy = (courses as f64 - 1.0) / 2.0;
     let mut knit = Knit::grid(
-        spec.wales,
-        spec.courses,
+        wales,
+        courses,
         false,
         &Tile::of(spec.pattern),
         lc,
@@ -39,11 +38,11 @@ pub fn build_patch(spec: &PatchSpec, stretch: Stretch) -> Knit {
         |w, c| Vec3::new((w as f64 - cx) * lc, (c as f64 - cy) * lw, 0.0),
     );
     let held: Vec<_> = match stretch.axis {
-        StretchAxis::Course => (0..spec.courses)
-            .flat_map(|c| [knit.point(0, c), knit.point(spec.wales - 1, c)])
+        StretchAxis::Course => (0..courses)
+            .flat_map(|c| [knit.point(0, c), knit.point(wales - 1, c)])
             .collect(),
-        StretchAxis::Wale => (0..spec.wales)
-            .flat_map(|w| [knit.point(w, 0), knit.point(w, spec.courses - 1)])
+        StretchAxis::Wale => (0..wales)
+            .flat_map(|w| [knit.point(w, 0), knit.point(w, courses - 1)])
             .collect(),
     };
     for p in held {
@@ -64,8 +63,7 @@ mod tests {
     #[test]
     fn held_edges_are_pinned_and_pulled() {
         let spec = PatchSpec {
-            wales: 5,
-            courses: 4,
+            grid: GridSize::new(5, 4),
             pattern: Pattern::Plain,
             course_spacing_m: 0.001,
             wale_spacing_m: 0.002,

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::nylon::yarn_diameter_m;
 use super::Pattern;
 use crate::base::settings::{self, Invalid};
-use crate::base::{PerYarn, YarnKind};
+use crate::base::{GridSize, PerYarn, YarnKind};
 
 /// Knit structure.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -276,7 +276,7 @@ impl std::fmt::Display for Stretch {
 #[serde(deny_unknown_fields, default)]
 pub struct PatchSettings {
     /// Patch size as `[wales, courses]`, points (default: `[10, 10]`, the paper's patch).
-    pub size: [usize; 2],
+    pub size: GridSize,
     /// Stretches to run, each on a fresh patch; drawn side by side (default: course ×1.5 and
     /// wale ×1.5, the paper's Fig. 9).
     pub stretch: Vec<Stretch>,
@@ -285,7 +285,7 @@ pub struct PatchSettings {
 impl Default for PatchSettings {
     fn default() -> Self {
         PatchSettings {
-            size: [10, 10],
+            size: GridSize::new(10, 10),
             stretch: vec![
                 Stretch {
                     axis: StretchAxis::Course,
@@ -370,10 +370,13 @@ impl Yarns {
     }
 }
 
-/// Refuses a `wales × courses` tube grid that is too small to be a tube or too large for a
-/// knit's 32-bit point indices; the message says which.
-pub fn check_grid_size(wales: usize, courses: usize) -> Result<(), String> {
-    let (w, c) = (wales, courses);
+/// Refuses a tube `grid` too small to be a tube or too large for a knit's 32-bit point indices;
+/// the message says which.
+pub fn check_grid_size(grid: GridSize) -> Result<(), String> {
+    let GridSize {
+        wales: w,
+        courses: c,
+    } = grid;
     if w < 3 || c < 2 {
         return Err(format!("needs at least 3 wales and 2 courses, got {w}×{c}"));
     }
@@ -416,7 +419,7 @@ impl TubeSettings {
     pub fn validate(&self) -> Result<(), Invalid> {
         let w = self.wales;
         let grid = match self.courses {
-            Some(c) => check_grid_size(w, c),
+            Some(c) => check_grid_size(GridSize::new(w, c)),
             // Courses left out are known, and checked, once the stocking's length is.
             None if w < 3 => Err(format!("needs at least 3 wales, got {w}")),
             None if w > MAX_TUBE_POINTS / 2 => Err(format!(
@@ -470,7 +473,7 @@ impl TubeSettings {
 impl PatchSettings {
     /// Checks every value; the error names the field under `patch`.
     pub fn validate(&self) -> Result<(), Invalid> {
-        let [wales, courses] = self.size;
+        let GridSize { wales, courses } = self.size;
         if wales < 2 || courses < 2 {
             return Err(Invalid::new(
                 "size",

@@ -27,7 +27,7 @@ use super::model::places_along;
 use super::path::{PathPart, TubePath};
 use super::settings::{TubeBottom, TubeHeel, TubeTop};
 use super::{Knit, Pattern, Tile};
-use crate::base::{perpendicular_frame, Vec3};
+use crate::base::{perpendicular_frame, GridSize, Vec3};
 use crate::leg::{slice, Axis, AxisSource, Landmarks, ThighTopKind};
 
 /// Fraction of the leg's height kept between the stocking's end and a cut in the mesh, where
@@ -47,10 +47,8 @@ const MIN_GAP_M: f64 = 0.003;
 /// Size and rest lengths of the tube.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TubeSpec {
-    /// Points around.
-    pub wales: usize,
-    /// Rings along.
-    pub courses: usize,
+    /// Points around (wales) by rings along (courses).
+    pub grid: GridSize,
     /// Knit pattern.
     pub pattern: Pattern,
     /// Circumference of the relaxed stocking, metres.
@@ -68,8 +66,8 @@ impl TubeSpec {
     /// Rest lengths of a course spring and a wale spring on this grid, metres.
     pub fn rest_lengths(&self) -> [f64; 2] {
         [
-            self.relaxed_circumference_m / self.wales as f64,
-            self.relaxed_length_m / (self.courses - 1).max(1) as f64,
+            self.relaxed_circumference_m / self.grid.wales as f64,
+            self.relaxed_length_m / (self.grid.courses - 1).max(1) as f64,
         ]
     }
 }
@@ -132,7 +130,10 @@ pub fn build_tube(
     leg_vertices: &[Point3<f64>],
     leg_triangles: &[[u32; 3]],
 ) -> Knit {
-    let (w_count, c_count) = (spec.wales, spec.courses);
+    let GridSize {
+        wales: w_count,
+        courses: c_count,
+    } = spec.grid;
     let bottom = axis.bottom();
     let a = axis.direction();
     let length = axis.length();
@@ -178,7 +179,10 @@ pub fn build_stocking(
     heel: TubeHeel,
     spacing: CourseSpacing,
 ) -> Knit {
-    let (w_count, c_count) = (spec.wales, spec.courses);
+    let GridSize {
+        wales: w_count,
+        courses: c_count,
+    } = spec.grid;
     let tile = Tile::of(spec.pattern);
     let [rest_course, even] = spec.rest_lengths();
     let intervals = match spacing {
@@ -273,7 +277,7 @@ pub const MAX_TOE_GRADING: f64 = 4.0;
 /// grid's cells are already that short, or the stocking too short to grade.
 pub fn toe_graded_intervals(spec: &TubeSpec) -> Option<Vec<f64>> {
     let length = spec.relaxed_length_m;
-    let steps = spec.courses.checked_sub(1).filter(|&n| n >= 2)? as f64;
+    let steps = spec.grid.courses.checked_sub(1).filter(|&n| n >= 2)? as f64;
     let (tip, ramp) = (TOE_TIP_FABRIC_M, TOE_TIP_RAMP_M);
     if length / steps <= TOE_TIP_CELL_M || length <= 2.0 * (tip + ramp) {
         return None;
@@ -480,8 +484,7 @@ mod tests {
 
     fn spec(courses: usize, length: f64) -> TubeSpec {
         TubeSpec {
-            wales: 100,
-            courses,
+            grid: GridSize::new(100, courses),
             pattern: Pattern::Alternating,
             relaxed_circumference_m: 0.2,
             relaxed_length_m: length,

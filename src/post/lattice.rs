@@ -142,8 +142,7 @@ mod tests {
             source: AxisSource::Scene,
         };
         let spec = |wales, courses| TubeSpec {
-            wales,
-            courses,
+            grid: crate::base::GridSize::new(wales, courses),
             pattern: Pattern::Alternating,
             relaxed_circumference_m: 0.25,
             relaxed_length_m: 0.25,

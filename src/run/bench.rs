@@ -19,6 +19,7 @@ mod table;
 use std::path::{Path, PathBuf};
 
 use super::{NoProgress, Progress};
+use crate::base::GridSize;
 use crate::draw::bench_plot::{self, Curve};
 use crate::error::Result;
 use crate::export;
@@ -52,9 +53,7 @@ pub struct BenchCase {
     /// Leg file name in `samples/`.
     pub leg: &'static str,
     /// Tube size.
-    pub wales: usize,
-    /// Tube size.
-    pub courses: usize,
+    pub grid: GridSize,
     /// Solver.
     pub solver: SolverMethod,
     /// Convergence tolerance.
@@ -65,7 +64,7 @@ impl BenchCase {
     /// The leg and grid as two table cells: `makehuman_leg | 50×50`.
     fn leg_and_grid(&self) -> String {
         let leg = self.leg.trim_end_matches(".glb");
-        format!("{leg} | {}×{}", self.wales, self.courses)
+        format!("{leg} | {}", self.grid)
     }
 }
 
@@ -144,11 +143,11 @@ pub fn bench_cases(options: &BenchOptions) -> (Vec<BenchCase>, Vec<SkippedCase>)
         for &(wales, courses) in sizes {
             for solver in [SolverMethod::Paper, SolverMethod::Multilevel] {
                 for &tolerance in &tolerances {
-                    let real_count = wales * courses > 300 * 300;
+                    let grid = GridSize::new(wales, courses);
+                    let real_count = grid.points() > 300 * 300;
                     let case = BenchCase {
                         leg,
-                        wales,
-                        courses,
+                        grid,
                         solver,
                         tolerance,
                     };
@@ -214,8 +213,7 @@ fn sweep(
     let mut reference: Option<(BenchCase, Reference)> = None;
     let mut references = Vec::new();
     for (n, case) in cases.iter().enumerate() {
-        let same_grid =
-            |r: &BenchCase| (r.leg, r.wales, r.courses) == (case.leg, case.wales, case.courses);
+        let same_grid = |r: &BenchCase| (r.leg, r.grid) == (case.leg, case.grid);
         if !reference.as_ref().is_some_and(|(r, _)| same_grid(r)) {
             let ref_case = BenchCase {
                 solver: SolverMethod::Multilevel,
@@ -261,8 +259,8 @@ fn sweep(
 /// memory.
 fn fit_case(base: &Scene, case: &BenchCase) -> Result<(SolvedFit, f64, Option<u64>)> {
     let mut scene = base.clone();
-    scene.tube.wales = case.wales;
-    scene.tube.courses = Some(case.courses);
+    scene.tube.wales = case.grid.wales;
+    scene.tube.courses = Some(case.grid.courses);
     // The sweep compares solvers on the open tube, on every leg alike (the whole stocking has
     // its own section).
     scene.tube.bottom = Some(TubeBottom::Ankle);
@@ -359,8 +357,8 @@ fn curves(rows: &[BenchRow]) -> Vec<Curve> {
         let label = format!(
             "{} {}x{} {}",
             c.solver.name(),
-            c.wales,
-            c.courses,
+            c.grid.wales,
+            c.grid.courses,
             c.leg.trim_end_matches(".glb").trim_end_matches("_leg")
         );
         let Some(error) = row.density_error else {
@@ -428,7 +426,7 @@ fn markdown(
             "| {} | {} | {} | {:.0e} | {:.2} | {} | {:.1e} | {:.1e} | {} | {:.4} | {} | \
              {} | {} |\n",
             c.leg_and_grid(),
-            c.wales * c.courses,
+            c.grid.points(),
             c.solver.name(),
             c.tolerance,
             r.seconds,
@@ -506,8 +504,8 @@ fn markdown(
             md.push_str(&format!(
                 "- {} {}×{} {} tol {:.0e}: {}\n",
                 c.leg.trim_end_matches(".glb"),
-                c.wales,
-                c.courses,
+                c.grid.wales,
+                c.grid.courses,
                 c.solver.name(),
                 c.tolerance,
                 s.why
@@ -544,8 +542,7 @@ fn same_accuracy(rows: &[BenchRow]) -> Vec<(&BenchRow, &BenchRow)> {
             rows.iter()
                 .filter(|r| {
                     r.case.solver == SolverMethod::Multilevel
-                        && (r.case.leg, r.case.wales, r.case.courses)
-                            == (paper.case.leg, paper.case.wales, paper.case.courses)
+                        && (r.case.leg, r.case.grid) == (paper.case.leg, paper.case.grid)
                         && r.density_error
                             .zip(paper.density_error)
                             .is_some_and(|(a, b)| a <= b)
@@ -564,9 +561,9 @@ fn csv(rows: &[BenchRow]) -> String {
         out.push_str(&format!(
             "{},{},{},{},{},{:e},{:.6},{},{:e},{:e},{},{:e},{},{},{},{},,,\n",
             c.leg,
-            c.wales,
-            c.courses,
-            c.wales * c.courses,
+            c.grid.wales,
+            c.grid.courses,
+            c.grid.points(),
             c.solver.name(),
             c.tolerance,
             r.seconds,

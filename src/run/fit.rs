@@ -134,8 +134,8 @@ fn details(
         },
         axis: placement.axis,
         tube: TubeDetails {
-            wales: spec.wales,
-            courses: spec.courses,
+            wales: spec.grid.wales,
+            courses: spec.grid.courses,
             rest_course_spacing_m: knit.grid_rest_m()[0],
             rest_wale_spacing_m: knit.grid_rest_m()[1],
             toe_tip_wale_spacing_m: knit

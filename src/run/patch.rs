@@ -43,8 +43,7 @@ pub fn run_patch(
     run.prepare()?;
 
     let spec = PatchSpec {
-        wales: scene.patch.size[0],
-        courses: scene.patch.size[1],
+        grid: scene.patch.size,
         pattern: scene.knit.pattern,
         course_spacing_m: scene.knit.course_spacing_m,
         wale_spacing_m: scene.knit.wale_spacing_m,
@@ -151,7 +150,7 @@ fn ply_comments(scene: &Scene) -> Vec<String> {
         format!("knitfit {} patch experiment", env!("CARGO_PKG_VERSION")),
         format!(
             "pattern {:?}, {}x{} points",
-            scene.knit.pattern, scene.patch.size[0], scene.patch.size[1]
+            scene.knit.pattern, scene.patch.size.wales, scene.patch.size.courses
         ),
     ]
 }
@@ -192,7 +191,7 @@ fn details(scene: &Scene, runs: &[Relaxed]) -> PatchDetails {
 fn anisotropy(scene: &Scene, runs: &[Relaxed]) -> Option<f64> {
     let find = |axis| runs.iter().find(|r| r.stretch.axis == axis);
     let (c, w) = (find(StretchAxis::Course)?, find(StretchAxis::Wale)?);
-    if c.stretch.factor != w.stretch.factor || scene.patch.size[0] != scene.patch.size[1] {
+    if c.stretch.factor != w.stretch.factor || scene.patch.size.wales != scene.patch.size.courses {
         return None;
     }
     Some(crate::post::anisotropy(

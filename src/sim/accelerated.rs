@@ -56,6 +56,7 @@ use super::evaluation::{
     MomentumStep, Workspace,
 };
 use super::{Constraints, ForceTerms, RelaxObserver};
+use crate::base::GridSize;
 use crate::error::{Error, Result};
 use crate::knit::Knit;
 
@@ -278,6 +279,13 @@ pub struct LevelStats {
     pub unsettled: Option<OutOfBalance>,
     /// Wall-clock seconds the level took.
     pub seconds: f64,
+}
+
+impl LevelStats {
+    /// The level's grid.
+    pub fn grid(&self) -> GridSize {
+        GridSize::new(self.wales, self.courses)
+    }
 }
 
 /// Relaxes `knit` in place on its own grid until the residual and the force step are below

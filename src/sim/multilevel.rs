@@ -28,7 +28,7 @@
 
 use super::accelerated::{relax_accelerated, LevelStats, Polish};
 use super::{Constraints, ForceTerms, RelaxObserver};
-use crate::base::Vec3;
+use crate::base::{GridSize, Vec3};
 use crate::error::Result;
 use crate::knit::Knit;
 
@@ -72,10 +72,10 @@ pub const HAND_ON_RESIDUAL_FLOOR: f64 = 1e-2;
 /// How the caller makes the knit and constraints of each level: the solver knows grids, the
 /// caller knows what is knitted and what it touches.
 pub trait Levels {
-    /// The knit of a `wales × courses` grid, at its starting positions (used as they are on the
-    /// coarsest level; finer levels are overwritten by interpolation); `finest` for the grid
-    /// the fit ends on.
-    fn knit(&mut self, wales: usize, courses: usize, finest: bool) -> Knit;
+    /// The knit of a `grid`, at its starting positions (used as they are on the coarsest
+    /// level; finer levels are overwritten by interpolation); `finest` for the grid the fit
+    /// ends on.
+    fn knit(&mut self, grid: GridSize, finest: bool) -> Knit;
     /// Fresh constraints for `knit` (per-point state belongs to one level), keeping any counters
     /// the caller reports.
     fn constraints(&mut self, knit: &Knit) -> &mut dyn Constraints;
@@ -84,11 +84,11 @@ pub trait Levels {
     fn accept(&mut self, _knit: &Knit) -> Result<()> {
         Ok(())
     }
-    /// The grids to solve on, coarsest first, ending at `wales × courses` (default: halving
-    /// down to [`COARSEST`], [`grid_sizes_down_to`]). A stocking to the toe follows the real
-    /// stitch count's own levels ([`grid_sizes_following`]).
-    fn grid_sizes(&self, wales: usize, courses: usize) -> Vec<(usize, usize)> {
-        grid_sizes_down_to(wales, courses, COARSEST)
+    /// The grids to solve on, coarsest first, ending at `grid` (default: halving down to
+    /// [`COARSEST`], [`grid_sizes_down_to`]). A stocking to the toe follows the real stitch
+    /// count's own levels ([`grid_sizes_following`]).
+    fn grid_sizes(&self, grid: GridSize) -> Vec<GridSize> {
+        grid_sizes_down_to(grid, COARSEST)
     }
 }
 
@@ -121,17 +121,17 @@ impl MultilevelStats {
     }
 }
 
-/// Grid sizes from the coarsest to `wales × courses`, each about half the next in both
+/// Grid sizes from the coarsest to `grid`, each about half the next in both
 /// directions, with at least `coarsest` wales and courses on every level ([`COARSEST`] for a
 /// tube, [`STOCKING_COARSEST`] for a stocking to the toe). A closed course of `w` points
 /// coarsens to `⌈w/2⌉`; a wale of `c` points (`c − 1` intervals between the held end rings) to
 /// `⌈(c − 1)/2⌉ + 1`.
-pub fn grid_sizes_down_to(wales: usize, courses: usize, coarsest: usize) -> Vec<(usize, usize)> {
-    let mut sizes = vec![(wales, courses)];
+pub fn grid_sizes_down_to(grid: GridSize, coarsest: usize) -> Vec<GridSize> {
+    let mut sizes = vec![grid];
     loop {
-        let (w, c) = *sizes.last().expect("starts non-empty");
-        let coarser = (w.div_ceil(2), (c - 1).div_ceil(2) + 1);
-        if coarser.0 < coarsest || coarser.1 < coarsest {
+        let GridSize { wales, courses } = *sizes.last().expect("starts non-empty");
+        let coarser = GridSize::new(wales.div_ceil(2), (courses - 1).div_ceil(2) + 1);
+        if coarser.wales < coarsest || coarser.courses < coarsest {
             break;
         }
         sizes.push(coarser);
@@ -140,7 +140,7 @@ pub fn grid_sizes_down_to(wales: usize, courses: usize, coarsest: usize) -> Vec<
     sizes
 }
 
-/// Grid sizes for a `wales × courses` stocking that follows the real stitch count's own path:
+/// Grid sizes for a `grid` stocking that follows the real stitch count's (`real`) own path:
 /// the levels of the real count's chain ([`grid_sizes_down_to`] to `coarsest`) with no more
 /// wales than the grid, whatever their courses, and no smaller than `coarsest` (the real count
 /// itself only where it is the grid), then the grid. So a grid with fewer courses than the
@@ -151,44 +151,42 @@ pub fn grid_sizes_down_to(wales: usize, courses: usize, coarsest: usize) -> Vec<
 /// the real count's too (decisions 0062 and 0071), so a grid follows the real count's path as
 /// far as its wales allow (decisions 0063, 0066 and 0072). [`largest_level`] is what that
 /// costs in points.
-pub fn grid_sizes_following(
-    [real_wales, real_courses]: [usize; 2],
-    wales: usize,
-    courses: usize,
-    coarsest: usize,
-) -> Vec<(usize, usize)> {
-    let chain = grid_sizes_down_to(real_wales, real_courses, coarsest);
-    let real = (real_wales, real_courses);
-    let mut sizes: Vec<(usize, usize)> = chain
+pub fn grid_sizes_following(real: GridSize, grid: GridSize, coarsest: usize) -> Vec<GridSize> {
+    let chain = grid_sizes_down_to(real, coarsest);
+    let fits = |level: &GridSize| level.wales.min(level.courses) >= coarsest;
+    let mut sizes: Vec<GridSize> = chain
         .iter()
         .copied()
-        .filter(|&(w, c)| w.min(c) >= coarsest && w <= wales && (w, c) != real)
-        .filter(|&level| level != (wales, courses))
+        .filter(|level| fits(level) && level.wales <= grid.wales && *level != real)
+        .filter(|&level| level != grid)
         .collect();
     if sizes.is_empty() {
         match chain.first().copied() {
-            Some((w, c)) if w.min(c) >= coarsest && w < wales && w * c < wales * courses => {
-                sizes.push((w, c))
+            Some(level)
+                if fits(&level) && level.wales < grid.wales && level.points() < grid.points() =>
+            {
+                sizes.push(level)
             }
-            _ => return grid_sizes_down_to(wales, courses, coarsest),
+            _ => return grid_sizes_down_to(grid, coarsest),
         }
     }
-    sizes.push((wales, courses));
+    sizes.push(grid);
     sizes
 }
 
-/// The level of `sizes` with the most points, `[wales, courses]`: the grid itself, or where it
+/// The level of `sizes` with the most points: the grid itself, or where it
 /// follows the real count's chain with fewer courses than the stitch's
 /// ([`grid_sizes_following`]), the chain's level with its wales (about the points of the grid
 /// whose courses follow the stitch: 1.75–2× an N×N grid's on the samples' stockings).
-pub fn largest_level(sizes: &[(usize, usize)]) -> [usize; 2] {
+pub fn largest_level(sizes: &[GridSize]) -> GridSize {
     sizes
         .iter()
-        .max_by_key(|&&(w, c)| w.saturating_mul(c))
-        .map_or([0, 0], |&(w, c)| [w, c])
+        .copied()
+        .max_by_key(|level| level.points())
+        .unwrap_or_default()
 }
 
-/// Relaxes a `wales × courses` knit coarse to fine (module docs); returns the fine knit at rest
+/// Relaxes a knit of `grid` coarse to fine (module docs); returns the fine knit at rest
 /// and each level's figures, or, where a level stopped as futile ([`LevelStats::stall`]), that
 /// level's knit and the figures so far. Coarser levels run to [`COARSE_TOLERANCE_FACTOR`] times
 /// `tolerance`, in at most [`COARSE_LEVEL_ITERATIONS`]. The finest runs to `tolerance` or
@@ -200,8 +198,7 @@ pub fn largest_level(sizes: &[(usize, usize)]) -> [usize; 2] {
 /// [`Levels::accept`] refuses.
 pub fn relax_multilevel(
     levels: &mut dyn Levels,
-    wales: usize,
-    courses: usize,
+    grid: GridSize,
     terms: &ForceTerms,
     tolerance: f64,
     max_iterations: usize,
@@ -209,10 +206,10 @@ pub fn relax_multilevel(
 ) -> Result<(Knit, MultilevelStats)> {
     let mut stats = MultilevelStats::default();
     let mut coarser: Option<Knit> = None;
-    let sizes = levels.grid_sizes(wales, courses);
-    for (n, &(w, c)) in sizes.iter().enumerate() {
+    let sizes = levels.grid_sizes(grid);
+    for (n, &level_grid) in sizes.iter().enumerate() {
         let finest = n + 1 == sizes.len();
-        let mut knit = levels.knit(w, c, finest);
+        let mut knit = levels.knit(level_grid, finest);
         if let Some(coarse) = &coarser {
             prolong(coarse, &mut knit);
         }
@@ -438,48 +435,67 @@ mod tests {
 
     #[test]
     fn grids_halve_down_to_the_coarsest_and_end_at_the_asked_size() {
-        let grid_sizes = |w, c| grid_sizes_down_to(w, c, COARSEST);
+        let pairs = |sizes: Vec<GridSize>| -> Vec<(usize, usize)> {
+            sizes.iter().map(|g| (g.wales, g.courses)).collect()
+        };
+        let down = |w, c, coarsest| pairs(grid_sizes_down_to(GridSize::new(w, c), coarsest));
+        let grid_sizes = |w, c| down(w, c, COARSEST);
+        let follow = |real: [usize; 2], w, c, coarsest| {
+            grid_sizes_following(real.into(), GridSize::new(w, c), coarsest)
+        };
         assert_eq!(grid_sizes(150, 150), vec![(38, 39), (75, 76), (150, 150)]);
         assert_eq!(grid_sizes(40, 40), vec![(40, 40)]);
         assert_eq!(
-            grid_sizes_down_to(150, 150, STOCKING_COARSEST),
+            down(150, 150, STOCKING_COARSEST),
             vec![(75, 76), (150, 150)]
         );
         assert_eq!(
-            grid_sizes_down_to(100, 100, STOCKING_COARSEST),
+            down(100, 100, STOCKING_COARSEST),
             vec![(50, 51), (100, 100)]
         );
         // A stocking follows the real count's levels with no more wales than it, whatever
         // their courses (an N×N grid has fewer than the stitch's), or halves its own.
-        let following = |w, c| grid_sizes_following([400, 701], w, c, STOCKING_COARSEST);
-        assert_eq!(following(150, 150), vec![(50, 89), (100, 176), (150, 150)]);
-        assert_eq!(following(150, 263), vec![(50, 89), (100, 176), (150, 263)]);
-        assert_eq!(following(100, 100), vec![(50, 89), (100, 176), (100, 100)]);
-        assert_eq!(largest_level(&following(100, 100)), [100, 176]);
-        assert_eq!(largest_level(&following(150, 150)), [150, 150]);
+        let following = |w, c| follow([400, 701], w, c, STOCKING_COARSEST);
         assert_eq!(
-            following(300, 300),
+            pairs(following(150, 150)),
+            vec![(50, 89), (100, 176), (150, 150)]
+        );
+        assert_eq!(
+            pairs(following(150, 263)),
+            vec![(50, 89), (100, 176), (150, 263)]
+        );
+        assert_eq!(
+            pairs(following(100, 100)),
+            vec![(50, 89), (100, 176), (100, 100)]
+        );
+        assert_eq!(largest_level(&following(100, 100)), GridSize::new(100, 176));
+        assert_eq!(largest_level(&following(150, 150)), GridSize::new(150, 150));
+        assert_eq!(
+            pairs(following(300, 300)),
             vec![(50, 89), (100, 176), (200, 351), (300, 300)]
         );
         assert_eq!(
-            following(400, 701),
-            grid_sizes_down_to(400, 701, STOCKING_COARSEST)
+            pairs(following(400, 701)),
+            down(400, 701, STOCKING_COARSEST)
         );
         // More wales than the real count: never the real count itself first.
         assert_eq!(
-            following(500, 100),
+            pairs(following(500, 100)),
             vec![(50, 89), (100, 176), (200, 351), (500, 100)]
         );
-        assert_eq!(following(60, 60), vec![(50, 89), (60, 60)]);
-        let following = |w, c| grid_sizes_following([400, 805], w, c, STOCKING_COARSEST);
-        assert_eq!(following(100, 100), vec![(50, 102), (100, 202), (100, 100)]);
-        assert_eq!(following(60, 80), vec![(50, 102), (60, 80)]);
+        assert_eq!(pairs(following(60, 60)), vec![(50, 89), (60, 60)]);
+        let following = |w, c| follow([400, 805], w, c, STOCKING_COARSEST);
+        assert_eq!(
+            pairs(following(100, 100)),
+            vec![(50, 102), (100, 202), (100, 100)]
+        );
+        assert_eq!(pairs(following(60, 80)), vec![(50, 102), (60, 80)]);
         // Where it has no level with fewer wales, its coarsest if that has fewer points.
-        let following = |w, c| grid_sizes_following([400, 805], w, c, 60);
-        assert_eq!(following(60, 80), vec![(60, 80)]);
+        let following = |w, c| follow([400, 805], w, c, 60);
+        assert_eq!(pairs(following(60, 80)), vec![(60, 80)]);
         // A real count too small to halve is no level below the coarsest.
-        let following = |w, c| grid_sizes_following([40, 701], w, c, STOCKING_COARSEST);
-        assert_eq!(following(60, 800), vec![(60, 800)]);
+        let following = |w, c| follow([40, 701], w, c, STOCKING_COARSEST);
+        assert_eq!(pairs(following(60, 800)), vec![(60, 800)]);
         let real = grid_sizes(400, 1600);
         assert_eq!(real.first(), Some(&(25, 101)));
         assert_eq!(real.last(), Some(&(400, 1600)));

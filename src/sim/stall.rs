@@ -251,16 +251,16 @@ impl StockingOnLeg<'_> {
                 self.support_ratio
             ),
             _ if level.wales < COARSE_GRID_WALES => format!(
-                "The {}×{} grid is coarse for this leg: its rings are polygons whose corners catch \
+                "The {} grid is coarse for this leg: its rings are polygons whose corners catch \
                  on it; give a finer grid (--resolution, tube.wales and tube.courses).",
-                level.wales, level.courses
+                level.grid()
             ),
             _ => "The leg is too thin or bent here for the stocking: end it lower (tube.top), or \
                   raise tube.relaxed_circumference_m."
                 .into(),
         };
         Error::Stalled {
-            grid: format!("{}×{}", level.wales, level.courses),
+            grid: level.grid().to_string(),
             iterations: level.iterations,
             seconds: level.seconds,
             residual: level.residual,

@@ -382,8 +382,7 @@ fn fit_time_step_limit(ratio: f64, circumference_m: f64) -> f64 {
     let leg = load_leg(&procedural_leg(), Units::Metres, UpChoice::Auto).unwrap();
     let axis = crate::support::fixtures::landmark_axis(&leg);
     let spec = TubeSpec {
-        wales: 24,
-        courses: 24,
+        grid: knitfit::base::GridSize::new(24, 24),
         pattern: scene.knit.pattern,
         relaxed_circumference_m: fabric.relaxed_circumference_m(),
         relaxed_length_m: knitfit::knit::RELAXED_LENGTH_FRACTION * axis.length(),
@@ -753,8 +752,7 @@ fn a_tube_started_partly_inside_the_leg_ends_outside_with_its_rings_in_order() {
     let collider = Collider::new(&leg, ContactMethod::Bvh).unwrap();
     let (wales, courses) = (24, 24);
     let spec = TubeSpec {
-        wales,
-        courses,
+        grid: knitfit::base::GridSize::new(wales, courses),
         pattern: scene.knit.pattern,
         relaxed_circumference_m: scene.fabric().relaxed_circumference_m(),
         relaxed_length_m: knitfit::knit::RELAXED_LENGTH_FRACTION * axis.length(),

@@ -13,8 +13,7 @@ const PAPER_TERMS: ForceTerms = ForceTerms {
 
 fn spec(size: usize, pattern: Pattern) -> PatchSpec {
     PatchSpec {
-        wales: size,
-        courses: size,
+        grid: knitfit::base::GridSize::new(size, size),
         pattern,
         course_spacing_m: 0.0005,
         wale_spacing_m: 0.0005,

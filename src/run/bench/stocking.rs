@@ -16,6 +16,7 @@ use std::time::Instant;
 
 use nalgebra::Point3;
 
+use crate::base::GridSize;
 use crate::error::{Error, Result};
 use crate::export::gltf::read_stocking_glb;
 use crate::export::Output;
@@ -36,27 +37,17 @@ pub const STOCKING_LEG: &str = "makehuman_leg_foot.glb";
 /// along. 1000 keeps the bench's whole run near ten seconds on two cores (400×1600 fits too,
 /// in about twice the time).
 const REAL_COUNT: StockingCase = StockingCase {
-    wales: 400,
-    courses: 1000,
+    grid: GridSize::new(400, 1000),
     heel: TubeHeel::None,
 };
 
 /// One whole stocking.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StockingCase {
-    /// Points around.
-    pub wales: usize,
-    /// Courses, welt to toe.
-    pub courses: usize,
+    /// Points around by courses, welt to toe.
+    pub grid: GridSize,
     /// The heel.
     pub heel: TubeHeel,
-}
-
-impl StockingCase {
-    /// `150×150`.
-    fn grid(&self) -> String {
-        format!("{}×{}", self.wales, self.courses)
-    }
 }
 
 /// What one whole run measured.
@@ -116,8 +107,7 @@ pub struct StockingFit {
 pub fn stocking_cases(quick: bool) -> Vec<StockingCase> {
     let mut cases: Vec<StockingCase> = [TubeHeel::None, TubeHeel::Pocket]
         .map(|heel| StockingCase {
-            wales: 150,
-            courses: 150,
+            grid: GridSize::new(150, 150),
             heel,
         })
         .to_vec();
@@ -152,8 +142,8 @@ pub fn measure_stocking(case: &StockingCase, scratch: &Path) -> Result<StockingR
     let loaded = stocking_scene(case)?;
     let out_dir = scratch.join(format!(
         "{}x{}-{}",
-        case.wales,
-        case.courses,
+        case.grid.wales,
+        case.grid.courses,
         case.heel.name()
     ));
     reset_peak_memory();
@@ -182,8 +172,8 @@ fn stocking_scene(case: &StockingCase) -> Result<LoadedScene> {
     scene.leg.file = STOCKING_LEG.into();
     scene.tube.bottom = Some(TubeBottom::Toe);
     scene.tube.heel = case.heel;
-    scene.tube.wales = case.wales;
-    scene.tube.courses = Some(case.courses);
+    scene.tube.wales = case.grid.wales;
+    scene.tube.courses = Some(case.grid.courses);
     scene.outputs = vec![Output::Ply, Output::Glb, Output::Picture, Output::Preview];
     Ok(LoadedScene {
         scene,
@@ -284,7 +274,7 @@ pub fn markdown(rows: &[StockingRow]) -> String {
     for row in rows {
         if let StockingResult::Stopped(why) = &row.result {
             let c = &row.case;
-            let line = format!("\n{}, heel {}, stopped: {why}\n", c.grid(), c.heel.name());
+            let line = format!("\n{}, heel {}, stopped: {why}\n", c.grid, c.heel.name());
             md.push_str(&line);
         }
     }
@@ -294,7 +284,7 @@ pub fn markdown(rows: &[StockingRow]) -> String {
 /// One row of the markdown table.
 fn table_row(row: &StockingRow) -> String {
     let c = &row.case;
-    let (grid, heel) = (c.grid(), c.heel.name());
+    let (grid, heel) = (c.grid, c.heel.name());
     let mib = mib(row.peak_memory_bytes);
     match &row.result {
         StockingResult::Fitted(f) => format!(
@@ -313,7 +303,7 @@ fn table_row(row: &StockingRow) -> String {
         ),
         StockingResult::Stopped(_) => format!(
             "| {grid} | {heel} | {} | {:.2} | — | — | — | — | stopped (below) | — | — | {mib} |\n",
-            c.wales * c.courses,
+            c.grid.points(),
             row.seconds,
         ),
     }
@@ -335,9 +325,9 @@ fn csv_row(row: &StockingRow) -> String {
     let figure = |get: &dyn Fn(&StockingFit) -> String| fitted.map_or(String::new(), get);
     let fields = [
         STOCKING_LEG.to_string(),
-        c.wales.to_string(),
-        c.courses.to_string(),
-        fitted.map_or(c.wales * c.courses, |f| f.points).to_string(),
+        c.grid.wales.to_string(),
+        c.grid.courses.to_string(),
+        fitted.map_or(c.grid.points(), |f| f.points).to_string(),
         row.solver.name().to_string(),
         format!("{:e}", row.tolerance),
         figure(&|f| format!("{:.6}", f.solve_seconds)),
@@ -393,7 +383,7 @@ mod tests {
     #[test]
     fn the_quick_bench_measures_150_around_with_and_without_a_heel_pocket_only() {
         let quick = stocking_cases(true);
-        assert!(quick.iter().all(|c| (c.wales, c.courses) == (150, 150)));
+        assert!(quick.iter().all(|c| c.grid == GridSize::new(150, 150)));
         let heels: Vec<_> = quick.iter().map(|c| c.heel).collect();
         assert_eq!(heels, [TubeHeel::None, TubeHeel::Pocket]);
         let full = stocking_cases(false);
@@ -431,8 +421,7 @@ mod tests {
     #[test]
     fn a_whole_run_writes_every_file_reaches_the_toe_and_leaves_no_scratch_behind() {
         let case = StockingCase {
-            wales: 60,
-            courses: 60,
+            grid: GridSize::new(60, 60),
             heel: TubeHeel::None,
         };
         let rows = measure_stockings(&[case], &mut NoProgress, 0).unwrap();
