@@ -11,14 +11,15 @@
 //! leaving its place: courses out of order along the stocking's centreline
 //! ([`bunched_courses`]), refused beyond [`MAX_BUNCHED_FRACTION`].
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::base::Direction;
 use crate::knit::tube::Centreline;
 use crate::knit::{Knit, PointId};
 
 /// Summary of the stitch shapes of a knit. Lengths in metres.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct StitchStats {
     /// Number of stitches (cells) measured.
     pub stitches: usize,
@@ -154,7 +155,8 @@ pub fn slack(knit: &Knit) -> Vec<f64> {
 }
 
 /// Where a fitted stocking is slack (see [`slack`]), for the report.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SlackDetails {
     /// Points slacker than [`SLACK_THRESHOLD`], as a fraction of all points.
     pub fraction_of_points: f64,
