@@ -156,7 +156,8 @@ impl FitMemory {
 }
 
 /// The peak memory a fit is estimated to need, by part, in bytes.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct MemoryEstimate {
     /// Tube size, wales × courses (for messages).
     #[serde(skip)]
@@ -235,7 +236,7 @@ impl MemoryEstimate {
 }
 
 /// Where the memory limit came from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum LimitSource {
     /// The scene's `limits.memory_gib` (or `--memory-limit`).
@@ -262,7 +263,8 @@ impl LimitSource {
 }
 
 /// The memory a run may use.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct MemoryLimit {
     /// Bytes.
     pub bytes: u64,
@@ -327,7 +329,8 @@ fn cgroup_available() -> Option<u64> {
 }
 
 /// A fit's estimate against its limit: the `memory` of the plan and of `report.json`.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct MemoryCheck {
     /// What the fit is estimated to need.
     pub estimate: MemoryEstimate,

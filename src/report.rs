@@ -1,14 +1,17 @@
 //! `report.json`: what ran, why, how long each stage took, how accurate the result is, and which
 //! files were written. Every command writes one; its `details` are the command's own typed
 //! record ([`FitDetails`], [`PatchDetails`], [`RenderDetails`]), so what a report holds is
-//! written down here, once.
+//! written down here, once. Every report type reads back (`Deserialize`) as the exact inverse of
+//! what it writes, a field it does not know refused, so tests read reports typed; the fields a
+//! type leaves out of the JSON (`#[serde(skip)]`: a patch's sorted aspects, the estimate's grid
+//! for messages) read back as their defaults.
 
 use std::time::Instant;
 
 use nalgebra::{Point3, Vector3};
-use serde::Serialize;
+use serde::{de, Deserialize, Deserializer, Serialize};
 
-use crate::base::GridSize;
+use crate::base::{GridSize, PerDirection};
 use crate::export::YarnsWritten;
 use crate::knit::{Pattern, Stretch, TubeBottom, TubeHeel};
 use crate::leg::landmarks::Ring;
@@ -29,7 +32,8 @@ use crate::sim::{LevelStats, RelaxStats};
 use crate::stage::{timed, Stage, StageTimes};
 
 /// One stage as it ran.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct StageRecord {
     /// The stage, by name (`relax course=1.5`).
     pub name: Stage,
@@ -40,7 +44,8 @@ pub struct StageRecord {
 }
 
 /// Accuracy and size of a run.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Metrics {
     /// Mass points simulated (summed over all relaxations of the run).
     pub points: usize,
@@ -87,6 +92,71 @@ pub struct Report<D> {
     pub wall_seconds: f64,
 }
 
+/// The `details` of one command's report, and the command that writes them: a report read back
+/// as `Report<D>` must be that command's.
+pub trait CommandDetails {
+    /// The command's name, as `report.json`'s `command` holds it (`fit`).
+    const COMMAND: &'static str;
+}
+
+impl CommandDetails for FitDetails {
+    const COMMAND: &'static str = "fit";
+}
+
+impl CommandDetails for PatchDetails {
+    const COMMAND: &'static str = "patch";
+}
+
+impl CommandDetails for RenderDetails {
+    const COMMAND: &'static str = "render";
+}
+
+impl<'de, D: Deserialize<'de> + CommandDetails> Deserialize<'de> for Report<D> {
+    /// The inverse of the report's JSON: every field, none unknown, and `command` that of `D`
+    /// (a patch's report is not read as a fit's). Exact given exact numbers: serde_json's own
+    /// parser, without its `float_roundtrip` feature, may read a 17-digit number one unit in the
+    /// last place off (the integration tests read reports with a correctly rounding reader).
+    fn deserialize<De: Deserializer<'de>>(deserializer: De) -> Result<Report<D>, De::Error> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Fields<D> {
+            command: String,
+            scene: String,
+            effects: Vec<Effect>,
+            stages: Vec<StageRecord>,
+            metrics: Metrics,
+            details: D,
+            outputs: Vec<String>,
+            wall_seconds: f64,
+        }
+        let f = Fields::<D>::deserialize(deserializer)?;
+        if f.command != D::COMMAND {
+            return Err(de::Error::custom(format!(
+                "a report of `{}`, read as one of `{}`",
+                f.command,
+                D::COMMAND
+            )));
+        }
+        Ok(Report {
+            command: D::COMMAND,
+            scene: f.scene,
+            effects: f.effects,
+            stages: f.stages,
+            metrics: f.metrics,
+            details: f.details,
+            outputs: f.outputs,
+            wall_seconds: f.wall_seconds,
+        })
+    }
+}
+
+/// Reads an `f64` that may have been written as `null`: `serde_json` writes every non-finite
+/// number so, and where a field's only non-finite value is +∞ (nothing covered, no free point),
+/// `null` reads back as +∞.
+fn infinity_from_null<'de, De: Deserializer<'de>>(deserializer: De) -> Result<f64, De::Error> {
+    Ok(Option::<f64>::deserialize(deserializer)?.unwrap_or(f64::INFINITY))
+}
+
 impl<D: Serialize> Report<D> {
     /// Pretty JSON, newline-terminated.
     pub fn to_json(&self) -> Vec<u8> {
@@ -97,7 +167,8 @@ impl<D: Serialize> Report<D> {
 }
 
 /// `details` of a fit.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct FitDetails {
     /// The leg as loaded.
     pub leg: LegDetails,
@@ -133,7 +204,8 @@ pub struct FitDetails {
 }
 
 /// The leg of a fit.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct LegDetails {
     /// The leg file.
     pub file: String,
@@ -154,7 +226,8 @@ pub struct LegDetails {
 }
 
 /// A landmark point: world space (metres, +Y up) and the leg file's own coordinates and units.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct LandmarkPoint {
     /// World space, metres.
     pub m: [f64; 3],
@@ -163,7 +236,8 @@ pub struct LandmarkPoint {
 }
 
 /// A section of the leg at a landmark.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct LandmarkRing {
     /// Centre of the section.
     pub centre: LandmarkPoint,
@@ -174,7 +248,8 @@ pub struct LandmarkRing {
 }
 
 /// The landmarks of the dressed leg ([`crate::leg::landmarks`]).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct LandmarkDetails {
     /// Unit vector up the body, world space.
     pub up: [f64; 3],
@@ -289,7 +364,8 @@ pub fn stocking_extent(
 }
 
 /// An axis-aligned box, metres.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Bounds {
     /// Lowest corner.
     pub min: [f64; 3],
@@ -298,7 +374,8 @@ pub struct Bounds {
 }
 
 /// The tube of a fit.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct TubeDetails {
     /// Points around.
     pub wales: usize,
@@ -342,7 +419,8 @@ pub struct TubeDetails {
 /// The toe box of a stocking to the toe ([`crate::knit::path::TubePath::box_the_toes`]): the skin
 /// beyond its rim's plane, towards the toe, was the convex hull of the toes' sections during
 /// the fit. Its fields on the leg come from fabric that bridged the toes' clefts there.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ToeBoxDetails {
     /// Centre of the box's open rim, on the foot's section there, metres.
     pub rim_centre_m: [f64; 3],
@@ -352,18 +430,9 @@ pub struct ToeBoxDetails {
     pub length_m: f64,
 }
 
-/// A value per knit direction.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub struct PerDirection {
-    /// Along the course.
-    pub course: f64,
-    /// Along the wale.
-    pub wale: f64,
-}
-
 /// The solver of a fit.
-#[derive(Clone, Debug, PartialEq, Serialize)]
-#[serde(tag = "method", rename_all = "snake_case")]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "method", rename_all = "snake_case", deny_unknown_fields)]
 pub enum SolverDetails {
     /// The paper's explicit steps.
     Paper {
@@ -371,7 +440,9 @@ pub enum SolverDetails {
         tolerance: f64,
         /// `solver.time_step`.
         time_step: f64,
-        /// The explicit stability limit, solver time units.
+        /// The explicit stability limit, solver time units (+∞, written `null`, when no point
+        /// is free).
+        #[serde(deserialize_with = "infinity_from_null")]
         time_step_limit: f64,
         /// Sub-steps per step.
         substeps_per_step: usize,
@@ -392,7 +463,8 @@ pub enum SolverDetails {
 }
 
 /// The contact of a fit.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ContactDetails {
     /// `bvh` or `brute`.
     pub method: ContactMethod,
@@ -404,7 +476,8 @@ pub struct ContactDetails {
 }
 
 /// The memory of a fit.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct MemoryDetails {
     /// The estimate against the limit, checked before the leg was decoded.
     pub check: MemoryCheck,
@@ -413,13 +486,15 @@ pub struct MemoryDetails {
 }
 
 /// The range of the stitch density over the covered leg vertices.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DensityRange {
     /// Leg vertices with yarn near them.
     pub leg_vertices_covered: usize,
     /// All leg vertices.
     pub leg_vertices: usize,
-    /// Lowest density, stitches per cm² (`null` when nothing is covered).
+    /// Lowest density, stitches per cm² (+∞, written `null`, when nothing is covered).
+    #[serde(deserialize_with = "infinity_from_null")]
     pub min: f64,
     /// Highest density, stitches per cm².
     pub max: f64,
@@ -427,7 +502,8 @@ pub struct DensityRange {
 
 /// The lowest, median and highest value of a field over the covered leg vertices (0 when none
 /// is covered).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct FieldRange {
     /// Lowest value.
     pub min: f64,
@@ -451,7 +527,8 @@ impl FieldRange {
 }
 
 /// The yarns a fit's files hold (`outputs`: the grid's, `stitches` or `loops`).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct YarnsDetails {
     /// `grid`, `stitches` or `loops`.
     pub written: YarnsWritten,
@@ -464,7 +541,8 @@ pub struct YarnsDetails {
 }
 
 /// `stocking.glb`'s sheer stocking surface, lifted off the knit (`post::surfaces`).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct StockingSurfaceDetails {
     /// How far it is lifted along its normals, metres.
     pub lift_m: f64,
@@ -476,7 +554,8 @@ pub struct StockingSurfaceDetails {
 }
 
 /// The real stocking a fit's grid stands for (`knit::Fabric`).
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct KnitDetails {
     /// Needles: real stitches around (`knit.needles`, or the given relaxed circumference over
     /// the stitch's width).
@@ -494,7 +573,8 @@ pub struct KnitDetails {
 }
 
 /// A value per yarn material.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct YarnValues {
     /// The nylon yarn.
     pub nylon: f64,
@@ -503,7 +583,8 @@ pub struct YarnValues {
 }
 
 /// `details` of the patch experiment.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PatchDetails {
     /// `patch.size`, `[wales, courses]`.
     pub size: GridSize,
@@ -517,8 +598,10 @@ pub struct PatchDetails {
     pub anisotropy: Option<f64>,
 }
 
-/// One relaxed patch.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+/// One relaxed patch. Read through `PatchRunFields`, which lists the relaxation's fields flat, as
+/// written, and reads its stability limit's `null` back as infinite.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(from = "PatchRunFields")]
 pub struct PatchRun {
     /// The stretch applied.
     pub stretch: Stretch,
@@ -532,8 +615,44 @@ pub struct PatchRun {
     pub stitches: Option<StitchStats>,
 }
 
+/// A [`PatchRun`] as its JSON holds it: the relaxation's fields flat beside the patch's, the
+/// stability limit `null` when infinite (a patch whose every point is held has no free point).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PatchRunFields {
+    stretch: Stretch,
+    points: usize,
+    steps: usize,
+    substeps_per_step: usize,
+    #[serde(deserialize_with = "infinity_from_null")]
+    time_step_limit: f64,
+    residual: f64,
+    max_move: f64,
+    converged: bool,
+    stitches: Option<StitchStats>,
+}
+
+impl From<PatchRunFields> for PatchRun {
+    fn from(f: PatchRunFields) -> PatchRun {
+        PatchRun {
+            stretch: f.stretch,
+            points: f.points,
+            relaxation: RelaxStats {
+                steps: f.steps,
+                substeps_per_step: f.substeps_per_step,
+                time_step_limit: f.time_step_limit,
+                residual: f.residual,
+                max_move: f.max_move,
+                converged: f.converged,
+            },
+            stitches: f.stitches,
+        }
+    }
+}
+
 /// `details` of `knitfit render`.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct RenderDetails {
     /// The `stocking.glb` rendered.
     pub input: String,
@@ -597,5 +716,132 @@ impl StageTimes for StageClock {
             why: planned.map(|p| p.why.clone()).unwrap_or_default(),
             seconds,
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::knit::StretchAxis;
+    use crate::stage::{File, FitFile, PatchFile};
+
+    /// Every kind of stage once, a patch's with factors Rust writes in full (`0.30000000000000004`)
+    /// or without a point (`2`).
+    fn every_stage() -> Vec<Stage> {
+        let awkward = Stretch {
+            axis: StretchAxis::Course,
+            factor: 0.1 + 0.2,
+        };
+        let whole = Stretch {
+            axis: StretchAxis::Wale,
+            factor: 2.0,
+        };
+        let stages = vec![
+            Stage::LoadLeg,
+            Stage::FindLandmarks,
+            Stage::FindAxis,
+            Stage::BuildCollider,
+            Stage::KnitTube,
+            Stage::Fit,
+            Stage::ExactContactPass,
+            Stage::CheckPenetration,
+            Stage::LegAttributes,
+            Stage::LayStitches,
+            Stage::KnitLoops,
+            Stage::PenetrationFix,
+            Stage::StockingSurface,
+            Stage::KnitPatch(awkward),
+            Stage::RelaxPatch(awkward),
+            Stage::KnitPatch(whole),
+            Stage::RelaxPatch(whole),
+            Stage::MeasureStitches,
+            Stage::ReadStocking,
+            Stage::Encode(File::Fit(FitFile::StockingGlb)),
+            Stage::Encode(File::Fit(FitFile::StockingPly)),
+            Stage::Encode(File::Fit(FitFile::LegPly)),
+            Stage::Encode(File::Fit(FitFile::DensityPicture)),
+            Stage::Encode(File::Patch(PatchFile::Ply)),
+            Stage::Encode(File::Patch(PatchFile::Glb)),
+            Stage::Encode(File::Patch(PatchFile::Picture)),
+            Stage::RenderPreview,
+            Stage::WriteFiles,
+        ];
+        // No wildcard: a new kind of stage does not compile here until it is in the list above.
+        for stage in &stages {
+            match stage {
+                Stage::LoadLeg
+                | Stage::FindLandmarks
+                | Stage::FindAxis
+                | Stage::BuildCollider
+                | Stage::KnitTube
+                | Stage::Fit
+                | Stage::ExactContactPass
+                | Stage::CheckPenetration
+                | Stage::LegAttributes
+                | Stage::LayStitches
+                | Stage::KnitLoops
+                | Stage::PenetrationFix
+                | Stage::StockingSurface
+                | Stage::KnitPatch(_)
+                | Stage::RelaxPatch(_)
+                | Stage::MeasureStitches
+                | Stage::ReadStocking
+                | Stage::Encode(File::Fit(_) | File::Patch(_))
+                | Stage::RenderPreview
+                | Stage::WriteFiles => {}
+            }
+        }
+        stages
+    }
+
+    #[test]
+    fn every_stage_reads_back_from_its_name() {
+        for stage in every_stage() {
+            let json = serde_json::to_string(&stage).unwrap();
+            let back: Stage = serde_json::from_str(&json).unwrap();
+            assert_eq!(back, stage, "{json}");
+            assert_eq!(serde_json::to_string(&back).unwrap(), json);
+        }
+    }
+
+    #[test]
+    fn a_name_no_stage_has_is_refused() {
+        for name in [
+            "knit course=1.50",
+            "relax diagonal=1.5",
+            "knit course=",
+            "encode report.json",
+            "Fit",
+            "fit ",
+            "",
+        ] {
+            let json = serde_json::to_string(name).unwrap();
+            let error = serde_json::from_str::<Stage>(&json).unwrap_err();
+            assert!(error.to_string().contains("no stage is named"), "{name}");
+        }
+    }
+
+    #[test]
+    fn an_infinite_value_written_as_null_reads_back_infinite() {
+        let nothing_covered = DensityRange {
+            leg_vertices_covered: 0,
+            leg_vertices: 12,
+            min: f64::INFINITY,
+            max: 0.0,
+        };
+        let json = serde_json::to_string(&nothing_covered).unwrap();
+        assert!(json.contains(r#""min":null"#), "{json}");
+        let back: DensityRange = serde_json::from_str(&json).unwrap();
+        assert_eq!(back, nothing_covered);
+    }
+
+    #[test]
+    fn a_field_no_report_type_has_is_refused() {
+        let error = serde_json::from_str::<FieldRange>(r#"{"min":0,"median":1,"max":2,"mean":1}"#)
+            .unwrap_err();
+        assert!(
+            error.to_string().contains("unknown field `mean`"),
+            "{error}"
+        );
     }
 }

@@ -17,7 +17,7 @@ use crate::base::settings::{number, Invalid};
 use crate::error::{Error, Result};
 use crate::export::{default_outputs, Output, YarnsWritten};
 use crate::knit::settings::{KnitSettings, PatchSettings, TubeSettings, Yarns, MAX_NEEDLES};
-use crate::knit::{Fabric, Pattern};
+use crate::knit::{Fabric, Pattern, TubeBottom};
 use crate::leg::settings::LegSettings;
 use crate::limits::Limits;
 use crate::preview::settings::PreviewSettings;
@@ -214,6 +214,14 @@ impl Scene {
         }
         self.contact.validate().map_err(|e| e.within("contact"))?;
         self.leg.validate().map_err(|e| e.within("leg"))?;
+        if self.tube.bottom == Some(TubeBottom::Toe) && self.leg.axis.is_some() {
+            return Err(Invalid::new(
+                "tube.bottom",
+                "\"toe\" follows the leg's landmarks, but leg.axis gives a straight tube; set \
+                 tube.bottom to \"ankle\", or leave leg.axis out",
+            )
+            .with(&["leg.axis"]));
+        }
         self.limits.validate().map_err(|e| e.within("limits"))
     }
 }

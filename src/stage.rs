@@ -91,6 +91,63 @@ impl Serialize for Stage {
     }
 }
 
+impl<'de> serde::Deserialize<'de> for Stage {
+    /// The inverse of the name: the stage whose [`Display`](fmt::Display) is the string (a
+    /// patch stage's factor read back as Rust writes it, shortest round trip, so exactly).
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Stage, D::Error> {
+        use crate::knit::StretchAxis;
+        let name = <String as serde::Deserialize>::deserialize(deserializer)?;
+        let unit = [
+            Stage::LoadLeg,
+            Stage::FindLandmarks,
+            Stage::FindAxis,
+            Stage::BuildCollider,
+            Stage::KnitTube,
+            Stage::Fit,
+            Stage::ExactContactPass,
+            Stage::CheckPenetration,
+            Stage::LegAttributes,
+            Stage::LayStitches,
+            Stage::KnitLoops,
+            Stage::PenetrationFix,
+            Stage::StockingSurface,
+            Stage::MeasureStitches,
+            Stage::ReadStocking,
+            Stage::RenderPreview,
+            Stage::WriteFiles,
+        ];
+        let files = (FitFile::ALL.into_iter().map(File::Fit))
+            .chain(PatchFile::ALL.into_iter().map(File::Patch));
+        let stretch = |s: &str| -> Option<Stretch> {
+            let (axis, factor) = s.split_once('=')?;
+            let axis = [StretchAxis::Course, StretchAxis::Wale]
+                .into_iter()
+                .find(|a| a.name() == axis)?;
+            Some(Stretch {
+                axis,
+                factor: factor.parse().ok()?,
+            })
+        };
+        let stage = unit
+            .into_iter()
+            .chain(files.map(Stage::Encode))
+            .find(|s| s.to_string() == name);
+        let patch = |prefix: &str, stage: fn(Stretch) -> Stage| {
+            name.strip_prefix(prefix).and_then(stretch).map(stage)
+        };
+        let stage = stage
+            .or_else(|| patch("knit ", Stage::KnitPatch))
+            .or_else(|| patch("relax ", Stage::RelaxPatch));
+        // A name that reads back as another stage's (`knit course=1.50`) is not a stage's name.
+        match stage {
+            Some(stage) if stage.to_string() == name => Ok(stage),
+            _ => Err(serde::de::Error::custom(format!(
+                "no stage is named {name:?}"
+            ))),
+        }
+    }
+}
+
 /// A file a fit encodes (the preview is rendered in [`Stage::RenderPreview`] instead).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FitFile {
@@ -104,6 +161,16 @@ pub enum FitFile {
     DensityPicture,
 }
 
+impl FitFile {
+    /// Every file a fit can encode.
+    pub const ALL: [FitFile; 4] = [
+        FitFile::StockingGlb,
+        FitFile::StockingPly,
+        FitFile::LegPly,
+        FitFile::DensityPicture,
+    ];
+}
+
 /// A file the patch experiment encodes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PatchFile {
@@ -113,6 +180,11 @@ pub enum PatchFile {
     Glb,
     /// `patch.png`: the stitch picture.
     Picture,
+}
+
+impl PatchFile {
+    /// Every file the patch experiment can encode.
+    pub const ALL: [PatchFile; 3] = [PatchFile::Ply, PatchFile::Glb, PatchFile::Picture];
 }
 
 /// A file one of the commands encodes.

@@ -13,4 +13,4 @@ pub use frame::{perpendicular_frame, Stance, Vec3};
 pub use grid::GridSize;
 pub use mesh::{area_weighted_normals, vertex_normals, Material, SurfaceMesh};
 pub use near::PointGrid;
-pub use yarn::{Direction, PerYarn, Segment, YarnGeometry, YarnKind};
+pub use yarn::{Direction, PerDirection, PerYarn, Segment, YarnGeometry, YarnKind};

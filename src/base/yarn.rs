@@ -77,6 +77,54 @@ impl Direction {
     }
 }
 
+/// A value per knit direction: along the course (around the leg) and along the wale. Indexed
+/// by [`Direction`]; reads as `{"course": …, "wale": …}` in reports.
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PerDirection<T = f64> {
+    /// Along the course.
+    pub course: T,
+    /// Along the wale.
+    pub wale: T,
+}
+
+impl<T> PerDirection<T> {
+    /// `course` along the course, `wale` along the wale.
+    pub const fn new(course: T, wale: T) -> PerDirection<T> {
+        PerDirection { course, wale }
+    }
+
+    /// The two values in [`Direction::index`] order, for kernels that index by direction.
+    pub fn to_array(self) -> [T; 2] {
+        [self.course, self.wale]
+    }
+
+    /// `f` of each direction's value.
+    pub fn map<U>(self, mut f: impl FnMut(T) -> U) -> PerDirection<U> {
+        PerDirection {
+            course: f(self.course),
+            wale: f(self.wale),
+        }
+    }
+}
+
+impl<T> From<[T; 2]> for PerDirection<T> {
+    /// `[course, wale]`, in [`Direction::index`] order.
+    fn from([course, wale]: [T; 2]) -> PerDirection<T> {
+        PerDirection { course, wale }
+    }
+}
+
+impl<T> std::ops::Index<Direction> for PerDirection<T> {
+    type Output = T;
+    fn index(&self, direction: Direction) -> &T {
+        match direction {
+            Direction::Course => &self.course,
+            Direction::Wale => &self.wale,
+        }
+    }
+}
+
 /// Yarn points, the segments between them and per-point attributes, ready to write.
 ///
 /// Positions are in metres, glTF convention (Y up). Attribute names are written as-is to PLY

@@ -40,7 +40,7 @@ pub(crate) fn default_outputs() -> Vec<Output> {
 }
 
 /// Which yarns the yarn files hold: the simulation grid's, or the real stitches'.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum YarnsWritten {
     /// The fitted grid's points and springs (a grid point stands for a block of stitches).

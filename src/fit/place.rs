@@ -81,17 +81,9 @@ pub fn place(
         let axis = choose_axis(leg, place, tube, landmarks.as_ref())?;
         let path = match (tube.bottom, &landmarks) {
             (Some(TubeBottom::Ankle), _) => None,
-            (Some(TubeBottom::Toe), None) => {
-                return Err(Error::Leg {
-                    path: leg.path.clone(),
-                    message: "tube.bottom is \"toe\", but leg.axis gives a straight tube; set \
-                              tube.bottom to \"ankle\", or leave leg.axis out so the stocking \
-                              follows the leg's landmarks"
-                        .into(),
-                })
-            }
+            // A given axis is a straight tube's (the scene refuses one to the toe).
+            (_, None) => None,
             // Absent: to the toe where the leg has a foot.
-            (None, None) => None,
             (None, Some(l)) if l.foot.is_none() => None,
             (_, Some(l)) => Some(stocking_path(leg, tube, l)?),
         };

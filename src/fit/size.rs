@@ -188,8 +188,8 @@ pub fn check_on_leg(
                  / 6 courses of {} m), longer than the relaxed stocking ({length} m): ask for \
                  fewer stitches around (knit.needles) or a shorter knit.wale_spacing_m, or give a \
                  longer tube.relaxed_length_m",
-                spec.relaxed_circumference_m / spec.stitch_m[0],
-                number(spec.stitch_m[1]),
+                spec.relaxed_circumference_m / spec.stitch_m.course,
+                number(spec.stitch_m.wale),
             ),
         ));
     }

@@ -22,7 +22,7 @@
 //!   newtons per metre of relaxed fabric (`c̄1` the mean stiffness of the course yarns), divided
 //!   by the wale stretch per metre of fitted fabric; along the leg, `a` and `b` trade places.
 
-use crate::base::{GridSize, PerYarn, YarnKind};
+use crate::base::{GridSize, PerDirection, PerYarn, YarnKind};
 
 use super::nylon::NYLON_MODULUS_PA;
 use super::settings::{KnitSettings, TubeSettings, Yarns};
@@ -37,7 +37,7 @@ pub struct Fabric {
     pub needles: f64,
     /// The relaxed stitch: distance between wales along a course, and between courses along a
     /// wale, metres.
-    pub stitch_m: [f64; 2],
+    pub stitch_m: PerDirection,
     /// Diameter of each yarn kind, metres, in [`YarnKind::index`] order.
     pub yarn_diameter_m: PerYarn<f64>,
     /// Stiffness of one nylon stitch (a yarn `stiffness` of 1), newtons per metre of extension.
@@ -57,7 +57,7 @@ impl Fabric {
         let second_moment = std::f64::consts::PI * d.powi(4) / 64.0;
         Fabric {
             needles,
-            stitch_m: [course, wale],
+            stitch_m: PerDirection::new(course, wale),
             yarn_diameter_m: YarnKind::ALL.map(|k| yarns.get(k).diameter_m()),
             loop_stiffness_n_per_m: 3.0 * NYLON_MODULUS_PA * second_moment / wale.powi(3),
         }
@@ -65,7 +65,7 @@ impl Fabric {
 
     /// Circumference of the stocking lying relaxed: the needles times the course spacing, metres.
     pub fn relaxed_circumference_m(&self) -> f64 {
-        self.needles * self.stitch_m[0]
+        self.needles * self.stitch_m.course
     }
 
     /// The real stitch count of a stocking `relaxed_length_m` long: its wales around (the
@@ -73,7 +73,7 @@ impl Fabric {
     pub fn real_count(&self, relaxed_length_m: f64) -> GridSize {
         // `as usize` saturates, and the `+ 1` must too: a stitch of 1e-300 m would wrap to 0
         // courses. The caller refuses a count over the 32-bit bound.
-        let courses = ((relaxed_length_m / self.stitch_m[1]).round() as usize).saturating_add(1);
+        let courses = ((relaxed_length_m / self.stitch_m.wale).round() as usize).saturating_add(1);
         GridSize::new((self.needles.round() as usize).max(3), courses.max(2))
     }
 
@@ -95,21 +95,24 @@ impl Fabric {
 
     /// Real stitches a grid cell of rest size `rest_m` (course spring, wale spring) stands for,
     /// around and along.
-    pub fn stitches_per_cell(&self, rest_m: [f64; 2]) -> [f64; 2] {
-        [rest_m[0] / self.stitch_m[0], rest_m[1] / self.stitch_m[1]]
+    pub fn stitches_per_cell(&self, rest_m: PerDirection) -> PerDirection {
+        PerDirection::new(
+            rest_m.course / self.stitch_m.course,
+            rest_m.wale / self.stitch_m.wale,
+        )
     }
 
     /// Real stitches per square metre of relaxed fabric.
     pub fn relaxed_stitches_per_m2(&self) -> f64 {
-        1.0 / (self.stitch_m[0] * self.stitch_m[1])
+        1.0 / (self.stitch_m.course * self.stitch_m.wale)
     }
 
     /// Tension per metre of relaxed fabric per unit strain of a yarn stiffness of 1, along the
     /// course and along the wale, N/m.
-    pub fn membrane_n_per_m(&self) -> [f64; 2] {
-        let [a, b] = self.stitch_m;
+    pub fn membrane_n_per_m(&self) -> PerDirection {
+        let PerDirection { course: a, wale: b } = self.stitch_m;
         let k = self.loop_stiffness_n_per_m;
-        [k * a / b, k * b / a]
+        PerDirection::new(k * a / b, k * b / a)
     }
 }
 
@@ -124,9 +127,17 @@ mod tests {
             &Yarns::default(),
             &TubeSettings::default(),
         );
-        assert_eq!(fabric.stitches_per_cell(fabric.stitch_m), [1.0, 1.0]);
-        let [around, along] =
-            fabric.stitches_per_cell([fabric.relaxed_circumference_m() / 150.0, 0.006]);
+        assert_eq!(
+            fabric.stitches_per_cell(fabric.stitch_m),
+            PerDirection::new(1.0, 1.0)
+        );
+        let PerDirection {
+            course: around,
+            wale: along,
+        } = fabric.stitches_per_cell(PerDirection::new(
+            fabric.relaxed_circumference_m() / 150.0,
+            0.006,
+        ));
         assert!((around - 400.0 / 150.0).abs() < 1e-12);
         assert!((along - 0.006 / 0.00074).abs() < 1e-12);
     }
@@ -150,12 +161,15 @@ mod tests {
         assert_eq!(fabric.grid_courses(100, length), 176);
         let rest = |courses: usize| {
             let wales = 150.0;
-            [
+            PerDirection::new(
                 fabric.relaxed_circumference_m() / wales,
                 length / (courses - 1) as f64,
-            ]
+            )
         };
-        let [around, along] = fabric.stitches_per_cell(rest(fabric.grid_courses(150, length)));
+        let PerDirection {
+            course: around,
+            wale: along,
+        } = fabric.stitches_per_cell(rest(fabric.grid_courses(150, length)));
         assert!(
             (along / around - 1.0).abs() < 0.01,
             "{around} × {along} stitches"
@@ -174,7 +188,7 @@ mod tests {
             ..TubeSettings::default()
         };
         let fabric = Fabric::of(&KnitSettings::default(), &Yarns::default(), &tube);
-        assert_eq!(fabric.stitch_m, [0.0005, 0.00074]);
+        assert_eq!(fabric.stitch_m, PerDirection::new(0.0005, 0.00074));
         assert!((fabric.needles - 320.0).abs() < 1e-9);
         assert!((fabric.relaxed_circumference_m() - 0.16).abs() < 1e-12);
     }

@@ -19,7 +19,7 @@
 use std::collections::BTreeMap;
 
 use super::pattern::Tile;
-use crate::base::{Direction, PerYarn, Segment, Vec3, YarnGeometry, YarnKind};
+use crate::base::{Direction, PerDirection, PerYarn, Segment, Vec3, YarnGeometry, YarnKind};
 
 /// Index of a mass point: `course * wales + wale`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -112,7 +112,7 @@ pub struct Knit {
     /// Factor on the yarn's stiffness c1 for course and wale springs (indexed by
     /// [`Direction::index`]): 1 when a grid cell is one stitch, as in the paper; see
     /// [`Knit::with_stitch_shape`] for a grid coarser than the stitches.
-    pub stiffness_scale: [f64; 2],
+    pub stiffness_scale: PerDirection,
     /// On a grid that stands for the fabric ([`Knit::with_stitch_shape`]): the share of each
     /// yarn kind among the grid's springs along each direction, which every spring of that
     /// direction then stands for together. `None` on a knit of single stitches (the patch),
@@ -277,7 +277,7 @@ impl Knit {
             springs,
             class,
             course_yarn,
-            stiffness_scale: [1.0, 1.0],
+            stiffness_scale: PerDirection::new(1.0, 1.0),
             yarn_blend: None,
             grid_springs,
             toe_seam: false,
@@ -413,7 +413,7 @@ impl Knit {
             });
         }
         self.toe_seam = true;
-        let wale_rest = self.grid_rest_m()[1];
+        let wale_rest = self.grid_rest_m().wale;
         if rest > 0.0 && wale_rest > 0.0 {
             self.toe_seam_steps = rest / wale_rest;
         }
@@ -608,7 +608,7 @@ impl Knit {
     /// would be another fabric: a 400×1600 tube of a 0.20 m × 0.29 m stocking has cells 2.7
     /// times wider than long, its rings 7× stiffer than its wales compared with a square stitch,
     /// and the rings squeeze the lower leg of the tube into folds. Scaling each direction's
-    /// springs by `α` and `1/α`, with `α = (course_spacing / wale_spacing) · (rest_wale /
+    /// springs by `α` and `1/α`, with `α = (stitch_m.course / stitch_m.wale) · (rest_wale /
     /// rest_course)`, gives every grid the stitch's membrane, so the grid size only sets how
     /// finely that fabric is resolved (and the multilevel solver's coarse grids are the same
     /// fabric as the fine one).
@@ -620,11 +620,11 @@ impl Knit {
     /// blended too: knitted spring by spring, its soft nylon courses zigzag between the support
     /// courses, a loop-scale wrinkle that is not the fabric's shape and that the solver takes
     /// ten times longer to settle (docs/decisions/0053).
-    pub fn with_stitch_shape(mut self, course_spacing: f64, wale_spacing: f64) -> Knit {
-        let [course, wale] = self.grid_rest_m();
-        if course > 0.0 && wale > 0.0 {
-            let alpha = (course_spacing / wale_spacing) * (wale / course);
-            self.stiffness_scale = [alpha, 1.0 / alpha];
+    pub fn with_stitch_shape(mut self, stitch_m: PerDirection) -> Knit {
+        let rest = self.grid_rest_m();
+        if rest.course > 0.0 && rest.wale > 0.0 {
+            let alpha = (stitch_m.course / stitch_m.wale) * (rest.wale / rest.course);
+            self.stiffness_scale = PerDirection::new(alpha, 1.0 / alpha);
             self.yarn_blend = Some(self.yarn_shares());
         }
         self
@@ -644,13 +644,14 @@ impl Knit {
 
     /// Rest lengths of the grid's course and wale springs, metres (the first of each; a grid's
     /// are all alike). 0 for a direction without springs.
-    pub fn grid_rest_m(&self) -> [f64; 2] {
-        [Direction::Course, Direction::Wale].map(|direction| {
+    pub fn grid_rest_m(&self) -> PerDirection {
+        let rest = |direction| {
             self.springs
                 .iter()
                 .find(|s| s.direction == direction)
                 .map_or(0.0, |s| s.rest)
-        })
+        };
+        PerDirection::new(rest(Direction::Course), rest(Direction::Wale))
     }
 
     /// Number of mass points.
@@ -794,7 +795,7 @@ impl Knit {
         let wales = self.wales;
         let across = self.course_springs_per_row();
         let mut faces = Vec::with_capacity(across * self.courses);
-        let first = self.grid_rest_m()[1];
+        let first = self.grid_rest_m().wale;
         for c in 0..self.courses.saturating_sub(1) {
             // A graded grid's cell is its interval's share of an even one's.
             let cell = match first > 0.0 {

@@ -27,7 +27,7 @@ use super::model::places_along;
 use super::path::{PathPart, TubePath};
 use super::settings::{TubeBottom, TubeHeel, TubeTop};
 use super::{Knit, Pattern, Tile};
-use crate::base::{perpendicular_frame, GridSize, Vec3};
+use crate::base::{perpendicular_frame, GridSize, PerDirection, Vec3};
 use crate::leg::{slice, Axis, AxisSource, Landmarks, ThighTopKind};
 
 /// Fraction of the leg's height kept between the stocking's end and a cut in the mesh, where
@@ -59,16 +59,16 @@ pub struct TubeSpec {
     /// wale, metres (`knit.course_spacing_m`, `knit.wale_spacing_m`). Their ratio sets how much
     /// stiffer the fabric is around than along; the distance between courses is also the toe
     /// seam's rest, one real course on every grid (docs/decisions/0070).
-    pub stitch_m: [f64; 2],
+    pub stitch_m: PerDirection,
 }
 
 impl TubeSpec {
     /// Rest lengths of a course spring and a wale spring on this grid, metres.
-    pub fn rest_lengths(&self) -> [f64; 2] {
-        [
+    pub fn rest_lengths(&self) -> PerDirection {
+        PerDirection::new(
             self.relaxed_circumference_m / self.grid.wales as f64,
             self.relaxed_length_m / (self.grid.courses - 1).max(1) as f64,
-        ]
+        )
     }
 }
 
@@ -140,7 +140,10 @@ pub fn build_tube(
     let (u, v) = perpendicular_frame(&a);
     let radii = enclosing_radii(c_count, &bottom, &a, length, leg_vertices, leg_triangles);
     let tile = Tile::of(spec.pattern);
-    let [rest_course, rest_wale] = spec.rest_lengths();
+    let PerDirection {
+        course: rest_course,
+        wale: rest_wale,
+    } = spec.rest_lengths();
     Knit::grid(
         w_count,
         c_count,
@@ -154,7 +157,7 @@ pub fn build_tube(
             bottom.coords + a * s + (u * theta.cos() + v * theta.sin()) * radii[c]
         },
     )
-    .with_stitch_shape(spec.stitch_m[0], spec.stitch_m[1])
+    .with_stitch_shape(spec.stitch_m)
 }
 
 /// Per point of a tube's knit, true on a held end ring (held at its height along the axis during
@@ -184,7 +187,10 @@ pub fn build_stocking(
         courses: c_count,
     } = spec.grid;
     let tile = Tile::of(spec.pattern);
-    let [rest_course, even] = spec.rest_lengths();
+    let PerDirection {
+        course: rest_course,
+        wale: even,
+    } = spec.rest_lengths();
     let intervals = match spacing {
         CourseSpacing::Even => None,
         CourseSpacing::FinerAtTheToe => toe_graded_intervals(spec),
@@ -211,8 +217,8 @@ pub fn build_stocking(
         |w, c| rings[c][w].coords,
     )
     .with_course_intervals(&intervals)
-    .with_stitch_shape(spec.stitch_m[0], spec.stitch_m[1])
-    .with_toe_seam(spec.stitch_m[1]);
+    .with_stitch_shape(spec.stitch_m)
+    .with_toe_seam(spec.stitch_m.wale);
     if heel == TubeHeel::Pocket {
         let [lo, hi] = path.heel_range();
         let middle = 0.5 * (lo + hi);
@@ -349,8 +355,8 @@ pub fn heel_pocket_depths(spec: &TubeSpec, wales: usize, rest_wale: f64) -> Vec<
 /// The length of fabric each half of a heel pocket knits ([`heel_pocket_depths`]): `n / 6` rows
 /// of the relaxed stitch, `n` the stitches around. Metres.
 pub fn heel_pocket_half_length_m(spec: &TubeSpec) -> f64 {
-    let stitches_around = spec.relaxed_circumference_m / spec.stitch_m[0];
-    stitches_around / 6.0 * spec.stitch_m[1]
+    let stitches_around = spec.relaxed_circumference_m / spec.stitch_m.course;
+    stitches_around / 6.0 * spec.stitch_m.wale
 }
 
 /// The stocking's centreline, from course 0's end to the last course's: the path's centres for
@@ -488,7 +494,7 @@ mod tests {
             pattern: Pattern::Alternating,
             relaxed_circumference_m: 0.2,
             relaxed_length_m: length,
-            stitch_m: [0.0005, 0.00074],
+            stitch_m: PerDirection::new(0.0005, 0.00074),
         }
     }
 

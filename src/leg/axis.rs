@@ -7,12 +7,12 @@
 //! rather than fitted onto air.
 
 use nalgebra::{Point3, Vector3};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::{slice, Leg};
 
 /// Where an axis came from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum AxisSource {
     /// `leg.axis` in the scene.
@@ -36,7 +36,8 @@ impl AxisSource {
 }
 
 /// The stocking's axis, world space (metres, Y up).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Axis {
     /// Bottom point (ankle end).
     pub bottom: [f64; 3],

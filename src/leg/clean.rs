@@ -29,7 +29,7 @@
 use std::collections::{HashMap, HashSet};
 
 use nalgebra::Point3;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::weld::welded_ids;
 
@@ -53,7 +53,8 @@ pub const SLIVER: f64 = 1e-6;
 pub const F32_ROUNDING: f64 = 2.0 * f32::EPSILON as f64;
 
 /// What cleaning removed from the file's mesh.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Cleaned {
     /// Vertices merged into an earlier one at the same position.
     pub merged_vertices: usize,

@@ -34,7 +34,7 @@
 //! gives the same landmarks.
 
 use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use super::slice::{Loop, Slicer};
 use super::Side;
@@ -90,7 +90,7 @@ pub struct Ring {
 }
 
 /// How the top of the thigh was found.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ThighTopKind {
     /// Where the two legs' sections join.

@@ -90,7 +90,7 @@ pub fn stitch_density(fabric: &Fabric, (course, wale): &Stretch) -> Vec<f64> {
 /// direction gets 1 there.
 pub fn stretch(knit: &Knit) -> Stretch {
     let spans = Spans::of(knit);
-    let [rest_course, rest_wale] = knit.grid_rest_m();
+    let [rest_course, rest_wale] = knit.grid_rest_m().to_array();
     let [reach_course, reach_wale] = spans.reach;
     let ratio = |rest: f64| move |ends: &Ends| ends.arc_length() / (rest * ends.steps);
     let course = (0..knit.len())
@@ -178,7 +178,7 @@ struct Spans {
 impl Spans {
     fn of(knit: &Knit) -> Spans {
         let parity = if knit.yarn_blend.is_some() { 1 } else { 2 };
-        let reach = knit.grid_rest_m().map(|rest| {
+        let reach = knit.grid_rest_m().to_array().map(|rest| {
             let steps = if rest > 0.0 {
                 MEASURE_SPAN_M / rest
             } else {
@@ -312,7 +312,7 @@ impl Spans {
         let graded = knit.is_graded();
         let last = knit.courses.saturating_sub(2);
         let seam = match graded {
-            true => knit.toe_seam_steps() * knit.grid_rest_m()[1] / knit.course_interval(last),
+            true => knit.toe_seam_steps() * knit.grid_rest_m().wale / knit.course_interval(last),
             false => knit.toe_seam_steps(),
         };
         for w in 0..knit.wales {
@@ -367,7 +367,7 @@ impl Spans {
                     let span = |i: f64| place(j, i as isize).and_then(relaxed_at);
                     match (span(-ends.back), span(ends.on)) {
                         (Some(a), Some(b)) => b - a,
-                        _ => ends.steps * knit.grid_rest_m()[1],
+                        _ => ends.steps * knit.grid_rest_m().wale,
                     }
                 };
                 // A point's step: the mean of its intervals along its own wale.
@@ -414,7 +414,7 @@ pub fn coverage(
 ) -> Vec<f64> {
     let [course_shares, _] = knit.yarn_shares();
     let lengths = loop_shapes(fabric).map(|shape| shape.in_plane_length());
-    let [w, c] = fabric.stitch_m;
+    let [w, c] = fabric.stitch_m.to_array();
     stretch_course
         .iter()
         .zip(stretch_wale)
@@ -444,7 +444,7 @@ pub fn tension(
     terms: &ForceTerms,
     (course, wale): &Stretch,
 ) -> [Vec<f64>; 2] {
-    let membrane = fabric.membrane_n_per_m();
+    let membrane = fabric.membrane_n_per_m().to_array();
     // The fabric's membrane, whatever yarn a point lies on: the grid's yarns blended.
     let shares = knit.yarn_shares();
     let stiffness =
@@ -635,7 +635,7 @@ pub(crate) mod tests {
     fn fabric(stitch_m: [f64; 2]) -> Fabric {
         Fabric {
             needles: 400.0,
-            stitch_m,
+            stitch_m: stitch_m.into(),
             yarn_diameter_m: [yarn_diameter_m(20.0), yarn_diameter_m(40.0), 0.0],
             loop_stiffness_n_per_m: 5.0,
         }
@@ -1014,7 +1014,7 @@ pub(crate) mod tests {
         for wales in [60, 240] {
             let knit = cylinder(wales, 30, radius, 1.5);
             let [around, along] = tension(&knit, &real, &terms, &stretch(&knit));
-            let t = real.membrane_n_per_m()[0] * 0.5;
+            let t = real.membrane_n_per_m().course * 0.5;
             for (i, &ti) in around.iter().enumerate() {
                 assert!((ti - t).abs() < 1e-6 * t, "{wales}: point {i}: {ti} vs {t}");
             }

@@ -18,7 +18,7 @@
 
 use nalgebra::Point3;
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::base::Vec3;
 use crate::knit::tube::end_rings;
@@ -28,7 +28,8 @@ use crate::sim::contact::LegContact;
 use crate::sim::multilevel::prolong;
 
 /// What laying the real stitches did, for the report.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct LaidStitches {
     /// Real stitches around (wales) and along (courses).
     pub wales: usize,
@@ -146,7 +147,7 @@ mod tests {
             pattern: Pattern::Alternating,
             relaxed_circumference_m: 0.25,
             relaxed_length_m: 0.25,
-            stitch_m: [0.0005, 0.00074],
+            stitch_m: crate::base::PerDirection::new(0.0005, 0.00074),
         };
         // A fitted grid on the skin: every point at the offset on the cylinder.
         let offset = 25e-6;

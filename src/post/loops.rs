@@ -4,7 +4,7 @@
 //! **Loop.** Choi & Lo (2003), "An energy model of plain knitted fabric", *Textile Research
 //! Journal* 73(8), 739–748. A half loop, `t ∈ [0, 1]` from the sinker (`t = 0`) to the middle of
 //! the needle-loop head (`t = 1`), in a relaxed stitch of width `w` (between wales along the
-//! course, [`Fabric::stitch_m`]`[0]`) and height `c` (between courses, `[1]`), yarn diameter `d`:
+//! course, [`Fabric::stitch_m`]`.course`) and height `c` (between courses, `.wale`), yarn diameter `d`:
 //! `x = a t³ − 1.5 a t² + ½ (a + w) t`, `y = ½ (c + 2e)(1 − cos π t)`,
 //! `z = ½ (t_h − d)(1 − cos 2π t)`; the other half is its mirror `x → w − x`. The legs' `x`
 //! extremes lie at `β₁,₂ = ½ (1 ∓ √((a − 2w) / 3a))`, and the loops of two courses interlock
@@ -237,7 +237,7 @@ impl InPlaneLength {
 
 /// The relaxed loop of each yarn kind of `fabric`, in [`YarnKind::index`] order.
 pub fn loop_shapes(fabric: &Fabric) -> PerYarn<LoopShape> {
-    let [w, c] = fabric.stitch_m;
+    let [w, c] = fabric.stitch_m.to_array();
     fabric.yarn_diameter_m.map(|d| LoopShape::of(w, c, d))
 }
 
@@ -618,7 +618,7 @@ mod tests {
     fn fabric() -> Fabric {
         Fabric {
             needles: 400.0,
-            stitch_m: [W, C],
+            stitch_m: crate::base::PerDirection::new(W, C),
             yarn_diameter_m: [
                 yarn_diameter_m(20.0),
                 yarn_diameter_m(40.0),

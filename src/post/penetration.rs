@@ -31,7 +31,7 @@ use std::collections::HashMap;
 
 use nalgebra::{Matrix2, Point3, Vector2};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::base::{Segment, Vec3, YarnGeometry};
 use crate::leg::{Closest, Collider};
@@ -54,7 +54,8 @@ const ACROSS_REACH: f64 = 4.0;
 const MIN_ACROSS: f64 = 0.05;
 
 /// What the fix did, for the report.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PenetrationStats {
     /// Yarn segments looked at.
     pub segments: usize,

@@ -10,7 +10,7 @@
 //! it is the same fabric's at any grid size.
 
 use nalgebra::Vector3;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::knit::path::{PathPart, TubePath};
 use crate::knit::tube::{part_at, Centreline};
@@ -25,7 +25,7 @@ pub const KNEE_BAND_M: f64 = 0.05;
 pub const TOE_LENGTH_M: f64 = 0.05;
 
 /// A part of the leg.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Region {
     /// The last few centimetres of the foot.
@@ -58,7 +58,8 @@ impl Region {
 }
 
 /// The stretch of one region.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct RegionStretch {
     /// The region.
     pub region: Region,

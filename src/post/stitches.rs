@@ -11,7 +11,7 @@
 //! leaving its place: courses out of order along the stocking's centreline
 //! ([`bunched_courses`]), refused beyond [`MAX_BUNCHED_FRACTION`].
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::base::Direction;
 use crate::error::{Error, Result};
@@ -19,7 +19,8 @@ use crate::knit::tube::Centreline;
 use crate::knit::{Knit, PointId};
 
 /// Summary of the stitch shapes of a knit. Lengths in metres.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct StitchStats {
     /// Number of stitches (cells) measured.
     pub stitches: usize,
@@ -190,7 +191,8 @@ pub fn slack(knit: &Knit) -> Vec<f64> {
 }
 
 /// Where a fitted stocking is slack (see [`slack`]), for the report.
-#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct SlackDetails {
     /// Points slacker than [`SLACK_THRESHOLD`], as a fraction of all points.
     pub fraction_of_points: f64,

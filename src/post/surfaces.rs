@@ -430,7 +430,7 @@ mod tests {
         let d = crate::knit::nylon::yarn_diameter_m;
         let fabric = crate::knit::Fabric {
             needles: 400.0,
-            stitch_m: [0.0005, 0.00074],
+            stitch_m: crate::base::PerDirection::new(0.0005, 0.00074),
             yarn_diameter_m: [d(20.0), d(40.0), d(20.0)],
             loop_stiffness_n_per_m: 6.8,
         };

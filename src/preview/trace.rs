@@ -113,7 +113,8 @@ pub struct PreviewBuffers {
 }
 
 /// Counters and sizes of one render.
-#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct PreviewStats {
     /// Image size, pixels.
     pub width: u32,

@@ -16,8 +16,8 @@ use crate::preview::PreviewInput;
 use crate::preview::PreviewStats;
 use crate::report::{
     Bounds, ContactDetails, DensityRange, FieldRange, FitDetails, KnitDetails, LandmarkDetails,
-    LegDetails, MemoryDetails, Metrics, PerDirection, SolverDetails, StockingSurfaceDetails,
-    ToeBoxDetails, TubeDetails, YarnValues, YarnsDetails,
+    LegDetails, MemoryDetails, Metrics, SolverDetails, StockingSurfaceDetails, ToeBoxDetails,
+    TubeDetails, YarnValues, YarnsDetails,
 };
 use crate::scene::LoadedScene;
 use crate::sim::SolverSettings;
@@ -115,8 +115,6 @@ fn details(
             .collect()
     };
     let fabric = &settings.fabric;
-    // The grid's own rests: a graded grid's welt is a little longer than an even one's.
-    let [around, along] = fabric.stitches_per_cell(knit.grid_rest_m());
     let (min, max) = leg.bounds();
     FitDetails {
         leg: LegDetails {
@@ -136,17 +134,14 @@ fn details(
         tube: TubeDetails {
             wales: spec.grid.wales,
             courses: spec.grid.courses,
-            rest_course_spacing_m: knit.grid_rest_m()[0],
-            rest_wale_spacing_m: knit.grid_rest_m()[1],
+            rest_course_spacing_m: knit.grid_rest_m().course,
+            rest_wale_spacing_m: knit.grid_rest_m().wale,
             toe_tip_wale_spacing_m: knit
                 .is_graded()
                 .then(|| knit.course_interval(knit.courses - 2)),
             relaxed_length_m: spec.relaxed_length_m,
             relaxed_circumference_m: spec.relaxed_circumference_m,
-            stiffness_scale: PerDirection {
-                course: knit.stiffness_scale[0],
-                wale: knit.stiffness_scale[1],
-            },
+            stiffness_scale: knit.stiffness_scale,
             centreline_m: placement.centreline.length(),
             bottom: if knit.has_toe_seam() {
                 TubeBottom::Toe
@@ -198,20 +193,15 @@ fn details(
         stretch_by_region: measure::stretch_by_part(fit),
         knit: KnitDetails {
             needles: fabric.needles,
-            courses: spec.relaxed_length_m / fabric.stitch_m[1],
-            stitch_m: PerDirection {
-                course: fabric.stitch_m[0],
-                wale: fabric.stitch_m[1],
-            },
+            courses: spec.relaxed_length_m / fabric.stitch_m.wale,
+            stitch_m: fabric.stitch_m,
             yarn_diameter_um: YarnValues {
                 nylon: 1e6 * fabric.yarn_diameter_m[YarnKind::Nylon.index() as usize],
                 support: 1e6 * fabric.yarn_diameter_m[YarnKind::Support.index() as usize],
             },
             loop_stiffness_n_per_m: fabric.loop_stiffness_n_per_m,
-            stitches_per_cell: PerDirection {
-                course: around,
-                wale: along,
-            },
+            // The grid's own rests: a graded grid's welt is a little longer than an even one's.
+            stitches_per_cell: fabric.stitches_per_cell(knit.grid_rest_m()),
         },
         coverage: FieldRange::of(&on_covered(&leg_fields.coverage)),
         pressure_mmhg: FieldRange::of(&on_covered(&leg_fields.pressure)),

@@ -140,7 +140,8 @@ impl FutilityWatch {
 
 /// Where a level stopped short of balance (as futile, or at its iteration cap): the courses
 /// still out of balance and the worst point.
-#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct OutOfBalance {
     /// Lowest and highest course (0 = the first knitted: a stocking's top, an open tube's bottom
     /// end) whose force step is above the tolerance; the worst point's alone where none is.
@@ -241,7 +242,8 @@ impl Met {
 }
 
 /// What the iteration on one grid did.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct LevelStats {
     /// Points around the grid.
     pub wales: usize,

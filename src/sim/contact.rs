@@ -66,7 +66,8 @@ struct PointContact {
 }
 
 /// Counters for the report.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct ContactCounters {
     /// Exact closest-point queries made.
     pub closest_queries: u64,

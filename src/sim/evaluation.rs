@@ -564,7 +564,7 @@ impl RowSprings<'_> {
 /// spring.
 pub(crate) fn rest_force_floor(knit: &Knit, terms: &ForceTerms) -> f64 {
     let min = |values: &[f64]| values.iter().copied().fold(f64::INFINITY, f64::min);
-    let softest = min(&terms.stiffness) * min(&knit.stiffness_scale);
+    let softest = min(&terms.stiffness) * min(&knit.stiffness_scale.to_array());
     REST_STRAIN * softest * shortest_rest(knit)
 }
 

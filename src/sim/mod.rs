@@ -53,7 +53,7 @@ impl ForceTerms {
             YarnKind::Seam => 1.0 / knit.toe_seam_steps(),
             _ => 1.0,
         };
-        stiffness * knit.stiffness_scale[direction.index()] * seam
+        stiffness * knit.stiffness_scale[direction] * seam
     }
 
     /// The stiffness of yarns mixed in `shares` along `direction`: courses lie side by side, so
@@ -115,6 +115,7 @@ impl RelaxObserver for () {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::base::PerDirection;
     use crate::knit::pattern::{Pattern, Tile};
 
     #[test]
@@ -133,7 +134,7 @@ mod tests {
             |w, c| Vec3::new(w as f64, c as f64, 0.0),
         )
         .with_course_intervals(&intervals)
-        .with_stitch_shape(1.0, 1.0);
+        .with_stitch_shape(PerDirection::new(1.0, 1.0));
         let terms = ForceTerms {
             stiffness: [1.0, 10.0, 10.0],
             connection_factor: None,
@@ -195,7 +196,7 @@ mod tests {
                 1.0,
                 |w, c| Vec3::new(w as f64, c as f64, 0.0),
             )
-            .with_stitch_shape(1.0, 1.0)
+            .with_stitch_shape(PerDirection::new(1.0, 1.0))
         };
         let knit = tube().with_toe_seam(0.2);
         assert!((knit.toe_seam_steps() - 0.2).abs() < 1e-12);

@@ -66,7 +66,7 @@ fn course_places(knit: &Knit, courses: usize) -> Vec<f64> {
 }
 
 /// Where on the stocking a level's courses stopped out of balance, in words.
-struct Whereabouts {
+struct PlaceInWords {
     /// The courses, and how far along the stocking they lie: "courses 140–148 of 150 (70–75 cm
     /// down the stocking from its top)".
     courses: String,
@@ -79,7 +79,7 @@ struct Whereabouts {
     at_foot: bool,
 }
 
-impl Whereabouts {
+impl PlaceInWords {
     /// Where the courses of `at` lie on a stocking along `axis` and `centreline`, named by
     /// `landmarks`, a level's courses lying at `places` along its fabric.
     fn of(
@@ -88,7 +88,7 @@ impl Whereabouts {
         landmarks: Option<&Landmarks>,
         places: &[f64],
         at: &OutOfBalance,
-    ) -> Whereabouts {
+    ) -> PlaceInWords {
         let courses = places.len();
         let total = places.last().copied().filter(|&p| p > 0.0).unwrap_or(1.0);
         let place = |c: usize| places.get(c).copied().unwrap_or(total);
@@ -111,7 +111,7 @@ impl Whereabouts {
             }
         );
         let Some(l) = landmarks else {
-            return Whereabouts {
+            return PlaceInWords {
                 courses: along,
                 worst: String::new(),
                 to_the_toe,
@@ -134,7 +134,7 @@ impl Whereabouts {
                 d(a.1).total_cmp(&d(b.1))
             })
             .expect("four landmarks");
-        Whereabouts {
+        PlaceInWords {
             courses: along,
             worst: format!(
                 ", worst {:.0} cm above the sole, at {name}",
@@ -151,7 +151,7 @@ impl Whereabouts {
 /// was within it (only those courses had not settled); or the grid as a whole, where no point
 /// was above it and only the residual was.
 fn unsettled_words(
-    at: &Whereabouts,
+    at: &PlaceInWords,
     unsettled: &OutOfBalance,
     level: &LevelStats,
     tolerance: f64,
@@ -186,7 +186,7 @@ impl StockingOnLeg<'_> {
     ) -> String {
         let named = self.named_landmarks();
         let places = course_places(knit, level.courses);
-        let at = Whereabouts::of(
+        let at = PlaceInWords::of(
             self.axis,
             self.centreline,
             named.as_deref(),
@@ -209,7 +209,7 @@ impl StockingOnLeg<'_> {
         let named = self.named_landmarks();
         let landmarks = named.as_deref();
         let stall = level.stall.expect("a stalled level says where");
-        let at = Whereabouts::of(axis, self.centreline, landmarks, places, &stall);
+        let at = PlaceInWords::of(axis, self.centreline, landmarks, places, &stall);
         let place = format!("{} are out of balance{}", at.courses, at.worst);
         let (to_the_toe, at_foot) = (at.to_the_toe, at.at_foot);
         let circumference = self.circumference_m;
@@ -289,7 +289,7 @@ mod tests {
             worst_point: [0.0, 0.9, 0.0],
             worst_force_step: 0.1,
         };
-        let words = Whereabouts::of(&axis, &Centreline::straight(&axis), None, &places, &at);
+        let words = PlaceInWords::of(&axis, &Centreline::straight(&axis), None, &places, &at);
         assert_eq!(
             words.courses,
             "courses 5–7 of 8 (90–100 cm up the stocking from its bottom end)"
@@ -298,7 +298,7 @@ mod tests {
 
     #[test]
     fn a_grid_out_of_steps_says_which_courses_had_not_settled_and_whether_the_residual_did() {
-        let at = Whereabouts {
+        let at = PlaceInWords {
             courses: "courses 297–299 of 300 (73–74 cm down the stocking from its top)".into(),
             worst: ", worst 1 cm above the sole, at the foot".into(),
             to_the_toe: true,

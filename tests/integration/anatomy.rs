@@ -10,13 +10,15 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use knitfit::leg::{Collider, ContactMethod, Leg, Units, UpAxis, UpChoice};
+use knitfit::knit::TubeBottom;
+use knitfit::leg::{Collider, ContactMethod, Leg, Side, ThighTopKind, Units, UpAxis, UpChoice};
+use knitfit::report::{FitDetails, LandmarkDetails, LandmarkRing, LegDetails, Report};
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, Unit, Vector3};
 use serde_json::{json, Value};
 
 use crate::support::{
-    float, knitfit, load_sample, point, read_glb_meshes, read_ply, report, run_scene, sample,
-    sample_legs, scene_for, stderr, write_raw_meshes, RawMesh,
+    float, knitfit, load_sample, point, read_fit_report, read_glb_meshes, read_ply, run_scene,
+    sample, sample_legs, scene_for, stderr, write_raw_meshes, RawMesh,
 };
 
 /// The tube of every fit here: small, as the figures compared do not need more.
@@ -27,7 +29,7 @@ const RESOLUTION: &str = "60x60";
 
 /// What a fit wrote that the tests compare.
 struct Fit {
-    report: Value,
+    report: Report<FitDetails>,
     /// Stitch density (per cm²) of each leg.ply vertex, by the vertex's position (the bits of
     /// its 32-bit coordinates, world space): what lets two fits of differently stored meshes be
     /// compared vertex by vertex.
@@ -37,18 +39,18 @@ struct Fit {
 }
 
 impl Fit {
-    fn landmarks(&self) -> &Value {
-        &self.report["details"]["leg"]["landmarks"]
+    fn landmarks(&self) -> &LandmarkDetails {
+        self.report.details.leg.landmarks.as_ref().unwrap()
     }
 
     /// Height above the sole of the landmark ring `name` (`ankle`, `thigh_top`), metres.
     fn height_m(&self, name: &str) -> f64 {
-        self.landmarks()[name]["height_m"].as_f64().unwrap()
+        ring(self.landmarks(), name).height_m
     }
 
     /// World y of the centre of the landmark ring `name`, metres.
     fn ring_y(&self, name: &str) -> f64 {
-        self.landmarks()[name]["centre"]["m"][1].as_f64().unwrap()
+        ring(self.landmarks(), name).centre.m[1]
     }
 
     /// Mean stitch density of the leg vertices the yarn covers, per cm².
@@ -65,15 +67,15 @@ impl Fit {
 
     /// The axis's bottom and top, world space.
     fn axis_world(&self) -> [Point3<f64>; 2] {
-        let axis = &self.report["details"]["axis"];
-        ["bottom", "top"].map(|k| vec3(&axis[k]).into())
+        let axis = &self.report.details.axis;
+        [axis.bottom(), axis.top()]
     }
 
     /// The axis's bottom and top in the leg file's coordinates (the fits here read metres).
     fn axis_file(&self) -> [Point3<f64>; 2] {
-        let leg = &self.report["details"]["leg"];
-        assert_eq!(leg["units"], "m");
-        let up: UpAxis = serde_json::from_value(leg["up_axis"].clone()).unwrap();
+        let leg = &self.report.details.leg;
+        assert_eq!(leg.units, Units::Metres);
+        let up = leg.up_axis;
         // world_from_file turns by quarter turns; its transpose turns back.
         let world_from_file = Matrix3::from_columns(&[0, 1, 2].map(|k| {
             let e = Point3::from(Vector3::ith(k, 1.0));
@@ -84,8 +86,14 @@ impl Fit {
     }
 }
 
-fn vec3(v: &Value) -> Vector3<f64> {
-    Vector3::from(std::array::from_fn(|i| v[i].as_f64().unwrap()))
+/// The landmark ring `name` (`ankle`, `knee`, `thigh_top`).
+fn ring<'a>(landmarks: &'a LandmarkDetails, name: &str) -> &'a LandmarkRing {
+    match name {
+        "ankle" => &landmarks.ankle,
+        "knee" => &landmarks.knee,
+        "thigh_top" => &landmarks.thigh_top,
+        _ => panic!("no landmark ring {name:?}"),
+    }
 }
 
 /// Fits the leg file `leg` with `leg_extra` merged into the scene's `leg`, and checks what
@@ -97,15 +105,15 @@ fn fit_checked(name: &str, leg: &Path, leg_extra: Value) -> Fit {
     let (dir, out) = run_scene(&scene_for(leg, leg_extra, ankle), RESOLUTION, &[]);
     assert!(out.status.success(), "{name}: {}", stderr(&out));
     let out_dir = dir.path().join("out");
-    let report = report(&out_dir);
-    let m = &report["metrics"];
-    assert_eq!(m["converged"], true, "{name}: {m}");
-    assert_eq!(m["max_penetration_m"], 0.0, "{name}: {m}");
+    let report = read_fit_report(&out_dir);
+    let m = &report.metrics;
+    assert!(m.converged, "{name}: {m:?}");
+    assert_eq!(m.max_penetration_m, Some(0.0), "{name}: {m:?}");
     // An open tube rests on the skin itself, toes or not.
-    let toe_box = &report["details"]["tube"]["toe_box"];
+    let toe_box = &report.details.tube.toe_box;
     assert!(
-        toe_box.is_null(),
-        "{name}: an open tube with a toe box {toe_box}"
+        toe_box.is_none(),
+        "{name}: an open tube with a toe box {toe_box:?}"
     );
     let bits = |v: &ply_rs_bw::ply::DefaultElement| {
         ["x", "y", "z"].map(|k| (float(v, k) as f32).to_bits())
@@ -181,13 +189,9 @@ struct Places {
 impl Places {
     fn of(clean: &Fit) -> Places {
         let l = clean.landmarks();
-        let up = vec3(&l["up"]);
-        let foot = if l["foot_direction"].is_null() {
-            Vector3::z()
-        } else {
-            vec3(&l["foot_direction"])
-        };
-        let centre = |k: &str| Point3::from(vec3(&l[k]["centre"]["file"]));
+        let up = Vector3::from(l.up);
+        let foot = l.foot_direction.map_or(Vector3::z(), Vector3::from);
+        let centre = |k: &str| Point3::from(ring(l, k).centre.file);
         Places {
             up,
             forward: (foot - up * foot.dot(&up)).normalize(),
@@ -349,44 +353,53 @@ impl Damage {
 
     /// Checks that cleaning saw the damage (`got`'s report against the clean fit's).
     fn check_cleaned(self, name: &str, clean: &Fit, got: &Fit, done: &Done, raw: &[RawMesh]) {
-        let count = |fit: &Fit, key: &str| {
-            let leg = &fit.report["details"]["leg"];
-            leg["cleaned"]
-                .get(key)
-                .unwrap_or(&leg[key])
-                .as_u64()
-                .unwrap() as usize
-        };
-        let added = |key: &str| count(got, key) - count(clean, key);
+        let count = |fit: &Fit, key: fn(&LegDetails) -> usize| key(&fit.report.details.leg);
+        let added = |key: fn(&LegDetails) -> usize| count(got, key) - count(clean, key);
         match self {
             Damage::RepeatedFaces => {
-                assert_eq!(added("duplicate_triangles"), done.faces, "{name}");
-                assert_eq!(added("merged_vertices"), done.vertices, "{name}");
+                assert_eq!(
+                    added(|l| l.cleaned.duplicate_triangles),
+                    done.faces,
+                    "{name}"
+                );
+                assert_eq!(
+                    added(|l| l.cleaned.merged_vertices),
+                    done.vertices,
+                    "{name}"
+                );
             }
             Damage::ZeroAreaFaces => {
-                assert_eq!(added("degenerate_triangles"), done.faces, "{name}")
+                assert_eq!(
+                    added(|l| l.cleaned.degenerate_triangles),
+                    done.faces,
+                    "{name}"
+                )
             }
             Damage::Unwelded => {
                 let raw_vertices: usize = raw.iter().map(|m| m.positions.len()).sum();
                 assert!(
-                    count(got, "merged_vertices") >= done.vertices - raw_vertices,
+                    count(got, |l| l.cleaned.merged_vertices) >= done.vertices - raw_vertices,
                     "{name}"
                 );
             }
             Damage::MixedWinding => {
-                let flipped = added("reoriented_triangles");
+                let flipped = added(|l| l.reoriented_triangles);
                 assert!(
                     (done.skin_faces..=done.faces).contains(&flipped),
                     "{name}: {flipped} rewound of {done:?}"
                 );
             }
             Damage::Debris => {
-                assert_eq!(added("debris_pieces"), done.vertices / 8, "{name}");
-                assert_eq!(added("debris_triangles"), done.faces, "{name}");
+                assert_eq!(
+                    added(|l| l.cleaned.debris_pieces),
+                    done.vertices / 8,
+                    "{name}"
+                );
+                assert_eq!(added(|l| l.cleaned.debris_triangles), done.faces, "{name}");
             }
             Damage::TJunctions => {
                 // Each face across a split is split too, at the same midpoint, which stays.
-                assert_eq!(added("split_triangles"), done.faces, "{name}");
+                assert_eq!(added(|l| l.cleaned.split_triangles), done.faces, "{name}");
                 assert_eq!(
                     got.density.len() - clean.density.len(),
                     done.vertices,
@@ -564,7 +577,7 @@ fn every_kind_of_export_damage_to_every_sample_fits_like_the_clean_file() {
         let sample = file_name(&path);
         let clean = fit_checked(&sample, &path, json!({}));
         // The samples are Y-up files: their file coordinates are world coordinates.
-        assert_eq!(clean.report["details"]["leg"]["up_axis"], "+y", "{sample}");
+        assert_eq!(clean.report.details.leg.up_axis, UpAxis::PosY, "{sample}");
         let raw = read_glb_meshes(&path);
         let places = Places::of(&clean);
         let gaps = check_debris_places(
@@ -608,7 +621,7 @@ fn every_kind_of_export_damage_to_every_sample_fits_like_the_clean_file() {
 // 2. Orientation and place.
 
 /// The rigid motions a file may be in, from the sample's own (upright, Y-up) coordinates.
-fn motions() -> [(&'static str, Isometry3<f64>, Option<&'static str>); 3] {
+fn motions() -> [(&'static str, Isometry3<f64>, Option<UpAxis>); 3] {
     // +Y onto +Z exactly: a quarter turn about X, written out.
     let z_up = Rotation3::from_matrix_unchecked(Matrix3::new(
         1.0, 0.0, 0.0, //
@@ -623,7 +636,7 @@ fn motions() -> [(&'static str, Isometry3<f64>, Option<&'static str>); 3] {
         (
             "Z up",
             Isometry3::from_parts(Translation3::identity(), z_up.into()),
-            Some("+z"),
+            Some(UpAxis::PosZ),
         ),
         (
             "turned 35° about (1, 2, 3)",
@@ -652,10 +665,10 @@ fn every_sample_turned_or_moved_fits_as_upright_up_to_the_motion() {
                 .collect();
             let file = write_raw_meshes(dir.path(), "moved.glb", &moved);
             let got = fit_checked(&name, &file, json!({}));
-            let leg = &got.report["details"]["leg"];
-            assert_eq!(leg["up_axis_found"], true, "{name}");
+            let leg = &got.report.details.leg;
+            assert!(leg.up_axis_found, "{name}");
             if let Some(up) = up_axis {
-                assert_eq!(leg["up_axis"], up, "{name}");
+                assert_eq!(leg.up_axis, up, "{name}");
             }
             // The axis, taken back to the upright file.
             let axis_off = got
@@ -727,8 +740,8 @@ fn a_body_turned_in_its_file_is_pictured_from_its_own_front() {
         let (run, out) = run_scene(&scene_for(leg, json!({}), top), RESOLUTION, &[]);
         assert!(out.status.success(), "{}", stderr(&out));
         let out_dir = run.path().join("out");
-        let facing = &report(&out_dir)["details"]["leg"]["landmarks"]["facing"];
-        let facing = Vector3::from_fn(|k, _| facing[k].as_f64().unwrap());
+        let r = read_fit_report(&out_dir);
+        let facing = Vector3::from(r.details.leg.landmarks.unwrap().facing.unwrap());
         let open = |name: &str| image::open(out_dir.join(name)).unwrap().to_rgb8();
         let rendered = knitfit(
             run.path(),
@@ -814,23 +827,23 @@ fn of_both_legs_the_left_is_dressed_unless_the_scene_says_right_and_the_other_st
             let name = format!("{sample}, {side}");
             let got = fit_checked(&name, &path, leg_extra);
             let l = got.landmarks();
-            assert_eq!(l["side"], side, "{name}");
-            assert_eq!(l["legs_found"], 2, "{name}");
-            assert_eq!(l["thigh_top_kind"], "crotch", "{name}");
+            assert_eq!(l.side.map(Side::name), Some(side), "{name}");
+            assert_eq!(l.legs_found, 2, "{name}");
+            assert_eq!(l.thigh_top_kind, ThighTopKind::Crotch, "{name}");
             for end in got.axis_world() {
                 assert!(sign * end.x > 0.0, "{name}: axis end {end}");
             }
             // Every landmark is on the leg dressed: the sole and toe on its own foot too.
             let points = [
-                &l["sole"],
-                &l["toe_tip"],
-                &l["ankle"]["centre"],
-                &l["knee"]["centre"],
-                &l["thigh_top"]["centre"],
+                Some(&l.sole),
+                l.toe_tip.as_ref(),
+                Some(&l.ankle.centre),
+                Some(&l.knee.centre),
+                Some(&l.thigh_top.centre),
             ];
-            for p in points.iter().filter(|p| !p.is_null()) {
-                let x = p["m"][0].as_f64().unwrap();
-                assert!(sign * x > 0.0, "{name}: landmark at {}", p["m"]);
+            for p in points.into_iter().flatten() {
+                let x = p.m[0];
+                assert!(sign * x > 0.0, "{name}: landmark at {:?}", p.m);
             }
             // The other leg: the skin on the other side of x = 0, below the crotch.
             let crotch_y = got.ring_y("thigh_top");
@@ -894,8 +907,8 @@ fn ankle_and_thigh_top_are_within_a_centimetre_of_hand_picked_ones() {
         let (ankle, thigh_top) = (got.ring_y("ankle"), got.ring_y("thigh_top"));
         println!(
             "{sample}: ankle y {ankle:.4} m (hand-picked {ankle_y}), thigh top y {thigh_top:.4} \
-             m (hand-picked {thigh_top_y}, {})",
-            got.landmarks()["thigh_top_kind"]
+             m (hand-picked {thigh_top_y}, {:?})",
+            got.landmarks().thigh_top_kind
         );
         assert!(
             (ankle - ankle_y).abs() <= LANDMARK_TOLERANCE_M,
@@ -954,19 +967,14 @@ fn a_t_posed_figure_is_stood_up_by_its_legs_not_its_arm_span() {
     let scene = scene_for(&path, json!({}), json!({ "tube": { "bottom": "ankle" } }));
     let (run, out) = run_scene(&scene, RESOLUTION, &[]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let r = report(&run.path().join("out"));
-    let landmarks = &r["details"]["leg"]["landmarks"];
-    let up: Vec<f64> = (0..3)
-        .map(|k| landmarks["up"][k].as_f64().unwrap())
-        .collect();
+    let r = read_fit_report(&run.path().join("out"));
+    let landmarks = r.details.leg.landmarks.as_ref().unwrap();
+    let up = landmarks.up;
     assert!(up[1] > 0.99, "up {up:?}");
-    assert_eq!(landmarks["legs_found"], 2);
-    assert_eq!(r["metrics"]["converged"], true);
-    assert_eq!(r["metrics"]["max_penetration_m"], 0.0);
-    assert!(
-        r["details"]["axis"]["bottom"][0].as_f64().unwrap() > 0.0,
-        "the left leg"
-    );
+    assert_eq!(landmarks.legs_found, 2);
+    assert!(r.metrics.converged);
+    assert_eq!(r.metrics.max_penetration_m, Some(0.0));
+    assert!(r.details.axis.bottom[0] > 0.0, "the left leg");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1014,19 +1022,20 @@ fn a_body_on_one_foot_is_dressed_up_to_its_crotch_not_its_head() {
         let scene = scene_for(&path, json!({}), json!({ "tube": { "bottom": "ankle" } }));
         let (run, out) = run_scene(&scene, RESOLUTION, &[]);
         assert!(out.status.success(), "lift {lift}: {}", stderr(&out));
-        let r = report(&run.path().join("out"));
-        let landmarks = &r["details"]["leg"]["landmarks"];
-        assert_eq!(landmarks["legs_found"], legs, "lift {lift}");
-        assert_eq!(landmarks["thigh_top_kind"], "crotch", "lift {lift}");
-        let top = landmarks["thigh_top"]["centre"]["m"][1].as_f64().unwrap();
+        let r = read_fit_report(&run.path().join("out"));
+        let landmarks = r.details.leg.landmarks.as_ref().unwrap();
+        assert_eq!(landmarks.legs_found, legs, "lift {lift}");
+        assert_eq!(
+            landmarks.thigh_top_kind,
+            ThighTopKind::Crotch,
+            "lift {lift}"
+        );
+        let top = landmarks.thigh_top.centre.m[1];
         assert!(
             (top - crotch).abs() < 0.03,
             "lift {lift}: thigh top {top} vs {crotch}"
         );
-        assert!(
-            r["details"]["axis"]["bottom"][0].as_f64().unwrap() > 0.0,
-            "the left leg"
-        );
+        assert!(r.details.axis.bottom[0] > 0.0, "the left leg");
     }
 }
 
@@ -1058,17 +1067,18 @@ fn a_messy_whole_body_export_gets_the_same_whole_stocking_as_the_clean_file() {
         let scene = scene_for(leg, json!({ "units": units }), json!({}));
         let (dir, out) = run_scene(&scene, "100x100", &[]);
         assert!(out.status.success(), "{}: {}", leg.display(), stderr(&out));
-        let r = report(&dir.path().join("out"));
-        let m = &r["metrics"];
-        assert_eq!(m["converged"], true, "{}: {m}", leg.display());
-        assert_eq!(m["max_penetration_m"], 0.0, "{}: {m}", leg.display());
-        assert_eq!(r["details"]["tube"]["bottom"], "toe", "{}", leg.display());
+        let r = read_fit_report(&dir.path().join("out"));
+        let m = &r.metrics;
+        assert!(m.converged, "{}: {m:?}", leg.display());
+        assert_eq!(m.max_penetration_m, Some(0.0), "{}: {m:?}", leg.display());
+        assert_eq!(r.details.tube.bottom, TubeBottom::Toe, "{}", leg.display());
         let yarn: Vec<Point3<f64>> = read_ply(&dir.path().join("out").join("stocking.ply")).payload
             ["vertex"]
             .iter()
             .map(point)
             .collect();
-        let tip = Point3::from(vec3(&r["details"]["leg"]["landmarks"]["toe_tip"]["m"]));
+        let landmarks = r.details.leg.landmarks.as_ref().unwrap();
+        let tip = Point3::from(landmarks.toe_tip.as_ref().unwrap().m);
         let toe_gap = yarn
             .iter()
             .map(|p| (p - tip).norm())
@@ -1077,12 +1087,8 @@ fn a_messy_whole_body_export_gets_the_same_whole_stocking_as_the_clean_file() {
     };
     let (clean, clean_gap) = whole(&path, "m");
     let (got, gap) = whole(&messy, "cm");
-    let length = |r: &Value| r["details"]["tube"]["centreline_m"].as_f64().unwrap();
-    let density = |r: &Value| {
-        r["details"]["stitch_density_per_cm2"]["max"]
-            .as_f64()
-            .unwrap()
-    };
+    let length = |r: &Report<FitDetails>| r.details.tube.centreline_m;
+    let density = |r: &Report<FitDetails>| r.details.stitch_density_per_cm2.max;
     println!(
         "messy body: toe gap {:.1} mm (clean {:.1}), centreline {:.4} m (clean {:.4}), \
          densest {:.2} per cm² (clean {:.2})",
@@ -1093,7 +1099,7 @@ fn a_messy_whole_body_export_gets_the_same_whole_stocking_as_the_clean_file() {
         density(&got),
         density(&clean)
     );
-    assert_eq!(got["details"]["leg"]["up_axis"], "+z");
+    assert_eq!(got.details.leg.up_axis, UpAxis::PosZ);
     assert!(
         gap < 0.005,
         "the messy stocking stops {gap} m short of the toe"

@@ -2,8 +2,13 @@
 
 use std::path::Path;
 
+use knitfit::leg::{Side, Units, UpAxis};
+use knitfit::report::SolverDetails;
+use knitfit::scene::Effect;
+
 use crate::support::{
-    files_in, knitfit, knitfit_env, procedural_leg, report, stage_names, stderr, stdout, write,
+    files_in, knitfit, knitfit_env, procedural_leg, read_fit_report, read_patch_report,
+    stage_names, stderr, stdout, write,
 };
 
 #[test]
@@ -194,11 +199,11 @@ fn report_has_the_agreed_fields_and_stages_in_order() {
     );
     assert!(out.status.success(), "{}", stderr(&out));
     assert!(stdout(&out).is_empty(), "-q prints nothing");
-    let r = report(&dir.path().join("o"));
-    assert_eq!(r["command"], "patch");
+    let r = read_patch_report(&dir.path().join("o"));
+    assert_eq!(r.command, "patch");
     assert_eq!(
-        r["effects"],
-        serde_json::json!(["yarn_connection", "alternating_yarns"])
+        r.effects,
+        [Effect::YarnConnection, Effect::AlternatingYarns]
     );
     let stages = stage_names(&r);
     assert_eq!(
@@ -213,20 +218,16 @@ fn report_has_the_agreed_fields_and_stages_in_order() {
             "write files"
         ]
     );
-    assert!(r["stages"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .all(|s| s["seconds"].as_f64().unwrap() >= 0.0));
-    assert_eq!(r["metrics"]["points"], 48);
-    assert_eq!(r["metrics"]["converged"], true);
-    assert!(r["metrics"]["residual"].as_f64().unwrap() < 1e-3);
-    assert!(r["metrics"]["steps"].as_u64().unwrap() > 0);
+    assert!(r.stages.iter().all(|s| s.seconds >= 0.0));
+    assert_eq!(r.metrics.points, 48);
+    assert!(r.metrics.converged);
+    assert!(r.metrics.residual < 1e-3);
+    assert!(r.metrics.steps > 0);
     assert_eq!(
-        r["outputs"],
-        serde_json::json!(["patch.ply", "patch.glb", "patch.png", "report.json"])
+        r.outputs,
+        ["patch.ply", "patch.glb", "patch.png", "report.json"]
     );
-    assert!(r["wall_seconds"].as_f64().unwrap() > 0.0);
+    assert!(r.wall_seconds > 0.0);
 }
 
 #[test]
@@ -246,14 +247,19 @@ fn only_the_outputs_and_effects_the_scene_names_run() {
         files_in(&dir.path().join("o")),
         ["patch.glb", "report.json"]
     );
-    let r = report(&dir.path().join("o"));
-    assert_eq!(r["effects"], serde_json::json!(["alternating_yarns"]));
-    let stages = r["stages"].to_string();
+    let r = read_patch_report(&dir.path().join("o"));
+    assert_eq!(r.effects, [Effect::AlternatingYarns]);
+    // Each stage's name and reason.
+    let stages: String = r
+        .stages
+        .iter()
+        .map(|s| format!("{} {}\n", s.name, s.why))
+        .collect();
     assert!(
         !stages.contains("ply") && !stages.contains("png"),
         "{stages}"
     );
-    assert!(r["details"].get("anisotropy").is_some());
+    assert!(r.details.anisotropy.is_some());
 }
 
 #[test]
@@ -290,7 +296,7 @@ fn outputs_are_byte_identical_across_runs_and_thread_counts() {
             "{file}: run to run"
         );
     }
-    assert_eq!(report(&dir.path().join("a"))["metrics"]["converged"], false);
+    assert!(!read_patch_report(&dir.path().join("a")).metrics.converged);
 }
 
 /// Runs knitfit expecting a one-line error with exit code 2 (bad input) and no output.
@@ -372,19 +378,12 @@ fn units_up_axis_and_side_flags_reach_the_fit() {
             "ankle",
         ],
     );
-    let l = &r["details"]["leg"];
-    assert_eq!(
-        (l["units"].as_str(), l["up_axis"].as_str()),
-        (Some("m"), Some("+y"))
-    );
-    assert_eq!(l["up_axis_found"], false);
-    assert_eq!(l["landmarks"]["side"], "right");
+    let l = &r.details.leg;
+    assert_eq!((l.units, l.up_axis), (Units::Metres, UpAxis::PosY));
+    assert!(!l.up_axis_found);
+    assert_eq!(l.landmarks.as_ref().unwrap().side, Some(Side::Right));
     // The character's right is -X (glTF characters face +Z, their left on +X).
-    assert!(
-        r["details"]["axis"]["bottom"][0].as_f64().unwrap() < 0.0,
-        "{}",
-        r["details"]["axis"]
-    );
+    assert!(r.details.axis.bottom[0] < 0.0, "{:?}", r.details.axis);
 }
 
 #[test]
@@ -659,19 +658,23 @@ fn a_fit_out_of_steps_is_written_and_says_where_it_had_not_settled() {
         text.contains("up the stocking from its bottom end"),
         "{text}"
     );
-    let r = report(&dir.path().join("out"));
-    assert_eq!(r["metrics"]["converged"], false);
-    let place = r["details"]["solver"]["unsettled_at"].as_str().unwrap();
+    let r = read_fit_report(&dir.path().join("out"));
+    assert!(!r.metrics.converged);
+    let SolverDetails::Multilevel {
+        unsettled_at,
+        levels,
+        ..
+    } = &r.details.solver
+    else {
+        panic!("{:?}", r.details.solver)
+    };
+    let place = unsettled_at.as_deref().unwrap();
     assert!(
         place.starts_with("course") && text.contains(place),
         "{place}"
     );
     assert!(place.contains("cm above the sole, at "), "{place}");
-    let fine = r["details"]["solver"]["levels"]
-        .as_array()
-        .unwrap()
-        .last()
-        .unwrap();
-    assert!(fine["unsettled"]["worst_force_step"].as_f64().unwrap() > 1e-3);
+    let fine = levels.last().unwrap();
+    assert!(fine.unsettled.unwrap().worst_force_step > 1e-3);
     assert!(dir.path().join("out/stocking.ply").exists());
 }

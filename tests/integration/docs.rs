@@ -171,6 +171,29 @@ fn architecture_names_every_source_file_and_only_files_that_exist() {
 }
 
 #[test]
+fn the_glossary_is_short_and_names_the_words_the_code_uses() {
+    let architecture = read(&root().join("ARCHITECTURE.md"));
+    let glossary = architecture
+        .split("## Words the code uses")
+        .nth(1)
+        .and_then(|rest| rest.split("\n## ").next())
+        .expect("ARCHITECTURE.md has a glossary");
+    let lines = glossary.lines().filter(|l| !l.trim().is_empty()).count();
+    assert!(lines <= 25, "the glossary has {lines} lines");
+    for word in [
+        "real count",
+        "level",
+        "settled",
+        "stall",
+        "polish",
+        "pressed",
+        "slack",
+    ] {
+        assert!(glossary.contains(word), "the glossary leaves out {word:?}");
+    }
+}
+
+#[test]
 fn every_module_doc_fits_on_a_screen() {
     for file in rust_files(&root().join("src")) {
         let text = read(&file);

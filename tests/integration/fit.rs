@@ -3,13 +3,16 @@
 
 use std::path::{Path, PathBuf};
 
-use knitfit::leg::{load_leg, read_leg_file, Collider, ContactMethod, Units, UpAxis, UpChoice};
+use knitfit::leg::{
+    load_leg, read_leg_file, AxisSource, Collider, ContactMethod, Units, UpAxis, UpChoice,
+};
+use knitfit::scene::Effect;
 use nalgebra::Point3;
 use ply_rs_bw::ply::Encoding;
 
 use crate::support::{
     base64, edited_sample, files_in, fit, float, knitfit, leg_as_ply, load_sample, point,
-    procedural_leg, read_ply, report, sample_legs, stderr, write_tube_leg, OPEN_TUBE,
+    procedural_leg, read_fit_report, read_ply, sample_legs, stderr, write_tube_leg, OPEN_TUBE,
 };
 
 #[test]
@@ -18,18 +21,18 @@ fn every_sample_leg_fits_without_penetration_between_the_axis_points() {
         let (dir, r) = fit(&leg_path, "60x60", OPEN_TUBE);
         let out = dir.path().join("out");
         let name = leg_path.display();
-        assert_eq!(r["metrics"]["converged"], true, "{name}");
-        assert!(r["metrics"]["residual"].as_f64().unwrap() < 1e-3, "{name}");
-        assert_eq!(r["metrics"]["points"], 3600);
-        assert_eq!(r["metrics"]["max_penetration_m"], 0.0, "{name}");
+        assert!(r.metrics.converged, "{name}");
+        assert!(r.metrics.residual < 1e-3, "{name}");
+        assert_eq!(r.metrics.points, 3600);
+        assert_eq!(r.metrics.max_penetration_m, Some(0.0), "{name}");
         assert_eq!(
-            r["effects"],
-            serde_json::json!([
-                "yarn_connection",
-                "alternating_yarns",
-                "contact",
-                "penetration_fix"
-            ])
+            r.effects,
+            [
+                Effect::YarnConnection,
+                Effect::AlternatingYarns,
+                Effect::Contact,
+                Effect::PenetrationFix
+            ]
         );
 
         // Independently of the report: every yarn point from the PLY, against the exact leg.
@@ -37,9 +40,7 @@ fn every_sample_leg_fits_without_penetration_between_the_axis_points() {
         let collider = Collider::new(&leg, ContactMethod::Bvh).unwrap();
         let yarns = read_ply(&out.join("stocking.ply"));
         let points: Vec<Point3<f64>> = yarns.payload["vertex"].iter().map(point).collect();
-        let inserted = r["details"]["penetration_fix"]["points_inserted"]
-            .as_u64()
-            .unwrap() as usize;
+        let inserted = r.details.penetration_fix.unwrap().points_inserted;
         assert_eq!(points.len(), 3600 + inserted);
         let deepest = points
             .iter()
@@ -52,13 +53,7 @@ fn every_sample_leg_fits_without_penetration_between_the_axis_points() {
         );
 
         // The tube stays between the two axis points.
-        let axis = &r["details"]["axis"];
-        let v = |k: &str| {
-            Point3::from(std::array::from_fn::<f64, 3, _>(|i| {
-                axis[k][i].as_f64().unwrap()
-            }))
-        };
-        let (bottom, top) = (v("bottom"), v("top"));
+        let (bottom, top) = (r.details.axis.bottom(), r.details.axis.top());
         let dir_axis = (top - bottom).normalize();
         let length = (top - bottom).norm();
         // The knit's own points exactly; points the penetration fix put on the skin between
@@ -87,12 +82,11 @@ fn stitch_density_is_positive_on_covered_skin_and_higher_at_the_ankle_than_the_t
             .map(|v| float(v, "stitch_density"))
             .collect();
         assert!(density.iter().all(|d| d.is_finite() && *d >= 0.0), "{name}");
-        let axis = &r["details"]["axis"];
-        let y = |k: &str| axis[k][1].as_f64().unwrap();
-        let (bottom, top) = (y("bottom"), y("top"));
+        let axis = &r.details.axis;
+        let (bottom, top) = (axis.bottom[1], axis.top[1]);
         // In a file with both legs (the sample bodies, symmetric about x = 0): the dressed side.
-        let both = r["details"]["leg"]["landmarks"]["legs_found"] == 2;
-        let side = axis["bottom"][0].as_f64().unwrap().signum();
+        let both = r.details.leg.landmarks.as_ref().map(|l| l.legs_found) == Some(2);
+        let side = axis.bottom[0].signum();
         let band = |lo: f64, hi: f64| {
             let values: Vec<f64> = vertices
                 .iter()
@@ -134,9 +128,7 @@ fn ply_and_gltf_outputs_agree_and_read_back_with_their_counts() {
     let yarns = read_ply(&out.join("stocking.ply"));
     // Every knit point, then the points the penetration fix inserted, each of which splits a
     // segment in two.
-    let inserted = r["details"]["penetration_fix"]["points_inserted"]
-        .as_u64()
-        .unwrap() as usize;
+    let inserted = r.details.penetration_fix.unwrap().points_inserted;
     assert_eq!(yarns.payload["vertex"].len(), 600 + inserted);
     assert_eq!(
         yarns.payload["edge"].len(),
@@ -145,8 +137,8 @@ fn ply_and_gltf_outputs_agree_and_read_back_with_their_counts() {
     );
     let legply = read_ply(&out.join("leg.ply"));
     assert_eq!(
-        legply.payload["face"].len() as u64,
-        r["metrics"]["leg_triangles"].as_u64().unwrap()
+        legply.payload["face"].len(),
+        r.metrics.leg_triangles.unwrap()
     );
     // leg.ply reads back as the leg it was fitted on.
     let leg = load_sample(leg_path);
@@ -263,9 +255,9 @@ fn brute_force_contact_gives_the_same_fit_as_the_bvh() {
     let leg = coarse_leg(dir.path());
     let (bvh_dir, bvh) = fit(&leg, "16x12", &[]);
     let (brute_dir, brute) = fit(&leg, "16x12", &["--contact", "brute"]);
-    assert_eq!(bvh["details"]["contact"]["method"], "bvh");
-    assert_eq!(brute["details"]["contact"]["method"], "brute");
-    assert_eq!(bvh["metrics"]["steps"], brute["metrics"]["steps"]);
+    assert_eq!(bvh.details.contact.method, ContactMethod::Bvh);
+    assert_eq!(brute.details.contact.method, ContactMethod::Brute);
+    assert_eq!(bvh.metrics.steps, brute.metrics.steps);
     let a = read_ply(&bvh_dir.path().join("out/stocking.ply"));
     let b = read_ply(&brute_dir.path().join("out/stocking.ply"));
     for (p, q) in a.payload["vertex"].iter().zip(&b.payload["vertex"]) {
@@ -403,7 +395,7 @@ fn a_ply_leg_fits_as_its_gltf_original_does() {
     std::fs::write(&ply, leg_as_ply(&leg, Encoding::Ascii)).unwrap();
     let (glb_dir, glb_report) = fit(&procedural_leg(), "16x12", &[]);
     let (ply_dir, ply_report) = fit(&ply, "16x12", &[]);
-    assert_eq!(glb_report["metrics"], ply_report["metrics"]);
+    assert_eq!(glb_report.metrics, ply_report.metrics);
     let a = read_ply(&glb_dir.path().join("out/stocking.ply"));
     let b = read_ply(&ply_dir.path().join("out/stocking.ply"));
     assert_eq!(a.payload["vertex"], b.payload["vertex"]);
@@ -537,8 +529,8 @@ fn a_z_up_leg_fits_like_the_y_up_one_when_the_scene_says_so() {
         "+z leg {z} vs +y leg {y} stitches/cm²"
     );
     assert_eq!(
-        report(&dir.path().join("z"))["details"]["leg"]["up_axis"],
-        "+z"
+        read_fit_report(&dir.path().join("z")).details.leg.up_axis,
+        UpAxis::PosZ
     );
     // Read as +Y, the same file lies on its side: the tube then follows the detected axis, but
     // the report must say what was assumed.
@@ -564,8 +556,10 @@ fn a_gltf_with_an_external_buffer_loads() {
     );
     assert!(out.status.success(), "{}", stderr(&out));
     assert_eq!(
-        report(&dir.path().join("out"))["metrics"]["leg_triangles"],
-        41216
+        read_fit_report(&dir.path().join("out"))
+            .metrics
+            .leg_triangles,
+        Some(41216)
     );
 }
 
@@ -573,8 +567,8 @@ fn a_gltf_with_an_external_buffer_loads() {
 fn axis_from_the_command_line_sets_where_the_stocking_ends() {
     let leg = &procedural_leg();
     let (dir, r) = fit(leg, "40x40", &["--axis", "0,0.30,0,0,0.60,0"]);
-    assert_eq!(r["details"]["axis"]["source"], "command_line");
-    assert_eq!(r["metrics"]["converged"], true);
+    assert_eq!(r.details.axis.source, AxisSource::CommandLine);
+    assert!(r.metrics.converged);
     let yarns = read_ply(&dir.path().join("out/stocking.ply"));
     // The knit's points exactly; points the penetration fix inserted within 0.1 mm.
     for (i, v) in yarns.payload["vertex"].iter().enumerate() {

@@ -164,22 +164,24 @@ impl Forefoot {
 fn measure_whole_stocking(leg: &std::path::Path, heel: &str) -> WholeStocking {
     let (dir, r) = crate::support::fit(leg, "150x150", &["--heel", heel]);
     let name = format!("{} heel {heel}", leg.display());
-    let m = &r["metrics"];
-    assert_eq!(m["converged"], true, "{name}: {m}");
-    assert_eq!(m["max_penetration_m"], 0.0, "{name}: {m}");
-    assert_eq!(r["details"]["tube"]["bottom"], "toe", "{name}");
+    let m = &r.metrics;
+    assert!(m.converged, "{name}: {m:?}");
+    assert_eq!(m.max_penetration_m, Some(0.0), "{name}: {m:?}");
+    assert_eq!(r.details.tube.bottom, TubeBottom::Toe, "{name}");
     let out = dir.path().join("out");
     let collider = crate::skin::collider_of(leg);
     let depth = crate::skin::polyline_depth(&out, &collider, |_| true);
     let deepest_m = depth.deepest;
 
-    let landmarks = &r["details"]["leg"]["landmarks"];
-    let v3 = |v: &serde_json::Value| Vector3::from(std::array::from_fn(|i| v[i].as_f64().unwrap()));
-    let (up, forward) = (v3(&landmarks["up"]), v3(&landmarks["foot_direction"]));
-    let tip = Point3::from(v3(&landmarks["toe_tip"]["m"]));
-    let sole = Point3::from(v3(&landmarks["sole"]["m"]));
-    let ankle = Point3::from(v3(&landmarks["ankle"]["centre"]["m"]));
-    let ankle_height = landmarks["ankle"]["height_m"].as_f64().unwrap();
+    let landmarks = r.details.leg.landmarks.as_ref().unwrap();
+    let (up, forward) = (
+        Vector3::from(landmarks.up),
+        Vector3::from(landmarks.foot_direction.unwrap()),
+    );
+    let tip = Point3::from(landmarks.toe_tip.as_ref().unwrap().m);
+    let sole = Point3::from(landmarks.sole.m);
+    let ankle = Point3::from(landmarks.ankle.centre.m);
+    let ankle_height = landmarks.ankle.height_m;
     let side = up.cross(&forward).normalize();
 
     let yarns = crate::support::read_ply(&out.join("stocking.ply"));
@@ -188,10 +190,10 @@ fn measure_whole_stocking(leg: &std::path::Path, heel: &str) -> WholeStocking {
         .map(crate::support::point)
         .collect();
     // The report says where the fabric rested on the toes boxed: the toe tip lies in the box.
-    let toe_box = &r["details"]["tube"]["toe_box"];
-    let rim = Point3::from(v3(&toe_box["rim_centre_m"]));
-    let tip_beyond_rim = (tip - rim).dot(&v3(&toe_box["towards_toe"]));
-    let box_length = toe_box["length_m"].as_f64().unwrap();
+    let toe_box = r.details.tube.toe_box.as_ref().unwrap();
+    let rim = Point3::from(toe_box.rim_centre_m);
+    let tip_beyond_rim = (tip - rim).dot(&Vector3::from(toe_box.towards_toe));
+    let box_length = toe_box.length_m;
     assert!(
         0.03 < tip_beyond_rim && tip_beyond_rim < box_length,
         "{name}: toe tip {tip_beyond_rim} m beyond the rim, box {box_length} m long"
@@ -353,10 +355,10 @@ fn a_stocking_to_the_toe_settles_at_coarse_grids_and_at_the_real_stitch_count() 
         ("makehuman_leg_foot.glb", "400x1000"),
     ] {
         let (_dir, r) = crate::support::fit(&sample(leg), grid, &[]);
-        let m = &r["metrics"];
-        assert_eq!(m["converged"], true, "{leg} {grid}: {m}");
-        assert_eq!(m["max_penetration_m"], 0.0, "{leg} {grid}: {m}");
-        assert_eq!(r["details"]["tube"]["bottom"], "toe", "{leg} {grid}");
+        let m = &r.metrics;
+        assert!(m.converged, "{leg} {grid}: {m:?}");
+        assert_eq!(m.max_penetration_m, Some(0.0), "{leg} {grid}: {m:?}");
+        assert_eq!(r.details.tube.bottom, TubeBottom::Toe, "{leg} {grid}");
     }
 }
 

@@ -11,13 +11,17 @@ use std::path::{Path, PathBuf};
 use std::process::Output;
 
 use knitfit::base::SurfaceMesh;
-use knitfit::leg::{load_leg, Collider, ContactMethod, Leg, Units, UpAxis, UpChoice};
+use knitfit::knit::TubeBottom;
+use knitfit::leg::{
+    load_leg, Collider, ContactMethod, Leg, Side, ThighTopKind, Units, UpAxis, UpChoice,
+};
+use knitfit::report::SolverDetails;
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
 use serde_json::{json, Value};
 
 use crate::support::{
-    files_in, float, load_sample, point, procedural_leg, read_ply, report, revolved, run_scene,
-    sample, scene_for, stderr, write_mesh, write_meshes,
+    files_in, float, load_sample, point, procedural_leg, read_fit_report, read_ply, revolved,
+    run_scene, sample, scene_for, stderr, write_mesh, write_meshes,
 };
 
 // ---------------------------------------------------------------------------------------------
@@ -111,31 +115,31 @@ fn check_fit_covering(
 ) -> Figures {
     assert!(out.status.success(), "{name}: {}", stderr(out));
     let out_dir = dir.join("out");
-    let r = report(&out_dir);
-    let m = &r["metrics"];
-    let tolerance = r["details"]["solver"]["tolerance"].as_f64().unwrap();
-    assert_eq!(m["converged"], true, "{name}: {m}");
-    let residual = m["residual"].as_f64().unwrap();
+    let r = read_fit_report(&out_dir);
+    let m = &r.metrics;
+    let tolerance = match r.details.solver {
+        SolverDetails::Paper { tolerance, .. } | SolverDetails::Multilevel { tolerance, .. } => {
+            tolerance
+        }
+    };
+    assert!(m.converged, "{name}: {m:?}");
+    let residual = m.residual;
     assert!(residual < tolerance, "{name}: residual {residual}");
-    assert_eq!(m["max_penetration_m"], 0.0, "{name}: {m}");
+    assert_eq!(m.max_penetration_m, Some(0.0), "{name}: {m:?}");
 
-    let axis = &r["details"]["axis"];
-    let p = |k: &str| Point3::from(std::array::from_fn(|i| axis[k][i].as_f64().unwrap()));
-    let (bottom, top) = (p("bottom"), p("top"));
+    let (bottom, top) = (r.details.axis.bottom(), r.details.axis.top());
     let (dir_axis, length) = ((top - bottom).normalize(), (top - bottom).norm());
     let along = |q: &Point3<f64>| (q - bottom).dot(&dir_axis) / length;
 
     let collider = Collider::new(leg, ContactMethod::Bvh).unwrap();
     let yarns = read_ply(&out_dir.join("stocking.ply"));
-    let knit_points = m["points"].as_u64().unwrap() as usize;
+    let knit_points = m.points;
     // Courses next to a held end ring may fold a little past it where the fabric is slack
     // along the wale there (it carries no compression): by a quarter of a course spacing at
     // most, and the report counts the courses out of order (`bunched_courses`). A thin ankle
     // polished to a tenth of the tolerance folds 1 mm past its ring (decision 0069).
-    let course_m = r["details"]["tube"]["rest_wale_spacing_m"]
-        .as_f64()
-        .unwrap();
-    let bunched = r["details"]["tube"]["bunched_courses"].as_u64().unwrap();
+    let course_m = r.details.tube.rest_wale_spacing_m;
+    let bunched = r.details.tube.bunched_courses;
     let mut largest_gap_m: f64 = 0.0;
     for (i, v) in yarns.payload["vertex"].iter().enumerate() {
         let q = point(v);
@@ -195,10 +199,10 @@ fn check_fit_covering(
         covered.iter().sum::<f64>() / covered.len() as f64
     };
     let figures = Figures {
-        iterations: m["steps"].as_u64().unwrap(),
+        iterations: m.steps as u64,
         residual,
-        max_penetration_m: m["max_penetration_m"].as_f64().unwrap(),
-        wall_seconds: r["wall_seconds"].as_f64().unwrap(),
+        max_penetration_m: m.max_penetration_m.unwrap(),
+        wall_seconds: r.wall_seconds,
         ankle_density: mean_covered(&bands[0], "ankle", min_covered),
         thigh_density: mean_covered(&bands[1], "thigh", 0.9),
         largest_gap_m,
@@ -232,9 +236,9 @@ fn check_denser_ankle_covering(
     // In a file with both legs (the sample bodies, symmetric about x = 0), the bands hold the
     // dressed leg's side only.
     assert!(out.status.success(), "{name}: {}", stderr(out));
-    let r = report(&dir.join("out"));
-    let both = r["details"]["leg"]["landmarks"]["legs_found"] == 2;
-    let side = r["details"]["axis"]["bottom"][0].as_f64().unwrap().signum();
+    let r = read_fit_report(&dir.join("out"));
+    let both = r.details.leg.landmarks.as_ref().map(|l| l.legs_found) == Some(2);
+    let side = r.details.axis.bottom[0].signum();
     let f = check_fit_covering(
         name,
         dir,
@@ -405,11 +409,21 @@ fn paper_solver_fit_converges_from_a_quarter_to_four_times_the_explicit_limit() 
             let (dir, out) = run_scene(&scene, "24x24", &[]);
             let name = format!("paper solver, ratio {ratio}, {multiple}× limit");
             check_denser_ankle(&name, dir.path(), &out, &procedural(), 1.5);
-            let solver = &report(&dir.path().join("out"))["details"]["solver"];
-            let reported = solver["time_step_limit"].as_f64().unwrap();
-            assert!((reported - limit).abs() < 1e-12 * limit, "{name}: {solver}");
+            let solver = read_fit_report(&dir.path().join("out")).details.solver;
+            let SolverDetails::Paper {
+                time_step_limit: reported,
+                substeps_per_step,
+                ..
+            } = solver
+            else {
+                panic!("{name}: {solver:?}")
+            };
+            assert!(
+                (reported - limit).abs() < 1e-12 * limit,
+                "{name}: {solver:?}"
+            );
             let substeps = if multiple <= 1.0 { 1 } else { 4 };
-            assert_eq!(solver["substeps_per_step"], substeps, "{name}: {solver}");
+            assert_eq!(substeps_per_step, substeps, "{name}: {solver:?}");
         }
     }
 }
@@ -458,15 +472,9 @@ fn a_leg_in_millimetres_fits_like_the_metre_leg_when_the_scene_says_mm() {
     let (run, out) = run_scene(&scene, "32x32", &[]);
     let leg_m = load_leg(&mm, Units::Millimetres, UpChoice::Axis(UpAxis::PosY)).unwrap();
     let got = check_leg_fit("×1000, units mm", run.path(), &out, &leg_m);
-    let axis = &report(&run.path().join("out"))["details"]["axis"];
-    assert!(
-        (axis["bottom"][1].as_f64().unwrap() - 0.1).abs() < 1e-9,
-        "{axis}"
-    );
-    assert!(
-        (axis["top"][1].as_f64().unwrap() - 0.81).abs() < 1e-9,
-        "{axis}"
-    );
+    let axis = read_fit_report(&run.path().join("out")).details.axis;
+    assert!((axis.bottom[1] - 0.1).abs() < 1e-9, "{axis:?}");
+    assert!((axis.top[1] - 0.81).abs() < 1e-9, "{axis:?}");
 
     let scene = scene_for(
         &procedural_leg(),
@@ -550,12 +558,10 @@ fn an_arbitrarily_rotated_leg_fits_along_its_detected_axis() {
     let (run, out) = run_scene(&scene, "32x32", &[]);
     let leg = load_leg(&path, Units::Metres, UpChoice::Axis(UpAxis::PosY)).unwrap();
     let got = check_leg_fit("rotated 35°", run.path(), &out, &leg);
-    let r = report(&run.path().join("out"));
-    assert_eq!(r["details"]["leg"]["up_axis_found"], true);
+    let r = read_fit_report(&run.path().join("out"));
+    assert!(r.details.leg.up_axis_found);
     // The detected axis follows the leg: the leg's own +Y, rotated.
-    let axis = &report(&run.path().join("out"))["details"]["axis"];
-    let v = |k: &str| Vector3::from(std::array::from_fn(|i| axis[k][i].as_f64().unwrap()));
-    let along = (v("top") - v("bottom")).normalize();
+    let along = r.details.axis.direction();
     let want = rotation * Vector3::y();
     assert!(along.dot(&want) > 0.999, "axis {along:?} vs {want:?}");
     assert_same_density("rotated", &got, reference, 0.03);
@@ -930,10 +936,11 @@ fn of_two_legs_and_a_pelvis_the_side_asked_for_is_dressed() {
         let f = check_fit(&format!("two legs, {side}"), run.path(), &out, &leg, |p| {
             sign * p.x > 0.0
         });
-        let r = report(&run.path().join("out"));
-        assert_eq!(r["details"]["leg"]["landmarks"]["side"], side);
-        assert_eq!(r["details"]["leg"]["landmarks"]["legs_found"], 2);
-        assert_eq!(r["details"]["leg"]["landmarks"]["thigh_top_kind"], "crotch");
+        let r = read_fit_report(&run.path().join("out"));
+        let landmarks = r.details.leg.landmarks.unwrap();
+        assert_eq!(landmarks.side.map(Side::name), Some(side));
+        assert_eq!(landmarks.legs_found, 2);
+        assert_eq!(landmarks.thigh_top_kind, ThighTopKind::Crotch);
         assert!(sign * f.axis[0].x > 0.0, "{side}: axis {:?}", f.axis);
     }
 }
@@ -956,8 +963,8 @@ fn a_leg_of_a_million_triangles_fits() {
     let leg = load_leg(&path, Units::Metres, UpChoice::Axis(UpAxis::PosY)).unwrap();
     assert!(leg.triangles.len() >= 1_000_000);
     let f = check_leg_fit("1M triangles", run.path(), &out, &leg);
-    let r = report(&run.path().join("out"));
-    println!("{}; stages {}", f.line(), r["stages"]);
+    let r = read_fit_report(&run.path().join("out"));
+    println!("{}; stages {:?}", f.line(), r.stages);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1108,8 +1115,8 @@ fn a_floor_and_a_backdrop_in_the_file_change_nothing() {
     let (run, out) = run_scene(&scene, "32x32", &[]);
     let got = check_leg_fit("floor and backdrop", run.path(), &out, &leg);
     assert_same_density("floor and backdrop", &got, reference, 0.01);
-    let cleaned = &report(&run.path().join("out"))["details"]["leg"]["cleaned"];
-    assert_eq!(cleaned["debris_pieces"], 2, "{cleaned}");
+    let cleaned = read_fit_report(&run.path().join("out")).details.leg.cleaned;
+    assert_eq!(cleaned.debris_pieces, 2, "{cleaned:?}");
 }
 
 #[test]
@@ -1161,16 +1168,12 @@ fn stiff_and_narrow_stockings_to_the_toe_fit_or_are_refused_as_bunched() {
                 continue;
             }
             assert!(out.status.success(), "{name}: {}", stderr(&out));
-            let r = report(&dir.path().join("out"));
-            let m = &r["metrics"];
-            println!(
-                "{name}: {} steps, residual {:.2e}",
-                m["steps"],
-                m["residual"].as_f64().unwrap()
-            );
-            assert_eq!(m["converged"], true, "{name}: {m}");
-            assert_eq!(m["max_penetration_m"], 0.0, "{name}: {m}");
-            assert_eq!(r["details"]["tube"]["bottom"], "toe", "{name}");
+            let r = read_fit_report(&dir.path().join("out"));
+            let m = &r.metrics;
+            println!("{name}: {} steps, residual {:.2e}", m.steps, m.residual);
+            assert!(m.converged, "{name}: {m:?}");
+            assert_eq!(m.max_penetration_m, Some(0.0), "{name}: {m:?}");
+            assert_eq!(r.details.tube.bottom, TubeBottom::Toe, "{name}");
         }
         let (dir, out) = run_scene(
             &scene_for(&leg_path, json!({}), toe(1000.0, 0.2)),

@@ -1,8 +1,10 @@
 //! Resource limits: a fit too large for memory is refused up front, with its estimate and the
 //! override; the override skips the check.
 
+use knitfit::limits::{LimitSource, MemoryEstimate};
+
 use crate::support::{
-    files_in, knitfit, knitfit_within, procedural_leg, report, stderr, stdout, write,
+    files_in, knitfit, knitfit_within, procedural_leg, read_fit_report, stderr, stdout, write,
 };
 
 /// A .gltf whose one primitive declares a billion triangles over a buffer file that does not
@@ -110,9 +112,9 @@ fn the_override_runs_a_fit_that_a_low_limit_refuses() {
 
     let out = knitfit(dir.path(), &[&base[..], &["--allow-large"]].concat());
     assert!(out.status.success(), "{}", stderr(&out));
-    let memory = &report(&dir.path().join("out"))["details"]["memory"];
-    assert_eq!(memory["check"]["allow_large"], true);
-    assert!(memory["check"]["estimate"]["total_bytes"].as_u64().unwrap() > 10 << 20);
+    let memory = read_fit_report(&dir.path().join("out")).details.memory;
+    assert!(memory.check.allow_large);
+    assert!(memory.check.estimate.total_bytes > 10 << 20);
 
     // The same from the scene file.
     let scene = write(
@@ -121,10 +123,7 @@ fn the_override_runs_a_fit_that_a_low_limit_refuses() {
         r#"{"limits": {"memory_gib": 0.01, "allow_large": true}, "outputs": []}"#,
     );
     let (_, fitted) = crate::support::fit(&leg, "20x12", &[scene.to_str().unwrap()]);
-    assert_eq!(
-        fitted["details"]["memory"]["check"]["limit"]["source"],
-        "scene"
-    );
+    assert_eq!(fitted.details.memory.check.limit.source, LimitSource::Scene);
 }
 
 #[test]
@@ -150,13 +149,12 @@ fn plan_shows_the_estimate_and_whether_the_run_would_be_refused() {
     assert!(text.contains("the run would be refused"), "{text}");
     assert!(plan(&["--allow-large"]).contains("run anyway"));
     let json: serde_json::Value = serde_json::from_str(&plan(&["--json"])).unwrap();
+    // The plan's `memory` has no type of its own (`fits` is the plan's); its estimate is typed.
     let memory = &json["memory"];
     assert_eq!(memory["fits"], false);
-    assert!(
-        memory["estimate"]["tube_bytes"].as_u64().unwrap() > 500 << 30,
-        "{memory}"
-    );
-    assert_eq!(memory["estimate"]["tube_points"], 900_000_000u64);
+    let estimate: MemoryEstimate = serde_json::from_value(memory["estimate"].clone()).unwrap();
+    assert!(estimate.tube_bytes > 500 << 30, "{memory}");
+    assert_eq!(estimate.tube_points, 900_000_000u64);
     assert!(files_in(dir.path()).is_empty());
 }
 

@@ -185,9 +185,7 @@ fn the_stocking_surface_lies_clear_of_the_skin() {
                 }
             }
         }
-        let dipping = report["details"]["stocking_surface"]["triangles_dipping"]
-            .as_u64()
-            .unwrap() as usize;
+        let dipping = report.details.stocking_surface.unwrap().triangles_dipping;
         let triangles = indices.len() / 3;
         eprintln!(
             "{} {grid}: the stocking surface is at least {:.3} mm above the skin ({samples} \

@@ -21,6 +21,7 @@ mod process_fuzz;
 mod properties;
 mod real_stitches;
 mod render;
+mod report;
 mod skin;
 mod solvers;
 mod support;

@@ -3,26 +3,44 @@
 
 use std::path::Path;
 
+use knitfit::knit::StretchAxis;
+use knitfit::leg::{Axis, AxisSource, Side, ThighTopKind, UpAxis};
+use knitfit::report::{FitDetails, LandmarkDetails, PatchDetails, Report};
+use knitfit::scene::Effect;
+
 use crate::support::{
-    files_in, knitfit, procedural_leg, report, revolved, stage_names, stderr, stdout, write,
-    write_mesh,
+    exact_json, files_in, knitfit, procedural_leg, read_fit_report, read_patch_report,
+    read_render_report, revolved, stage_names, stderr, stdout, write, write_mesh,
 };
 
 /// Fits the procedural leg at 20×12 with the scene `scene` (written to `dir/NAME.json`) and
 /// `extra` flags, expecting success; returns the report.
-fn fit(dir: &Path, scene: &str, name: &str, extra: &[&str]) -> serde_json::Value {
+fn fit(dir: &Path, scene: &str, name: &str, extra: &[&str]) -> Report<FitDetails> {
     let scene = write(dir, &format!("{name}.json"), scene);
     let args = [&[scene.to_str().unwrap()][..], extra].concat();
     crate::support::fit(&procedural_leg(), "20x12", &args).1
 }
 
-/// The plan (`knitfit plan --json ARGS`) as JSON; the command must succeed.
+/// The plan (`knitfit plan --json ARGS`) as JSON, its numbers exactly as written (so that they
+/// compare with a report's to the last digit); the command must succeed. Untyped: the plan's
+/// JSON has no type of its own in the library (`run::plan` builds it from private structs); its
+/// parts that are report types (`landmarks`, `axis`, `effects`) are read typed where compared.
 fn plan_json(dir: &Path, args: &[&str]) -> serde_json::Value {
     let mut all = vec!["plan", "--json"];
     all.extend_from_slice(args);
     let run = knitfit(dir, &all);
     assert!(run.status.success(), "{}", stderr(&run));
-    serde_json::from_str(&stdout(&run)).unwrap()
+    exact_json(&stdout(&run))
+}
+
+/// The plan's `landmarks`, typed as the report's (`null` where the axis is given).
+fn plan_landmarks(plan: &serde_json::Value) -> Option<LandmarkDetails> {
+    serde_json::from_value(plan["landmarks"].clone()).unwrap()
+}
+
+/// The plan's `axis`, typed as the report's (`null` where no leg was read).
+fn plan_axis(plan: &serde_json::Value) -> Option<Axis> {
+    serde_json::from_value(plan["axis"].clone()).unwrap()
 }
 
 fn names(list: &serde_json::Value) -> Vec<String> {
@@ -45,9 +63,9 @@ fn a_fit_without_a_preview_builds_no_render_structures() {
     );
     // The preview stage reports the BVH and yarn grid it built; without it there is nothing.
     assert!(
-        without["details"]["preview"].is_null(),
-        "{}",
-        without["details"]
+        without.details.preview.is_none(),
+        "{:?}",
+        without.details.preview
     );
     assert!(!stage_names(&without).iter().any(|s| s.contains("preview")));
 
@@ -57,9 +75,9 @@ fn a_fit_without_a_preview_builds_no_render_structures() {
         "with",
         &[],
     );
-    let built = &with["details"]["preview"];
-    assert!(built["bvh_triangles"].as_u64().unwrap() > 0, "{built}");
-    assert!(built["segments"].as_u64().unwrap() > 0, "{built}");
+    let built = with.details.preview.unwrap();
+    assert!(built.bvh_triangles > 0, "{built:?}");
+    assert!(built.segments > 0, "{built:?}");
 }
 
 #[test]
@@ -72,12 +90,9 @@ fn without_polyline_outputs_no_penetration_fix_runs() {
         "picture",
         &[],
     );
-    assert!(picture_only["details"]["penetration_fix"].is_null());
+    assert!(picture_only.details.penetration_fix.is_none());
     assert!(!stage_names(&picture_only).contains(&"penetration fix".to_string()));
-    assert!(!picture_only["effects"]
-        .as_array()
-        .unwrap()
-        .contains(&"penetration_fix".into()));
+    assert!(!picture_only.effects.contains(&Effect::PenetrationFix));
     // The plan says why it was left out.
     let scene = dir.path().join("picture.json");
     let leg = procedural_leg();
@@ -93,8 +108,8 @@ fn without_polyline_outputs_no_penetration_fix_runs() {
         "ply",
         &[],
     );
-    let fix = &ply["details"]["penetration_fix"];
-    assert!(fix["segments"].as_u64().unwrap() > 0, "{fix}");
+    let fix = ply.details.penetration_fix.unwrap();
+    assert!(fix.segments > 0, "{fix:?}");
     assert!(stage_names(&ply).contains(&"penetration fix".to_string()));
 }
 
@@ -110,10 +125,10 @@ fn the_patch_command_loads_no_leg() {
     let scene = scene.to_str().unwrap();
     let patch = knitfit(dir.path(), &["patch", scene, "--out", "p", "-q"]);
     assert!(patch.status.success(), "{}", stderr(&patch));
-    let r = report(&dir.path().join("p"));
-    assert!(!stage_names(&r).iter().any(|s| s.contains("leg")), "{r}");
-    assert!(r["details"].get("leg").is_none());
-    assert!(r["metrics"].get("leg_triangles").is_none());
+    // Read as a patch's report, whose details have no `leg` (an unknown field fails the read).
+    let r = read_patch_report(&dir.path().join("p"));
+    assert!(!stage_names(&r).iter().any(|s| s.contains("leg")), "{r:?}");
+    assert!(r.metrics.leg_triangles.is_none());
 
     let fit = knitfit(dir.path(), &["fit", scene, "--out", "f", "-q"]);
     assert_eq!(fit.status.code(), Some(2));
@@ -144,48 +159,41 @@ fn turning_yarn_connection_off_makes_course_and_wale_stretch_alike() {
             &["patch", scene.to_str().unwrap(), "--out", out, "-q"],
         );
         assert!(run.status.success(), "{}", stderr(&run));
-        report(&dir.path().join(out))
+        read_patch_report(&dir.path().join(out))
     };
     let on = patch(r#"["yarn_connection"]"#, "on");
     let off = patch("[]", "off");
-    let anisotropy = |r: &serde_json::Value| r["details"]["anisotropy"].as_f64().unwrap();
-    let course_spread = |r: &serde_json::Value| {
-        let s = &r["details"]["patches"][0]["stitches"];
-        assert_eq!(r["details"]["patches"][0]["stretch"]["axis"], "course");
-        s["max_aspect"].as_f64().unwrap() - s["min_aspect"].as_f64().unwrap()
+    let anisotropy = |r: &Report<PatchDetails>| r.details.anisotropy.unwrap();
+    let course_spread = |r: &Report<PatchDetails>| {
+        let s = r.details.patches[0].stitches.as_ref().unwrap();
+        assert_eq!(r.details.patches[0].stretch.axis, StretchAxis::Course);
+        s.max_aspect - s.min_aspect
     };
     assert!(anisotropy(&on) > 0.01, "on: {}", anisotropy(&on));
     assert!(anisotropy(&off) < 0.002, "off: {}", anisotropy(&off));
     assert!(course_spread(&on) > 0.05, "on: {}", course_spread(&on));
     assert!(course_spread(&off) < 0.01, "off: {}", course_spread(&off));
-    assert_eq!(on["effects"], serde_json::json!(["yarn_connection"]));
-    assert_eq!(off["effects"], serde_json::json!([]));
+    assert_eq!(on.effects, [Effect::YarnConnection]);
+    assert_eq!(off.effects, []);
 }
 
 /// Checks that a run's report lists exactly the plan's stages, in order, each with its time.
-fn assert_report_follows_plan(plan: &serde_json::Value, report: &serde_json::Value) {
+fn assert_report_follows_plan<D>(plan: &serde_json::Value, report: &Report<D>) {
     assert_eq!(
         names(&plan["stages"]),
         stage_names(report),
         "plan vs report"
     );
-    let stages = report["stages"].as_array().unwrap();
     let mut total = 0.0;
-    for (s, planned) in stages.iter().zip(plan["stages"].as_array().unwrap()) {
-        let seconds = s["seconds"].as_f64().unwrap();
-        assert!(seconds.is_finite() && seconds >= 0.0, "{s}");
-        total += seconds;
+    for (s, planned) in report.stages.iter().zip(plan["stages"].as_array().unwrap()) {
+        assert!(s.seconds.is_finite() && s.seconds >= 0.0, "{s:?}");
+        total += s.seconds;
         // A stage the run times but the plan does not list gets no reason: it shows here.
-        assert!(!s["why"].as_str().unwrap().is_empty(), "{s}");
-        assert_eq!(s["why"], planned["why"], "{s}");
+        assert!(!s.why.is_empty(), "{s:?}");
+        assert_eq!(s.why, planned["why"].as_str().unwrap(), "{s:?}");
     }
-    assert!(total <= report["wall_seconds"].as_f64().unwrap());
-    let written: Vec<&str> = report["outputs"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|o| o.as_str().unwrap())
-        .collect();
+    assert!(total <= report.wall_seconds);
+    let written: Vec<&str> = report.outputs.iter().map(String::as_str).collect();
     let planned: Vec<String> = plan["files"]
         .as_array()
         .unwrap()
@@ -233,12 +241,13 @@ fn the_plan_lists_the_stages_a_real_run_reports_each_with_its_time() {
         args.extend_from_slice(extra);
         let plan = plan_json(dir.path(), &args);
         assert_report_follows_plan(&plan, &report);
-        assert_eq!(plan["effects"], report["effects"], "{name}");
+        let planned: Vec<Effect> = serde_json::from_value(plan["effects"].clone()).unwrap();
+        assert_eq!(planned, report.effects, "{name}");
     }
     let patch = knitfit(dir.path(), &["patch", "--size", "6x6", "--out", "p", "-q"]);
     assert!(patch.status.success(), "{}", stderr(&patch));
     let plan = plan_json(dir.path(), &["patch", "--size", "6x6", "--out", "p"]);
-    assert_report_follows_plan(&plan, &report(&dir.path().join("p")));
+    assert_report_follows_plan(&plan, &read_patch_report(&dir.path().join("p")));
 
     // knitfit render has no `plan`: its report's stages must each carry the reason its plan gave.
     let fitted = knitfit(
@@ -262,15 +271,13 @@ fn the_plan_lists_the_stages_a_real_run_reports_each_with_its_time() {
         ],
     );
     assert!(render.status.success(), "{}", stderr(&render));
-    let r: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.path().join("r/preview.report.json")).unwrap())
-            .unwrap();
+    let r = read_render_report(&dir.path().join("r"));
     assert_eq!(
         stage_names(&r),
         ["read stocking.glb", "render preview", "write files"]
     );
-    for s in r["stages"].as_array().unwrap() {
-        assert!(!s["why"].as_str().unwrap().is_empty(), "{s}");
+    for s in &r.stages {
+        assert!(!s.why.is_empty(), "{s:?}");
     }
 }
 
@@ -363,15 +370,16 @@ fn plan_shows_the_landmarks_and_the_axis_the_fit_then_uses() {
             &[&["fit"][..], &args, &["--out", side]].concat(),
         );
         assert!(fit.status.success(), "{}", stderr(&fit));
-        let r = report(&dir.path().join(side));
+        let r = read_fit_report(&dir.path().join(side));
         // The same landmarks and axis, to the last digit, and the same words for the extent.
+        assert_eq!(plan_landmarks(&plan), r.details.leg.landmarks, "{leg:?}");
+        let axis = plan_axis(&plan).unwrap();
+        assert_eq!(axis, r.details.axis, "{leg:?}");
+        assert_eq!(axis.source, AxisSource::Landmarks);
         assert_eq!(
-            plan["landmarks"], r["details"]["leg"]["landmarks"],
-            "{leg:?}"
+            serde_json::from_value::<UpAxis>(plan["leg"]["up_axis"].clone()).unwrap(),
+            r.details.leg.up_axis
         );
-        assert_eq!(plan["axis"], r["details"]["axis"], "{leg:?}");
-        assert_eq!(plan["axis"]["source"], "landmarks");
-        assert_eq!(plan["leg"]["up_axis"], r["details"]["leg"]["up_axis"]);
         assert_eq!(plan["leg"]["up_axis_found"], true);
         let extent = line_starting(&text, extent);
         assert_eq!(
@@ -401,26 +409,18 @@ fn plan_shows_the_landmarks_and_the_axis_the_fit_then_uses() {
         dir.path(),
         &["--leg", sample("makehuman_body.glb").to_str().unwrap()],
     );
-    let l = &body["landmarks"];
-    assert_eq!(
-        (l["legs_found"].as_u64(), l["side"].as_str()),
-        (Some(2), Some("left"))
-    );
-    assert_eq!(l["thigh_top_kind"], "crotch");
-    assert!(
-        l["toe_tip"]["m"].is_array() && l["foot_direction"].is_array(),
-        "{l}"
-    );
-    assert!(
-        body["axis"]["bottom"][0].as_f64().unwrap() > 0.0,
-        "{}",
-        body["axis"]
-    );
+    let l = plan_landmarks(&body).unwrap();
+    assert_eq!((l.legs_found, l.side), (2, Some(Side::Left)));
+    assert_eq!(l.thigh_top_kind, ThighTopKind::Crotch);
+    assert!(l.toe_tip.is_some() && l.foot_direction.is_some(), "{l:?}");
+    let axis = plan_axis(&body).unwrap();
+    assert!(axis.bottom[0] > 0.0, "{axis:?}");
     let cut = plan_json(
         dir.path(),
         &["--leg", sample("makehuman_leg.glb").to_str().unwrap()],
     );
-    assert!(cut["landmarks"]["toe_tip"].is_null() && cut["landmarks"]["side"].is_null());
+    let l = plan_landmarks(&cut).unwrap();
+    assert!(l.toe_tip.is_none() && l.side.is_none(), "{l:?}");
     let text = stdout(&knitfit(
         dir.path(),
         &[
@@ -448,8 +448,8 @@ fn plan_of_a_given_axis_shows_it_in_world_and_file_coordinates() {
     let leg = procedural_leg();
     let args = ["--leg", leg.to_str().unwrap(), "--axis", "0,0.1,0,0,0.8,0"];
     let plan = plan_json(dir.path(), &args);
-    assert!(plan["landmarks"].is_null(), "{}", plan["landmarks"]);
-    assert_eq!(plan["axis"]["source"], "command_line");
+    assert!(plan_landmarks(&plan).is_none(), "{}", plan["landmarks"]);
+    assert_eq!(plan_axis(&plan).unwrap().source, AxisSource::CommandLine);
     assert_eq!(
         plan["axis_file"]["bottom"],
         serde_json::json!([0.0, 0.1, 0.0])

@@ -4,10 +4,13 @@
 
 use std::path::Path;
 
+use knitfit::export::YarnsWritten;
 use serde_json::json;
 
 use crate::skin::{collider_of, polyline_depth};
-use crate::support::{float, read_ply, run_scene, sample_legs, scene_for, stderr};
+use crate::support::{
+    float, read_fit_report, read_ply, run_scene, sample_legs, scene_for, stage_names, stderr,
+};
 
 /// A stocking of the default's relaxed size knitted with a coarser stitch (100 needles, 4×
 /// the stitch), so that every sample's real stitches can be sampled against the leg quickly.
@@ -34,12 +37,12 @@ fn every_real_stitch_lies_outside_the_leg_with_its_pattern_on_every_sample() {
         );
         assert!(out.status.success(), "{name}: {}", stderr(&out));
         let out = dir.path().join("out");
-        let r = crate::support::report(&out);
-        let real = &r["details"]["yarns"]["real_stitches"];
-        let courses = r["details"]["knit"]["courses"].as_f64().unwrap().round() as u64 + 1;
-        assert_eq!(r["details"]["yarns"]["written"], "stitches", "{name}");
-        assert_eq!(real["wales"], 100, "{name}");
-        assert_eq!(real["courses"].as_u64(), Some(courses), "{name}");
+        let r = read_fit_report(&out);
+        let real = r.details.yarns.real_stitches.unwrap();
+        let courses = r.details.knit.courses.round() as u64 + 1;
+        assert_eq!(r.details.yarns.written, YarnsWritten::Stitches, "{name}");
+        assert_eq!(real.wales, 100, "{name}");
+        assert_eq!(real.courses as u64, courses, "{name}");
         // Every real stitch is written (short rows and the fix's inserted points add more).
         let ply = read_ply(&out.join("stocking.ply"));
         let vertices = &ply.payload["vertex"];
@@ -78,14 +81,14 @@ fn the_default_stocking_writes_all_its_real_stitches() {
     );
     let (dir, out) = run_scene(&scene, "60x60", &[]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let r = crate::support::report(&dir.path().join("out"));
-    let yarns = &r["details"]["yarns"];
-    let real = &yarns["real_stitches"];
-    assert_eq!(real["wales"], 400);
-    let points = real["wales"].as_u64().unwrap() * real["courses"].as_u64().unwrap();
-    assert_eq!(real["points"].as_u64(), Some(points));
-    assert!(yarns["points"].as_u64().unwrap() >= points);
-    let stages = crate::support::stage_names(&r);
+    let r = read_fit_report(&dir.path().join("out"));
+    let yarns = &r.details.yarns;
+    let real = yarns.real_stitches.unwrap();
+    assert_eq!(real.wales, 400);
+    let points = real.wales * real.courses;
+    assert_eq!(real.points, points);
+    assert!(yarns.points >= points);
+    let stages = stage_names(&r);
     assert!(stages.contains(&"lay stitches".to_string()), "{stages:?}");
 }
 
@@ -102,14 +105,17 @@ fn every_real_stitch_as_a_loop_stays_outside_a_whole_stocking() {
     );
     assert!(out.status.success(), "{}", stderr(&out));
     let out = dir.path().join("out");
-    let r = crate::support::report(&out);
-    let yarns = &r["details"]["yarns"];
-    assert_eq!(yarns["written"], "loops");
-    let stitches = yarns["real_stitches"]["points"].as_u64().unwrap();
+    let r = read_fit_report(&out);
+    let yarns = &r.details.yarns;
+    assert_eq!(yarns.written, YarnsWritten::Loops);
+    let stitches = yarns.real_stitches.unwrap().points;
     // Twelve samples a stitch; the fix adds a few where a loop crossed a crease.
-    let points = yarns["points"].as_u64().unwrap();
-    assert!(points >= 12 * stitches && points < 13 * stitches, "{yarns}");
-    assert_eq!(r["details"]["penetration_fix"]["still_crossing"], 0);
+    let points = yarns.points;
+    assert!(
+        points >= 12 * stitches && points < 13 * stitches,
+        "{yarns:?}"
+    );
+    assert_eq!(r.details.penetration_fix.unwrap().still_crossing, 0);
     let depth = polyline_depth(&out, &collider_of(&leg), |_| true);
     assert!(
         depth.deepest <= 1e-7,

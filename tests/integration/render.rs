@@ -11,7 +11,8 @@ use knitfit::preview::{CameraSettings, PreviewSettings};
 use knitfit::scene::Scene;
 
 use crate::support::{
-    files_in, knitfit, knitfit_env, procedural_leg, report, stage_names, stderr, write,
+    files_in, knitfit, knitfit_env, procedural_leg, read_fit_report, read_render_report,
+    stage_names, stderr, write,
 };
 
 /// Yarn 0.2/0.25 mm in radius: thicker than the bundled scene's, so that a coarse 40×40 fit
@@ -326,7 +327,7 @@ fn a_fit_without_preview_in_its_outputs_renders_nothing_and_one_with_it_writes_p
     };
     let without = fit(r#"["glb"]"#, "without");
     assert_eq!(files_in(&without), ["report.json", "stocking.glb"]);
-    let stages = stage_names(&report(&without));
+    let stages = stage_names(&read_fit_report(&without));
     assert!(
         !stages
             .iter()
@@ -336,7 +337,7 @@ fn a_fit_without_preview_in_its_outputs_renders_nothing_and_one_with_it_writes_p
 
     let with = fit(r#"["preview"]"#, "with");
     assert_eq!(files_in(&with), ["preview.png", "report.json"]);
-    let r = report(&with);
+    let r = read_fit_report(&with);
     let stages = stage_names(&r);
     assert!(stages.contains(&"render preview".to_string()), "{stages:?}");
     // The preview draws every real stitch as a loop; no yarn file, so nothing to mend.
@@ -376,10 +377,8 @@ fn render_writes_preview_png_next_to_the_input_with_its_own_report() {
         files_in(dir.path()),
         ["preview.png", "preview.report.json", "stocking.glb"]
     );
-    let r: serde_json::Value =
-        serde_json::from_slice(&std::fs::read(dir.path().join("preview.report.json")).unwrap())
-            .unwrap();
-    assert_eq!(r["command"], "render");
+    let r = read_render_report(dir.path());
+    assert_eq!(r.command, "render");
     assert!(stage_names(&r).contains(&"render preview".to_string()));
     // Refuses to overwrite its input.
     let clash = knitfit(

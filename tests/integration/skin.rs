@@ -9,8 +9,8 @@ use knitfit::leg::{load_leg, Collider, ContactMethod, Units, UpAxis, UpChoice};
 use nalgebra::Point3;
 
 use crate::support::{
-    fit, float, knitfit, point, read_ply, report, sample_legs, stage_names, stderr, write_tube_leg,
-    OPEN_TUBE,
+    fit, float, knitfit, point, read_fit_report, read_ply, sample_legs, stage_names, stderr,
+    write_tube_leg, OPEN_TUBE,
 };
 
 /// How deep a yarn polyline may reach into the leg: 0.05 mm.
@@ -74,12 +74,12 @@ fn every_yarn_polyline_stays_on_the_skin_of_every_sample_leg() {
         let (dir, r) = fit(&leg, "60x60", OPEN_TUBE);
         let out = dir.path().join("out");
         let name = leg.display();
-        let fix = &r["details"]["penetration_fix"];
-        assert_eq!(fix["still_crossing"], 0, "{name}: {fix}");
-        assert_eq!(fix["repaired"], fix["crossing"], "{name}: {fix}");
+        let fix = r.details.penetration_fix.unwrap();
+        assert_eq!(fix.still_crossing, 0, "{name}: {fix:?}");
+        assert_eq!(fix.repaired, fix.crossing, "{name}: {fix:?}");
         let depth = polyline_depth(&out, &collider_of(&leg), |_| true);
         eprintln!(
-            "{name}: {} samples, deepest {:.2e} m, fix {fix}",
+            "{name}: {} samples, deepest {:.2e} m, fix {fix:?}",
             depth.samples, depth.deepest
         );
         assert!(
@@ -112,8 +112,8 @@ fn without_the_fix_straight_segments_cut_through_the_coarse_leg() {
         &["fit", "nofix.json", "--resolution", "40x40", "-q"],
     );
     assert!(out.status.success(), "{}", stderr(&out));
-    let r = report(&dir.path().join("out"));
-    assert!(r["details"]["penetration_fix"].is_null());
+    let r = read_fit_report(&dir.path().join("out"));
+    assert!(r.details.penetration_fix.is_none());
     let stages = stage_names(&r);
     assert!(!stages.iter().any(|s| s == "penetration fix"), "{stages:?}");
     let depth = polyline_depth(&dir.path().join("out"), &collider_of(&leg), |_| true);
@@ -125,12 +125,9 @@ fn without_the_fix_straight_segments_cut_through_the_coarse_leg() {
 
     // The same fit with the fix: repaired, and on the skin.
     let (fixed_dir, fixed) = fit(&leg, "40x40", &[]);
-    let fix = &fixed["details"]["penetration_fix"];
-    assert!(fix["repaired"].as_u64().unwrap() > 100, "{fix}");
-    assert!(
-        fix["points_inserted"].as_u64().unwrap() >= fix["repaired"].as_u64().unwrap(),
-        "{fix}"
-    );
+    let fix = fixed.details.penetration_fix.unwrap();
+    assert!(fix.repaired > 100, "{fix:?}");
+    assert!(fix.points_inserted >= fix.repaired, "{fix:?}");
     let depth = polyline_depth(&fixed_dir.path().join("out"), &collider_of(&leg), |_| true);
     assert!(depth.deepest <= MAX_DEPTH_M, "{} mm", depth.deepest * 1e3);
 }
@@ -163,7 +160,7 @@ fn the_back_of_the_knee_and_the_achilles_tendon_are_not_cut_through() {
             depth.at
         );
     }
-    assert_eq!(r["metrics"]["max_penetration_m"], 0.0);
+    assert_eq!(r.metrics.max_penetration_m, Some(0.0));
 }
 
 /// A leg-sized tube with a sharp V-shaped crease running down its back (concave) and a sharp
@@ -187,10 +184,10 @@ fn a_synthetic_crease_and_ridge_are_followed_without_cutting_through() {
     let dir = tempfile::tempdir().unwrap();
     let leg = creased_leg(dir.path());
     let (fit_dir, r) = fit(&leg, "48x40", &[]);
-    assert_eq!(r["metrics"]["converged"], true);
-    assert_eq!(r["metrics"]["max_penetration_m"], 0.0);
-    let fix = &r["details"]["penetration_fix"];
-    assert!(fix["repaired"].as_u64().unwrap() > 0, "{fix}");
+    assert!(r.metrics.converged);
+    assert_eq!(r.metrics.max_penetration_m, Some(0.0));
+    let fix = r.details.penetration_fix.unwrap();
+    assert!(fix.repaired > 0, "{fix:?}");
     let depth = polyline_depth(&fit_dir.path().join("out"), &collider_of(&leg), |_| true);
     assert!(
         depth.deepest <= MAX_DEPTH_M,
@@ -228,11 +225,7 @@ fn coverage_and_density_rise_where_the_leg_is_thin_and_fall_where_it_is_stretche
     for leg in sample_legs() {
         let (dir, r) = fit(&leg, "60x60", OPEN_TUBE);
         let name = leg.display();
-        let axis = &r["details"]["axis"];
-        let (bottom, top) = (
-            axis["bottom"][1].as_f64().unwrap(),
-            axis["top"][1].as_f64().unwrap(),
-        );
+        let (bottom, top) = (r.details.axis.bottom[1], r.details.axis.top[1]);
         let fields = leg_fields(&dir.path().join("out"));
         let band = |from: f64, to: f64| {
             let picked: Vec<&LegVertex> = fields
@@ -279,11 +272,7 @@ fn leg_attributes_are_smooth_across_the_mesh() {
     let leg = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/makehuman_leg.glb");
     let (dir, r) = fit(&leg, "150x150", &[]);
     // Inside the covered part: the field ends where the stocking does, by design.
-    let axis = &r["details"]["axis"];
-    let (bottom, top) = (
-        axis["bottom"][1].as_f64().unwrap(),
-        axis["top"][1].as_f64().unwrap(),
-    );
+    let (bottom, top) = (r.details.axis.bottom[1], r.details.axis.top[1]);
     let inside = |p: &Point3<f64>| (0.05..0.95).contains(&((p.y - bottom) / (top - bottom)));
     // Vertices outside count as uncovered (density 0), keeping the mesh's numbering.
     let fields: Vec<LegVertex> = leg_fields(&dir.path().join("out"))
@@ -381,11 +370,7 @@ fn the_density_picture_shows_front_and_side() {
     let leg = Path::new(env!("CARGO_MANIFEST_DIR")).join("samples/makehuman_leg.glb");
     let (dir, r) = fit(&leg, "40x40", &[]);
     let out = dir.path().join("out");
-    assert!(r["outputs"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .any(|o| o == "density.png"));
+    assert!(r.outputs.iter().any(|o| o == "density.png"));
     let picture = image::open(out.join("density.png")).unwrap().to_rgb8();
     assert!(picture.width() > picture.height(), "two views side by side");
     // Coloured pixels (not grey, not background) make up a real part of the picture.

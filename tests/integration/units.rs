@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use knitfit::report::{FitDetails, Report};
 use serde_json::json;
 
 use crate::support::{
@@ -50,21 +51,15 @@ fn the_legs_fields_are_the_same_on_a_coarse_grid_and_at_the_real_stitch_count() 
     let leg = procedural_leg();
     let (coarse_dir, coarse) = fit(&leg, "100x100", &[]);
     // The real count: a point per needle around, a course per knitted course along.
-    let knit = &coarse["details"]["knit"];
-    assert_eq!(knit["needles"], 400.0);
-    let courses = knit["courses"].as_f64().unwrap().round() as usize + 1;
+    let knit = &coarse.details.knit;
+    assert_eq!(knit.needles, 400.0);
+    let courses = knit.courses.round() as usize + 1;
     let (real_dir, real) = fit(&leg, &format!("400x{courses}"), &[]);
-    let per_cell = &real["details"]["knit"]["stitches_per_cell"];
-    assert!(
-        (per_cell["course"].as_f64().unwrap() - 1.0).abs() < 1e-9,
-        "{per_cell}"
-    );
-    assert!(
-        (per_cell["wale"].as_f64().unwrap() - 1.0).abs() < 0.01,
-        "{per_cell}"
-    );
+    let per_cell = real.details.knit.stitches_per_cell;
+    assert!((per_cell.course - 1.0).abs() < 1e-9, "{per_cell:?}");
+    assert!((per_cell.wale - 1.0).abs() < 0.01, "{per_cell:?}");
     for (r, name) in [(&coarse, "100x100"), (&real, "real")] {
-        assert_eq!(r["metrics"]["converged"], true, "{name}");
+        assert!(r.metrics.converged, "{name}");
     }
     let a = leg_fields(&coarse_dir.path().join("out"));
     let b = leg_fields(&real_dir.path().join("out"));
@@ -78,14 +73,10 @@ fn a_whole_stockings_fields_are_the_same_on_coarse_grids_and_at_the_real_stitch_
     let leg = sample("makehuman_leg_foot.glb");
     // The default grid: 150 wales, the courses following the stitch (150×264 here).
     let (coarse_dir, coarse) = fit(&leg, "150", &[]);
-    assert_eq!(coarse["details"]["tube"]["courses"], 264);
+    assert_eq!(coarse.details.tube.courses, 264);
     // Its cells, 1.97 mm of fabric, are short enough for the toe's tip: even.
-    assert!(coarse["details"]["tube"]["toe_tip_wale_spacing_m"].is_null());
-    let courses = coarse["details"]["knit"]["courses"]
-        .as_f64()
-        .unwrap()
-        .round() as usize
-        + 1;
+    assert!(coarse.details.tube.toe_tip_wale_spacing_m.is_none());
+    let courses = coarse.details.knit.courses.round() as usize + 1;
     let (real_dir, _) = fit(&leg, &format!("400x{courses}"), &[]);
     let a = leg_fields(&coarse_dir.path().join("out"));
     let b = leg_fields(&real_dir.path().join("out"));
@@ -104,7 +95,7 @@ fn a_whole_stockings_fields_are_the_same_on_coarse_grids_and_at_the_real_stitch_
     // 0.3 / 0.1 / 1.9 % and 1.1 / 0.2 / 2.7 % measured.
     for grid in ["100", "100x100"] {
         let (dir, report) = fit(&leg, grid, &[]);
-        let tip = report["details"]["tube"]["toe_tip_wale_spacing_m"].as_f64();
+        let tip = report.details.tube.toe_tip_wale_spacing_m;
         assert!(
             tip.is_some_and(|m| (m - 0.002).abs() < 1e-4),
             "{grid}: {tip:?}"
@@ -121,12 +112,9 @@ fn kept(fields: &[[f64; 3]], keep: &[bool]) -> Vec<[f64; 3]> {
 }
 
 /// For each vertex of `out/leg.ply`, whether it lies above the ankle the report found.
-fn above_the_ankle(out: &Path, report: &serde_json::Value) -> Vec<bool> {
-    let marks = &report["details"]["leg"]["landmarks"];
-    let vector = |v: &serde_json::Value| -> [f64; 3] {
-        [0, 1, 2].map(|i| v[i].as_f64().expect("a landmark coordinate"))
-    };
-    let (up, ankle) = (vector(&marks["up"]), vector(&marks["ankle"]["centre"]["m"]));
+fn above_the_ankle(out: &Path, report: &Report<FitDetails>) -> Vec<bool> {
+    let marks = report.details.leg.landmarks.as_ref().expect("landmarks");
+    let (up, ankle) = (marks.up, marks.ankle.centre.m);
     let height = |p: [f64; 3]| (0..3).map(|i| p[i] * up[i]).sum::<f64>();
     read_ply(&out.join("leg.ply")).payload["vertex"]
         .iter()
@@ -137,27 +125,24 @@ fn above_the_ankle(out: &Path, report: &serde_json::Value) -> Vec<bool> {
 #[test]
 fn a_20_denier_stocking_has_the_density_coverage_and_pressure_of_sheer_hosiery() {
     let (dir, r) = fit(&procedural_leg(), "100x100", &[]);
-    let d = &r["details"];
+    let d = &r.details;
     // 20 den nylon is 50 µm across (solid nylon, 1.14 g/cm³); the support yarn's 40 den, 70 µm.
-    let diameter = |yarn: &str| d["knit"]["yarn_diameter_um"][yarn].as_f64().unwrap();
-    assert!((diameter("nylon") - 49.9).abs() < 0.1);
-    assert!((diameter("support") - 70.5).abs() < 0.1);
+    let diameter = d.knit.yarn_diameter_um;
+    assert!((diameter.nylon - 49.9).abs() < 0.1);
+    assert!((diameter.support - 70.5).abs() < 0.1);
     // Hundreds of real stitches per cm² at the ankle, as the paper's density map shows, not the
     // tens a 100-point grid has.
-    let density = &d["stitch_density_per_cm2"];
-    assert!(density["max"].as_f64().unwrap() > 150.0, "{density}");
+    let density = &d.stitch_density_per_cm2;
+    assert!(density.max > 150.0, "{density:?}");
     // Sheer: most of the skin shows; stretched over the thigh, more of it.
-    let coverage = &d["coverage"];
-    let (lo, hi) = (
-        coverage["min"].as_f64().unwrap(),
-        coverage["max"].as_f64().unwrap(),
-    );
-    assert!(lo > 0.05 && hi < 0.5, "{coverage}");
+    let coverage = d.coverage;
+    let (lo, hi) = (coverage.min, coverage.max);
+    assert!(lo > 0.05 && hi < 0.5, "{coverage:?}");
     // Far below the lightest medical compression class (15–21 mmHg at the ankle), but not
     // nothing where the stocking is stretched.
-    let pressure = &d["pressure_mmhg"];
-    assert!(pressure["max"].as_f64().unwrap() < 15.0, "{pressure}");
-    assert!(pressure["median"].as_f64().unwrap() > 0.2, "{pressure}");
+    let pressure = d.pressure_mmhg;
+    assert!(pressure.max < 15.0, "{pressure:?}");
+    assert!(pressure.median > 0.2, "{pressure:?}");
     let fields = leg_fields(&dir.path().join("out"));
     assert!(fields.iter().flatten().all(|v| v.is_finite() && *v >= 0.0));
 }

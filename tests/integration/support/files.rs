@@ -25,6 +25,42 @@ pub fn point(e: &DefaultElement) -> Point3<f64> {
     Point3::new(float(e, "x"), float(e, "y"), float(e, "z"))
 }
 
+/// The JSON `text` as a value whose numbers are exactly those written: each float read as Rust
+/// reads one (`str::parse`, correctly rounded). serde_json's own parser, without its
+/// `float_roundtrip` feature (which knitfit does not enable: it would change how scenes and glTF
+/// files are read), rounds a 17-digit number twice and lands one unit in the last place off for
+/// about one in twenty, so a report read with it is not the report written. Integers, strings and
+/// the literals are serde_json's; an object's keys come back sorted.
+pub fn exact_json(text: &str) -> serde_json::Value {
+    use serde_json::value::RawValue;
+    use serde_json::Value;
+    let raw = text.trim();
+    match raw.as_bytes().first() {
+        Some(b'{') => {
+            let fields: Vec<(String, &RawValue)> =
+                serde_json::from_str::<std::collections::BTreeMap<String, &RawValue>>(raw)
+                    .unwrap()
+                    .into_iter()
+                    .collect();
+            Value::Object(
+                fields
+                    .into_iter()
+                    .map(|(k, v)| (k, exact_json(v.get())))
+                    .collect(),
+            )
+        }
+        Some(b'[') => {
+            let items: Vec<&RawValue> = serde_json::from_str(raw).unwrap();
+            Value::Array(items.into_iter().map(|v| exact_json(v.get())).collect())
+        }
+        Some(b'-' | b'0'..=b'9') if raw.contains(['.', 'e', 'E']) => {
+            let x: f64 = raw.parse().unwrap_or_else(|e| panic!("{raw}: {e}"));
+            Value::Number(serde_json::Number::from_f64(x).unwrap())
+        }
+        _ => serde_json::from_str(raw).unwrap_or_else(|e| panic!("{raw}: {e}")),
+    }
+}
+
 /// Standard base64 with padding, for the data URIs of `.gltf` buffers.
 pub fn base64(bytes: &[u8]) -> String {
     const ALPHABET: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";

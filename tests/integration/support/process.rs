@@ -4,7 +4,11 @@
 use std::path::{Path, PathBuf};
 use std::process::Output;
 
+use knitfit::report::{CommandDetails, FitDetails, PatchDetails, RenderDetails, Report};
+use serde::de::DeserializeOwned;
 use serde_json::{json, Value};
+
+use super::files::exact_json;
 
 /// Runs the knitfit binary with `args` in directory `cwd`.
 pub fn knitfit(cwd: &Path, args: &[&str]) -> Output {
@@ -50,9 +54,28 @@ pub fn files_in(dir: &Path) -> Vec<String> {
     names
 }
 
-/// The parsed report.json of an output directory.
-pub fn report(dir: &Path) -> serde_json::Value {
-    serde_json::from_slice(&std::fs::read(dir.join("report.json")).unwrap()).unwrap()
+/// The report `file` (a run's `report.json`, or `render`'s `preview.report.json`), read as the
+/// report of the command whose details are `D`: every field typed, none unknown
+/// (`deny_unknown_fields`), so a renamed or added field fails here rather than passing as
+/// `null`; every number exactly as written ([`exact_json`]).
+pub fn read_report_file<D: DeserializeOwned + CommandDetails>(file: &Path) -> Report<D> {
+    let text = std::fs::read_to_string(file).unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+    serde_json::from_value(exact_json(&text)).unwrap_or_else(|e| panic!("{}: {e}", file.display()))
+}
+
+/// The `report.json` of the fit whose output directory is `dir`.
+pub fn read_fit_report(dir: &Path) -> Report<FitDetails> {
+    read_report_file(&dir.join("report.json"))
+}
+
+/// The `report.json` of the patch experiment whose output directory is `dir`.
+pub fn read_patch_report(dir: &Path) -> Report<PatchDetails> {
+    read_report_file(&dir.join("report.json"))
+}
+
+/// The `preview.report.json` that `knitfit render` wrote into the fit directory `dir`.
+pub fn read_render_report(dir: &Path) -> Report<RenderDetails> {
+    read_report_file(&dir.join("preview.report.json"))
 }
 
 /// The flags of a fit that ends at the ankle (an open tube), for tests about the open tube's
@@ -60,7 +83,11 @@ pub fn report(dir: &Path) -> serde_json::Value {
 pub const OPEN_TUBE: &[&str] = &["--bottom", "ankle"];
 
 /// Fits `leg` at `resolution` into a fresh directory and returns (dir, report).
-pub fn fit(leg: &Path, resolution: &str, extra: &[&str]) -> (tempfile::TempDir, serde_json::Value) {
+pub fn fit(
+    leg: &Path,
+    resolution: &str,
+    extra: &[&str],
+) -> (tempfile::TempDir, Report<FitDetails>) {
     let dir = tempfile::tempdir().unwrap();
     let mut args = vec![
         "fit",
@@ -73,18 +100,13 @@ pub fn fit(leg: &Path, resolution: &str, extra: &[&str]) -> (tempfile::TempDir, 
     args.extend_from_slice(extra);
     let out = knitfit(dir.path(), &args);
     assert!(out.status.success(), "{}: {}", leg.display(), stderr(&out));
-    let r = report(&dir.path().join("out"));
+    let r = read_fit_report(&dir.path().join("out"));
     (dir, r)
 }
 
 /// The names of the stages in a report, in order.
-pub fn stage_names(report: &serde_json::Value) -> Vec<String> {
-    report["stages"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|s| s["name"].as_str().unwrap().to_string())
-        .collect()
+pub fn stage_names<D>(report: &Report<D>) -> Vec<String> {
+    report.stages.iter().map(|s| s.name.to_string()).collect()
 }
 
 /// Runs `knitfit fit` on a scene in a fresh directory: `scene` is the scene file's JSON (the leg
