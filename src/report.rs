@@ -736,37 +736,12 @@ mod tests {
             axis: StretchAxis::Wale,
             factor: 2.0,
         };
-        let stages = vec![
-            Stage::LoadLeg,
-            Stage::FindLandmarks,
-            Stage::FindAxis,
-            Stage::BuildCollider,
-            Stage::KnitTube,
-            Stage::Fit,
-            Stage::ExactContactPass,
-            Stage::CheckPenetration,
-            Stage::LegAttributes,
-            Stage::LayStitches,
-            Stage::KnitLoops,
-            Stage::PenetrationFix,
-            Stage::StockingSurface,
-            Stage::KnitPatch(awkward),
-            Stage::RelaxPatch(awkward),
-            Stage::KnitPatch(whole),
-            Stage::RelaxPatch(whole),
-            Stage::MeasureStitches,
-            Stage::ReadStocking,
-            Stage::Encode(File::Fit(FitFile::StockingGlb)),
-            Stage::Encode(File::Fit(FitFile::StockingPly)),
-            Stage::Encode(File::Fit(FitFile::LegPly)),
-            Stage::Encode(File::Fit(FitFile::DensityPicture)),
-            Stage::Encode(File::Patch(PatchFile::Ply)),
-            Stage::Encode(File::Patch(PatchFile::Glb)),
-            Stage::Encode(File::Patch(PatchFile::Picture)),
-            Stage::RenderPreview,
-            Stage::WriteFiles,
-        ];
-        // No wildcard: a new kind of stage does not compile here until it is in the list above.
+        let mut stages = Stage::UNPARAMETERISED.to_vec();
+        stages.extend([awkward, whole].map(Stage::KnitPatch));
+        stages.extend([awkward, whole].map(Stage::RelaxPatch));
+        stages.extend(FitFile::ALL.map(|f| Stage::Encode(File::Fit(f))));
+        stages.extend(PatchFile::ALL.map(|f| Stage::Encode(File::Patch(f))));
+        // No wildcard: a new kind of stage does not compile here until it is in the lists above.
         for stage in &stages {
             match stage {
                 Stage::LoadLeg

@@ -57,6 +57,30 @@ pub enum Stage {
     WriteFiles,
 }
 
+impl Stage {
+    /// Every stage that carries no value (a patch stage carries its stretch, an encode its
+    /// file), in the order a plan lists them.
+    pub const UNPARAMETERISED: [Stage; 17] = [
+        Stage::LoadLeg,
+        Stage::FindLandmarks,
+        Stage::FindAxis,
+        Stage::BuildCollider,
+        Stage::KnitTube,
+        Stage::Fit,
+        Stage::ExactContactPass,
+        Stage::CheckPenetration,
+        Stage::LegAttributes,
+        Stage::LayStitches,
+        Stage::KnitLoops,
+        Stage::PenetrationFix,
+        Stage::StockingSurface,
+        Stage::MeasureStitches,
+        Stage::ReadStocking,
+        Stage::RenderPreview,
+        Stage::WriteFiles,
+    ];
+}
+
 impl fmt::Display for Stage {
     /// The stage's name, as in `knitfit plan` and `report.json` (`relax course=1.5`).
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -97,25 +121,6 @@ impl<'de> serde::Deserialize<'de> for Stage {
     fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Stage, D::Error> {
         use crate::knit::StretchAxis;
         let name = <String as serde::Deserialize>::deserialize(deserializer)?;
-        let unit = [
-            Stage::LoadLeg,
-            Stage::FindLandmarks,
-            Stage::FindAxis,
-            Stage::BuildCollider,
-            Stage::KnitTube,
-            Stage::Fit,
-            Stage::ExactContactPass,
-            Stage::CheckPenetration,
-            Stage::LegAttributes,
-            Stage::LayStitches,
-            Stage::KnitLoops,
-            Stage::PenetrationFix,
-            Stage::StockingSurface,
-            Stage::MeasureStitches,
-            Stage::ReadStocking,
-            Stage::RenderPreview,
-            Stage::WriteFiles,
-        ];
         let files = (FitFile::ALL.into_iter().map(File::Fit))
             .chain(PatchFile::ALL.into_iter().map(File::Patch));
         let stretch = |s: &str| -> Option<Stretch> {
@@ -128,7 +133,7 @@ impl<'de> serde::Deserialize<'de> for Stage {
                 factor: factor.parse().ok()?,
             })
         };
-        let stage = unit
+        let stage = Stage::UNPARAMETERISED
             .into_iter()
             .chain(files.map(Stage::Encode))
             .find(|s| s.to_string() == name);
