@@ -29,7 +29,7 @@ pub enum Error {
     },
     /// A settings value the run cannot use, found by a check that needs the leg (its length,
     /// its foot): the field as the scene spells it, and what is wrong. A command reports it
-    /// under the scene file, or the flag that set the value ([`crate::scene::LoadedScene::refusal`]).
+    /// under the scene file, or the flag that set the value ([`crate::scene::LoadedScene::named`]).
     #[error("{}: {}", .0.field, .0.message)]
     Settings(crate::base::settings::Invalid),
     /// The leg file cannot be used: not glTF, no triangles, compressed geometry, bad values, or

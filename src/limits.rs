@@ -82,7 +82,7 @@ pub const FALLBACK_LIMIT_GIB: f64 = 8.0;
 
 /// What a fit's memory grows with.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct FitSize<'a> {
+struct FitSize<'a> {
     /// The tube's grid (`tube.wales` by `tube.courses`).
     pub tube: GridSize,
     /// Triangles the leg file declares.
@@ -115,9 +115,9 @@ pub struct FitMemory {
 pub const COURSES_PER_WALE_ESTIMATE: usize = 2;
 
 impl FitMemory {
-    /// The check of a fit on a `tube` grid over a leg of `leg_triangles`,
-    /// relaxed first on the larger level `solved_on` where it has one, its tube real stitches
-    /// drawn as loops where `loops`.
+    /// The check of a fit on a `tube` grid over a leg of `leg_triangles`, relaxed first on the
+    /// larger level `solved_on` where it has one; `loops` where the tube is the real stitches,
+    /// drawn as loops.
     pub fn check(
         &self,
         tube: GridSize,
@@ -162,7 +162,7 @@ pub struct MemoryEstimate {
     /// Tube size, wales × courses (for messages).
     #[serde(skip)]
     pub tube: GridSize,
-    /// [`FitSize::solved_on`] (for messages).
+    /// The larger level the solver relaxes first, if any (for messages).
     #[serde(skip)]
     pub solved_on: Option<GridSize>,
     /// Tube points (wales × courses).
@@ -183,7 +183,7 @@ pub struct MemoryEstimate {
 
 impl MemoryEstimate {
     /// The estimate for a fit of this size.
-    pub fn fit(size: &FitSize) -> MemoryEstimate {
+    fn fit(size: &FitSize) -> MemoryEstimate {
         let points = size.tube.wales as f64 * size.tube.courses as f64;
         let triangles = size.leg_triangles as f64;
         let writes = |output| size.outputs.contains(&output);
@@ -342,7 +342,7 @@ pub struct MemoryCheck {
 
 impl MemoryCheck {
     /// The check of a fit of this size against `limits`.
-    pub fn fit(size: &FitSize, limits: &Limits) -> MemoryCheck {
+    fn fit(size: &FitSize, limits: &Limits) -> MemoryCheck {
         MemoryCheck {
             estimate: MemoryEstimate::fit(size),
             limit: MemoryLimit::of(limits),

@@ -17,6 +17,7 @@ use crate::limits::FitMemory;
 use crate::preview::RenderMode;
 use crate::scene::{Effect, LoadedScene, Scene, LEG_AXIS};
 use crate::sim::multilevel::{grid_sizes_down_to, COARSEST, STOCKING_COARSEST};
+use crate::sim::stall::YarnStiffness;
 use crate::sim::{ForceTerms, SolverMethod};
 use crate::stage::{File, FitFile, PatchFile, Stage};
 
@@ -530,9 +531,10 @@ impl Plan {
                 forces: self.forces,
                 contact: scene.contact.method,
                 offset_m: scene.contact.offset(&scene.yarns),
-                heel: scene.tube.heel,
-                support_ratio: scene.yarns.support.stiffness / scene.yarns.nylon.stiffness,
-                side: scene.leg.side,
+                yarn_stiffness: YarnStiffness {
+                    nylon: scene.yarns.nylon.stiffness,
+                    support: scene.yarns.support.stiffness,
+                },
             },
             measure: self.has(Stage::LegAttributes),
             products: Some(ProductSettings {

@@ -15,9 +15,7 @@ use crate::base::{GridSize, PerDirection};
 use crate::export::YarnsWritten;
 use crate::knit::{Pattern, Stretch, TubeBottom, TubeHeel};
 use crate::leg::landmarks::Ring;
-use crate::leg::{
-    Axis, AxisSource, Cleaned, ContactMethod, Landmarks, Leg, Side, ThighTopKind, Units, UpAxis,
-};
+use crate::leg::{Axis, Cleaned, ContactMethod, Landmarks, Leg, Side, ThighTopKind, Units, UpAxis};
 use crate::limits::MemoryCheck;
 use crate::plan::{Plan, PlannedStage};
 use crate::post::lattice::LaidStitches;
@@ -327,12 +325,7 @@ pub fn stocking_extent(
 ) -> String {
     let length = axis.length();
     let Some(l) = landmarks else {
-        let given = match axis.source {
-            AxisSource::CommandLine => "--axis",
-            AxisSource::Scene => "leg.axis",
-            AxisSource::Landmarks => "the landmarks",
-        };
-        return format!("along {given}, {length:.3} m long");
+        return format!("along {}, {length:.3} m long", axis.source.describe());
     };
     let leg = l
         .side

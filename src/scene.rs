@@ -16,6 +16,7 @@ use serde_json::Value;
 use crate::base::settings::{number, Invalid};
 use crate::error::{Error, Result};
 use crate::export::{default_outputs, Output, YarnsWritten};
+use crate::fit::place::toe_on_a_given_axis;
 use crate::knit::settings::{KnitSettings, PatchSettings, TubeSettings, Yarns, MAX_NEEDLES};
 use crate::knit::{Fabric, Pattern, TubeBottom};
 use crate::leg::settings::LegSettings;
@@ -215,12 +216,7 @@ impl Scene {
         self.contact.validate().map_err(|e| e.within("contact"))?;
         self.leg.validate().map_err(|e| e.within("leg"))?;
         if self.tube.bottom == Some(TubeBottom::Toe) && self.leg.axis.is_some() {
-            return Err(Invalid::new(
-                "tube.bottom",
-                "\"toe\" follows the leg's landmarks, but leg.axis gives a straight tube; set \
-                 tube.bottom to \"ankle\", or leave leg.axis out",
-            )
-            .with(&["leg.axis"]));
+            return Err(toe_on_a_given_axis());
         }
         self.limits.validate().map_err(|e| e.within("limits"))
     }
@@ -581,6 +577,25 @@ mod tests {
 
     fn with(overrides: Vec<Override>) -> Result<LoadedScene> {
         LoadedScene::from_json("{}", "s.json", None, overrides)
+    }
+
+    #[test]
+    fn a_stocking_to_the_toe_on_a_given_axis_is_refused_by_the_field_or_flag_that_asked() {
+        let scene = r#"{"tube": {"bottom": "toe"},
+                        "leg": {"axis": {"bottom": [0, 0, 0], "top": [0, 1, 0]}}}"#;
+        let err = Scene::from_json(scene, "s.json").unwrap_err().to_string();
+        assert!(
+            err.starts_with("s.json: tube.bottom: \"toe\" follows"),
+            "{err}"
+        );
+        let bottom = Override::new("--bottom", "tube.bottom", "toe");
+        let axis = Override::new(
+            "--axis",
+            "leg.axis",
+            serde_json::json!({"bottom": [0, 0, 0], "top": [0, 1, 0]}),
+        );
+        let err = with(vec![bottom, axis]).unwrap_err().to_string();
+        assert!(err.starts_with("--axis: "), "{err}");
     }
 
     #[test]

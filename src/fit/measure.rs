@@ -60,9 +60,9 @@ pub fn stretch_by_part(fit: &SolvedFit) -> Vec<RegionStretch> {
         placement.path.as_ref(),
         landmarks,
     );
-    let (course, wale) = fields::stretch(knit);
+    let stretch = fields::stretch(knit);
     let shares = knit.point_fabric_shares();
-    stretch_by_region(&regions, &course, &wale, shares.as_deref())
+    stretch_by_region(&regions, &stretch, shares.as_deref())
 }
 
 /// A part of the path as the report names it (`"heel"`).

@@ -9,20 +9,19 @@
 //!    state checked (a stall says where and why: [`crate::sim::stall`]);
 //! 5. [`measure`]: density, coverage, stretch, tension and pressure per point and per leg
 //!    vertex, in the real stocking's units at any grid;
-//! 6. [`products()`]: the yarns, the real stitches, the stocking surface, and the files' bytes.
+//! 6. [`products()`]: the yarns, the real stitches, the stocking surface; then each file's bytes
+//!    ([`Products::encode`]) and the preview ([`Products::render_preview`]).
 //!
 //! [`fit()`] runs 2–6 in one call. `knitfit fit`, `bench`, `plan` and the tests call the same
 //! functions: a command builds the [`FitSettings`] from its scene and plan
 //! ([`crate::plan::Plan::fit_settings`]) and times each stage on its clock ([`StageTimes`]).
 //!
 //! ```
-//! use knitfit::{fit, leg, plan::Plan, scene::LoadedScene, stage::NoProgress};
-//!
-//! let mut scene = LoadedScene::load(None, Vec::new())?; // the bundled scene and leg
+//! let mut scene = knitfit::scene::LoadedScene::load(None, Vec::new())?; // the bundled scene
 //! scene.scene.tube.wales = 60; // a coarse grid, for a quick example
-//! let settings = Plan::fit(&scene.scene).fit_settings(&scene);
-//! let leg = leg::load_leg(&scene.leg_path(), settings.load.units, settings.load.up)?;
-//! let fitted = fit::fit(leg, &settings, &mut (), &mut NoProgress)?;
+//! let settings = knitfit::plan::Plan::fit(&scene.scene).fit_settings(&scene);
+//! let (leg, _memory) = knitfit::fit::load(&scene.leg_path(), &settings, &mut ())?;
+//! let fitted = knitfit::fit::fit(leg, &settings, &mut (), &mut knitfit::stage::NoProgress)?;
 //! assert!(fitted.solved.solver.converged() && fitted.solved.max_penetration_m == 0.0);
 //! let density = &fitted.fields.on_leg.stitch_density; // stitches per cm², per leg vertex
 //! assert!(density.iter().any(|&d| d > 0.0));
@@ -44,14 +43,19 @@ pub use products::{products, ProductSettings, Products};
 pub use size::{size, RealStitches, SizedTube};
 pub use solve::{solve, SolveSettings, SolvedFit, SolverRun};
 
-use crate::error::Result;
+use crate::base::settings::{self, Invalid};
+use crate::error::{Error, Result};
 use crate::knit::{Fabric, Pattern, TubeSettings};
 use crate::leg::{decode_leg, read_leg_file, Leg, Units, UpChoice};
 use crate::limits::{FitMemory, MemoryCheck};
+use crate::sim::settings::MAX_OFFSET_M;
 use crate::stage::{timed, Progress, Stage, StageTimes};
 
 /// What each stage of a fit is given: the parts of the scene it owns, and what the plan decided
-/// (the force terms, which products to make).
+/// (the force terms, which products to make). Built from a validated scene by
+/// [`crate::plan::Plan::fit_settings`]; `fabric`, `solve.offset_m` and `solve.forces` are
+/// derived from the scene's `knit`, `yarns`, `tube` and `effects` there, so a script changes
+/// the scene and builds the settings again rather than editing them.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FitSettings {
     /// How the leg file is read.
@@ -72,6 +76,31 @@ pub struct FitSettings {
     pub measure: bool,
     /// The products to make; `None` makes none.
     pub products: Option<ProductSettings>,
+}
+
+impl FitSettings {
+    /// Checks the values a fit divides by or bounds loops with, as the scene's validation does,
+    /// so settings built or edited by hand meet the same limits; the error names the field as
+    /// the scene spells it.
+    pub fn validate(&self) -> std::result::Result<(), Invalid> {
+        self.tube.validate().map_err(|e| e.within("tube"))?;
+        self.solve
+            .solver
+            .validate()
+            .map_err(|e| e.within("solver"))?;
+        self.memory
+            .limits
+            .validate()
+            .map_err(|e| e.within("limits"))?;
+        let stitch = self.fabric.stitch_m;
+        settings::positive("knit.course_spacing_m", stitch.course)?;
+        settings::positive("knit.wale_spacing_m", stitch.wale)?;
+        settings::positive("knit.needles", self.fabric.needles)?;
+        settings::within("contact.offset_m", self.solve.offset_m, 0.0, MAX_OFFSET_M)?;
+        let stiffness = self.solve.yarn_stiffness;
+        settings::positive("yarns.nylon.stiffness", stiffness.nylon)?;
+        settings::positive("yarns.support.stiffness", stiffness.support)
+    }
 }
 
 /// How a leg file is read: the scene's `leg.units` and `leg.up_axis`.
@@ -118,13 +147,15 @@ pub fn load(
 /// and makes its products where `settings` asks; each stage timed in `times`, the solver's
 /// steps told to `progress`.
 ///
-/// Errors: each stage's (see [`place()`], [`size()`], [`solve()`]).
+/// Errors: [`Error::Settings`] for settings [`FitSettings::validate`] refuses; each stage's
+/// (see [`place()`], [`size()`], [`solve()`]).
 pub fn fit(
     leg: Leg,
     settings: &FitSettings,
     times: &mut dyn StageTimes,
     progress: &mut dyn Progress,
 ) -> Result<Fitted> {
+    settings.validate().map_err(Error::Settings)?;
     let placement = place(&leg, &settings.place, &settings.tube, times)?;
     let real_stitches = settings
         .products

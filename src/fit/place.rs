@@ -10,6 +10,7 @@
 
 use nalgebra::{Point3, Vector3};
 
+use crate::base::settings::Invalid;
 use crate::error::{Error, Result};
 use crate::knit::path::{path_to_toe, TubePath};
 use crate::knit::tube::{tube_axis, Centreline};
@@ -41,6 +42,8 @@ pub struct Placement {
     pub path: Option<TubePath>,
     /// The stocking's centreline, from course 0 to the last course: the path's, or the axis.
     pub centreline: Centreline,
+    /// Which leg was dressed (`leg.side`; a file with one leg has it dressed whatever its side).
+    pub side: Side,
 }
 
 impl Placement {
@@ -59,7 +62,9 @@ impl Placement {
 /// [`Stage::FindAxis`] in `times`.
 ///
 /// Errors: [`Error::Leg`] when the landmarks cannot be found, the axis cannot be placed on them,
-/// the leg does not go around it, or the stocking cannot be taken to the toe.
+/// the leg does not go around it, or the stocking cannot be taken to the toe;
+/// [`Error::Settings`] for a grid too coarse for a stocking to the toe, or one to the toe on a
+/// given axis.
 pub fn place(
     leg: &Leg,
     place: &PlaceSettings,
@@ -81,8 +86,9 @@ pub fn place(
         let axis = choose_axis(leg, place, tube, landmarks.as_ref())?;
         let path = match (tube.bottom, &landmarks) {
             (Some(TubeBottom::Ankle), _) => None,
-            // A given axis is a straight tube's (the scene refuses one to the toe).
-            (_, None) => None,
+            // A given axis is a straight tube's (a scene's validation refuses this too).
+            (Some(TubeBottom::Toe), None) => return Err(Error::Settings(toe_on_a_given_axis())),
+            (None, None) => None,
             // Absent: to the toe where the leg has a foot.
             (None, Some(l)) if l.foot.is_none() => None,
             (_, Some(l)) => Some(stocking_path(leg, tube, l)?),
@@ -98,6 +104,7 @@ pub fn place(
         axis,
         path,
         centreline,
+        side: place.side,
     })
 }
 
@@ -151,8 +158,19 @@ fn stocking_path(leg: &Leg, tube: &TubeSettings, landmarks: &Landmarks) -> Resul
         ),
     };
     tube.check_to_the_toe()
-        .map_err(|invalid| fail(invalid.message))?;
+        .map_err(|invalid| Error::Settings(invalid.within("tube")))?;
     let axis = tube_axis(landmarks, TubeBottom::Toe, tube.top).map_err(fail)?;
     let top_s = axis.top().coords.dot(&Vector3::from(landmarks.up));
     path_to_toe(landmarks, top_s, &leg.positions, &leg.triangles).map_err(fail)
+}
+
+/// The refusal of a stocking to the toe on a given axis: a straight tube cannot follow the
+/// foot. The scene's validation and [`place`] both refuse it.
+pub fn toe_on_a_given_axis() -> Invalid {
+    Invalid::new(
+        "tube.bottom",
+        "\"toe\" follows the leg's landmarks, but leg.axis gives a straight tube; set \
+         tube.bottom to \"ankle\", or leave leg.axis out",
+    )
+    .with(&["leg.axis"])
 }

@@ -1,7 +1,8 @@
 //! What a fit hands to artists' tools: the yarns (the grid's, or every real stitch as a
 //! crossing or a knitted loop), mended where they cut through the skin (paper §6.3), the leg
-//! and the stocking as surfaces with their attributes, and the files' bytes. Stages
-//! [`Stage::LayStitches`] to [`Stage::StockingSurface`], and [`Stage::Encode`] of each file.
+//! and the stocking as surfaces with their attributes; then each file's bytes and the preview.
+//! Stages [`Stage::LayStitches`] to [`Stage::StockingSurface`], [`Stage::Encode`] of each file
+//! and [`Stage::RenderPreview`].
 
 use crate::base::{Material, PerYarn, Stance, SurfaceMesh, YarnGeometry, YarnKind};
 use crate::draw;
@@ -11,7 +12,7 @@ use crate::export;
 use crate::export::gltf::GlbNode;
 use crate::export::YarnsWritten;
 use crate::knit::tube::{build_stocking, build_tube, CourseSpacing, TubeSpec};
-use crate::knit::{Fabric, Knit};
+use crate::knit::{Fabric, Knit, Yarns};
 use crate::leg::landmarks::stance_of;
 use crate::post::fields;
 use crate::post::lattice::{lay_on_skin, lay_stitches, LaidStitches};
@@ -19,6 +20,7 @@ use crate::post::loops::loops;
 use crate::post::penetration::{fix_penetrations, PenetrationStats};
 use crate::post::stitches::slack;
 use crate::post::surfaces::{leg_surface, lift_clear_of, stocking_surface};
+use crate::preview::{encode_preview, PreviewInput, PreviewSettings, PreviewStats};
 use crate::sim::ForceTerms;
 use crate::stage::{timed, FitFile, Stage, StageTimes};
 
@@ -52,7 +54,7 @@ pub struct Products {
     pub yarns: YarnGeometry,
     /// The real loops, where they were made for the preview only (drawn unmended: a loop
     /// dipping a few micrometres into the skin is hidden where it dips).
-    pub preview_loops: Option<YarnGeometry>,
+    preview_loops: Option<YarnGeometry>,
     /// How the real stitches were laid, where they were.
     pub laid: Option<LaidStitches>,
     /// What the penetration fix did, where it ran.
@@ -144,9 +146,9 @@ pub fn products(
 }
 
 /// A knit's points and springs as yarns, with each point's `tension` (N/m around) and `slack`.
-pub fn knit_yarns(knit: &Knit, fabric: &Fabric, forces: &ForceTerms) -> YarnGeometry {
+fn knit_yarns(knit: &Knit, fabric: &Fabric, forces: &ForceTerms) -> YarnGeometry {
     let stretch = fields::stretch(knit);
-    let [tension, _] = fields::tension(knit, fabric, forces, &stretch);
+    let tension = fields::tension(knit, fabric, forces, &stretch).course;
     let mut yarns = knit.yarn_geometry("yarns", [0.0; 3]);
     let as_f32 = |v: &[f64]| v.iter().map(|&x| x as f32).collect();
     yarns
@@ -186,9 +188,19 @@ fn real_stitches(fit: &SolvedFit) -> (Knit, LaidStitches) {
 }
 
 impl Products {
-    /// The stocking surface, where it was made.
-    pub fn stocking_surface(&self) -> Option<&SurfaceMesh> {
-        self.stocking.as_ref().map(|(surface, _)| surface)
+    /// The yarn-level preview still (paper §7–8) of these products, with `yarns`' radii and
+    /// colours and `settings`, encoded as the PNG `name` (stage [`Stage::RenderPreview`]): the
+    /// real loops where they were made, else the yarns the files hold (a density preview draws
+    /// none).
+    pub fn render_preview(
+        &self,
+        yarns: &Yarns,
+        settings: &PreviewSettings,
+        name: &str,
+    ) -> Result<(Vec<u8>, PreviewStats)> {
+        let drawn = self.preview_loops.as_ref().unwrap_or(&self.yarns);
+        let input = PreviewInput::new(&self.leg_mesh, drawn, yarns, self.stance);
+        encode_preview(input, settings, name)
     }
 
     /// Encodes `file`.
@@ -196,7 +208,7 @@ impl Products {
         let comments = || vec![format!("knitfit {} fit", env!("CARGO_PKG_VERSION"))];
         match file {
             FitFile::StockingGlb => {
-                let Some(stocking) = self.stocking_surface() else {
+                let Some((stocking, _)) = &self.stocking else {
                     // The plan builds it wherever it encodes stocking.glb.
                     return Err(Error::Encode {
                         what: "glTF".into(),

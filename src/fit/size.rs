@@ -3,8 +3,9 @@
 //! stitch, [`Fabric::grid_courses`]), and the memory that grid needs once it is known.
 //!
 //! The scene's values that can only be checked against the leg are checked here, in one place
-//! ([`check_on_leg`]), each refusal naming its field as an [`Invalid`] that the command reports
-//! under the scene file or the flag that set it.
+//! ([`check_tube_on_leg`], then [`check_stitches_on_leg`] once the grid's memory is known to
+//! fit), each refusal naming its fields as an [`Invalid`] that the command reports under the
+//! scene file or the flag that set them.
 
 use crate::base::settings::{number, Invalid};
 use crate::base::GridSize;
@@ -24,14 +25,17 @@ use super::Placement;
 pub struct SizedTube {
     /// The grid and relaxed size of the tube.
     pub spec: TubeSpec,
+    /// Its heel (a stocking to the toe's).
+    pub heel: TubeHeel,
     /// The real stitch count of the stocking, whose levels a stocking's grids follow.
     pub real_count: GridSize,
     /// The check of the grid's memory, where it was made here.
     pub memory: Option<MemoryCheck>,
 }
 
-/// What a fit's real stitches are drawn as, where it lays them ([`crate::stage::Stage::LayStitches`]):
-/// their count is checked against what a knit's indices can number when the stocking is sized.
+/// What a fit's real stitches are drawn as, where it lays them
+/// ([`crate::stage::Stage::LayStitches`]): their count is checked against what a knit's
+/// indices can number when the stocking is sized.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RealStitches {
     /// The fit lays no real stitches.
@@ -46,8 +50,8 @@ pub enum RealStitches {
 /// the stocking `fabric` knits in `pattern`, its memory checked against `memory` where its grid
 /// was not known before, and the real stitches, where the fit lays them, checked as well.
 ///
-/// Errors: [`Error::Settings`] for a value [`check_on_leg`] refuses; [`Error::TooLarge`] over
-/// the memory limit.
+/// Errors: [`Error::Settings`] for a value the checks refuse; [`Error::TooLarge`] over the
+/// memory limit.
 pub fn size(
     placement: &Placement,
     leg: &Leg,
@@ -60,19 +64,21 @@ pub fn size(
     let to_toe = placement.path.is_some();
     let (leg_name, leg_triangles) = (leg.path.display().to_string(), leg.triangles.len());
     let centreline_m = placement.centreline.length();
-    let checked = check_on_leg(tube, fabric, pattern, centreline_m, to_toe, real_stitches)
-        .map_err(Error::Settings)?;
-    let spec = checked.spec;
+    let checked =
+        check_tube_on_leg(tube, fabric, pattern, centreline_m, to_toe).map_err(Error::Settings)?;
     // Courses left out, or a larger level, are known only now: the estimate made before the
     // leg was read is replaced.
     let checked_memory = (tube.courses.is_none() || checked.solved_on.is_some())
-        .then(|| memory.check(spec.grid, leg_triangles, checked.solved_on, false));
+        .then(|| memory.check(checked.spec.grid, leg_triangles, checked.solved_on, false));
     if let Some(check) = &checked_memory {
         check.enforce(&leg_name)?;
     }
+    check_stitches_on_leg(&checked, to_toe, tube.heel, real_stitches).map_err(Error::Settings)?;
     // The real stitches are checked as a fit of that size would be (an upper bound: no solver
     // runs on them).
-    let real_count = fabric.real_count(spec.relaxed_length_m);
+    let CheckedTube {
+        spec, real_count, ..
+    } = checked;
     if real_stitches != RealStitches::None {
         let loops = real_stitches == RealStitches::Loops;
         memory
@@ -81,39 +87,38 @@ pub fn size(
     }
     Ok(SizedTube {
         spec,
+        heel: tube.heel,
         real_count,
         memory: checked_memory,
     })
 }
 
-/// What [`check_on_leg`] found: the tube (its relaxed length and courses known), and the
-/// larger level a stocking to the toe is relaxed on first, if any.
-pub struct OnLeg {
+/// What [`check_tube_on_leg`] found: the tube (its relaxed length and courses known), its real
+/// stitch count, and the larger level a stocking to the toe is relaxed on first, if any.
+pub struct CheckedTube {
     /// The tube, its relaxed length and courses known.
     pub spec: TubeSpec,
+    /// The real stitch count of the stocking.
+    pub real_count: GridSize,
     /// The real stitch count's level relaxed first, where larger than the tube's grid.
     pub solved_on: Option<GridSize>,
 }
 
-/// The checks of the scene's `tube` (and `knit`) that need the leg: on a stocking whose
-/// centreline is `centreline_m` long (to the toe where `to_toe`) knitted as `fabric` in
-/// `pattern`,
+/// The checks of the scene's `tube` that need the leg: on a stocking whose centreline is
+/// `centreline_m` long (to the toe where `to_toe`) knitted as `fabric` in `pattern`,
 ///
 /// - `tube.relaxed_length_m` is shorter than the centreline (else the stocking would bunch);
 /// - `tube.courses` left out follow the stitch: the grid they make is one a knit can number,
 ///   and for a stocking to the toe not too coarse ([`TubeSettings::check_to_the_toe`]);
 /// - the real stitch count's level a stocking to the toe is relaxed on first is one a knit can
-///   number;
-/// - a heel pocket is no longer than the relaxed stocking (its rows would be without bound);
-/// - the real stitches, where the fit lays them, are a count 32-bit indices can number.
-pub fn check_on_leg(
+///   number.
+pub fn check_tube_on_leg(
     tube: &TubeSettings,
     fabric: &Fabric,
     pattern: Pattern,
     centreline_m: f64,
     to_toe: bool,
-    real_stitches: RealStitches,
-) -> std::result::Result<OnLeg, Invalid> {
+) -> std::result::Result<CheckedTube, Invalid> {
     let relaxed_length_m = match tube.relaxed_length_m {
         None => RELAXED_LENGTH_FRACTION * centreline_m,
         Some(l) if l < centreline_m => l,
@@ -162,9 +167,14 @@ pub fn check_on_leg(
     if let Some(level) = solved_on {
         check_grid_size(level).map_err(|message| {
             Invalid::new(
-                "tube",
+                "tube.wales",
                 format!("relaxed first on the real stitch count's {level} level: {message}"),
             )
+            .with(&[
+                "tube.courses",
+                "tube.relaxed_length_m",
+                "knit.wale_spacing_m",
+            ])
         })?;
     }
     let spec = TubeSpec {
@@ -174,8 +184,28 @@ pub fn check_on_leg(
         relaxed_length_m,
         stitch_m: fabric.stitch_m,
     };
-    let half = heel_pocket_half_length_m(&spec);
-    if tube.heel == TubeHeel::Pocket && to_toe && half > relaxed_length_m {
+    Ok(CheckedTube {
+        spec,
+        real_count: real,
+        solved_on,
+    })
+}
+
+/// The checks of the scene's `tube` and `knit` that need the stitches laid on the leg, on
+/// `checked`'s tube (to the toe where `to_toe`, with `heel`), laying `real_stitches`:
+///
+/// - a heel pocket is no longer than the relaxed stocking (its rows would be without bound);
+/// - the real stitches, where the fit lays them, are a count 32-bit indices can number.
+pub fn check_stitches_on_leg(
+    checked: &CheckedTube,
+    to_toe: bool,
+    heel: TubeHeel,
+    real_stitches: RealStitches,
+) -> std::result::Result<(), Invalid> {
+    let (spec, real) = (&checked.spec, checked.real_count);
+    let relaxed_length_m = spec.relaxed_length_m;
+    let half = heel_pocket_half_length_m(spec);
+    if heel == TubeHeel::Pocket && to_toe && half > relaxed_length_m {
         // Millimetres as millimetres; a length far below them as the number it is.
         let length = match relaxed_length_m >= 1e-3 {
             true => format!("{relaxed_length_m:.3}"),
@@ -205,14 +235,15 @@ pub fn check_on_leg(
         };
         if real.points() > most {
             return Err(Invalid::new(
-                "knit",
+                "knit.needles",
                 format!(
                     "the real stitches of this stocking, {real}, are over the {most} {what}; \
                      ask for fewer knit.needles or a larger stitch (knit.course_spacing_m, \
                      knit.wale_spacing_m)"
                 ),
-            ));
+            )
+            .with(&["knit.course_spacing_m", "knit.wale_spacing_m", "outputs"]));
         }
     }
-    Ok(OnLeg { spec, solved_on })
+    Ok(())
 }

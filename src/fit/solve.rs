@@ -1,8 +1,8 @@
 //! The tube knitted and relaxed onto the leg (Sakaguchi & Miyata §6.2): the collider the yarn
-//! slides on, the scene's solver (the paper's explicit steps, or the multilevel one over
-//! the tube at each of its grid sizes), the exact contact pass, and the checks of the rest state: how deep any
-//! point is inside the skin, whether the stocking is on the leg at all, and whether its courses
-//! bunched. Stages [`Stage::BuildCollider`] to [`Stage::CheckPenetration`] of a fit.
+//! slides on, the scene's solver (the paper's explicit steps, or the multilevel one over the
+//! tube at each of its grid sizes), the exact contact pass, and the checks of the rest state:
+//! how deep any point is inside the skin, whether the stocking is on the leg at all, and
+//! whether its courses bunched. Stages [`Stage::BuildCollider`] to [`Stage::CheckPenetration`] of a fit.
 //!
 //! A level that stops as going nowhere is refused with where and why
 //! ([`crate::sim::stall`]); a fit that runs out of steps is kept, and says where it had not
@@ -14,12 +14,12 @@ use crate::base::GridSize;
 use crate::error::{Error, Result};
 use crate::knit::tube::{Centreline, TubeSpec};
 use crate::knit::{Knit, TubeHeel};
-use crate::leg::{Collider, ContactMethod, Leg, Side};
+use crate::leg::{Collider, ContactMethod, Leg};
 use crate::limits::MemoryCheck;
 use crate::post::stitches::refuse_bunched;
 use crate::sim::accelerated::OutOfBalance;
 use crate::sim::contact::ContactCounters;
-use crate::sim::stall::StockingOnLeg;
+use crate::sim::stall::{StockingOnLeg, YarnStiffness};
 use crate::sim::{
     relax_constrained, relax_multilevel, ForceTerms, LevelStats, Levels, MultilevelStats,
     RelaxStats, SolverMethod, SolverSettings,
@@ -30,7 +30,7 @@ use super::levels::TubeLevels;
 use super::{Placement, SizedTube};
 
 /// What the solve stage reads: the scene's `solver` and `contact`, the force terms its effects
-/// switch on, the heel it knits, and its yarns' stiffness ratio (for messages).
+/// switch on, and its yarns' stiffness (what a bunched or stalled fit's advice names).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SolveSettings {
     /// The scene's `solver`.
@@ -42,12 +42,9 @@ pub struct SolveSettings {
     /// Distance kept between yarn centre line and skin, metres (`contact.offset_m`, or the
     /// nylon's radius).
     pub offset_m: f64,
-    /// The heel of a stocking to the toe (`tube.heel`).
-    pub heel: TubeHeel,
-    /// Support yarn's stiffness over nylon's: what a bunched or stalled fit's advice names.
-    pub support_ratio: f64,
-    /// Which leg is dressed (`leg.side`): a stall's message names places by its landmarks.
-    pub side: Side,
+    /// The yarns' stiffness, whatever the effects: `yarns.nylon.stiffness` and
+    /// `yarns.support.stiffness`.
+    pub yarn_stiffness: YarnStiffness,
 }
 
 /// A fitted knit on its leg, before any post-processing or file: what `fit` goes on to measure
@@ -133,14 +130,14 @@ pub fn solve(
     let mut levels = TubeLevels {
         spec,
         path: placement.path.as_ref(),
-        heel: settings.heel,
+        heel: tube.heel,
         centreline: &placement.centreline,
         lock_axis: placement.lock_axis(),
         axis: &placement.axis,
         leg: &leg,
         collider: toe_box.as_ref().unwrap_or(&collider),
         offset: settings.offset_m,
-        support_ratio: settings.support_ratio,
+        support_ratio: settings.yarn_stiffness.support_ratio(),
         real_count: tube.real_count,
         contact: None,
         retired: ContactCounters::default(),
@@ -181,12 +178,12 @@ pub fn solve(
     };
     let on_leg = StockingOnLeg {
         leg: &leg,
-        side: settings.side,
+        side: placement.side,
         axis: &placement.axis,
         centreline: &placement.centreline,
         landmarks: placement.landmarks.as_ref(),
         circumference_m: spec.relaxed_circumference_m,
-        support_ratio: settings.support_ratio,
+        yarn_stiffness: settings.yarn_stiffness,
     };
     if let Some(level) = run.stalled() {
         // A stocking stopped while bunched is refused as that: it says more.
@@ -195,7 +192,7 @@ pub fn solve(
             &knit,
             centreline,
             spec.relaxed_circumference_m,
-            settings.support_ratio,
+            settings.yarn_stiffness.support_ratio(),
         )?;
         return Err(on_leg.stalled(&knit, level));
     }
@@ -235,7 +232,7 @@ pub fn solve(
         &knit,
         &placement.centreline,
         spec.relaxed_circumference_m,
-        settings.support_ratio,
+        settings.yarn_stiffness.support_ratio(),
     )?;
     Ok(SolvedFit {
         leg,
@@ -243,7 +240,7 @@ pub fn solve(
         collider,
         toe_box,
         spec,
-        heel: settings.heel,
+        heel: tube.heel,
         real_count: tube.real_count,
         offset: settings.offset_m,
         knit,
@@ -260,7 +257,7 @@ pub fn solve(
 /// A fit whose yarn rests on the skin at fewer than this fraction of its points is no stocking
 /// on this leg: a tight fit touches nearly everywhere, and even one far wider than the leg
 /// (support yarn 1000× nylon's relaxed at the thigh's girth) rests on a fifth of its points.
-pub const MIN_TOUCHING_FRACTION: f64 = 0.1;
+const MIN_TOUCHING_FRACTION: f64 = 0.1;
 /// A point within this distance of the skin rests on it, metres.
 const TOUCHING_M: f64 = 0.002;
 
@@ -372,6 +369,7 @@ mod tests {
     use super::*;
     use crate::fit::place::{place, PlaceSettings};
     use crate::knit::TubeSettings;
+    use crate::leg::Side;
     use crate::leg::{load_leg, Units, UpChoice};
 
     #[test]
@@ -417,7 +415,10 @@ mod tests {
             centreline: &placed.centreline,
             landmarks: placed.landmarks.as_ref(),
             circumference_m: 0.2,
-            support_ratio: 10.0,
+            yarn_stiffness: YarnStiffness {
+                nylon: 1.0,
+                support: 10.0,
+            },
         };
         let places: Vec<f64> = (0..level.courses).map(|c| c as f64).collect();
         let message = on_leg.stalled_at(&level, &places).to_string();

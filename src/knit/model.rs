@@ -117,7 +117,7 @@ pub struct Knit {
     /// yarn kind among the grid's springs along each direction, which every spring of that
     /// direction then stands for together. `None` on a knit of single stitches (the patch),
     /// which knits the pattern spring by spring.
-    pub yarn_blend: Option<[PerYarn<f64>; 2]>,
+    pub yarn_blend: Option<PerDirection<PerYarn<f64>>>,
     /// Springs of the grid (the first ones); those after are the shaping's.
     grid_springs: usize,
     /// True when the last course is closed by a toe seam.
@@ -631,15 +631,15 @@ impl Knit {
     }
 
     /// The share of each yarn kind among the grid's springs, along the course and the wale.
-    pub fn yarn_shares(&self) -> [PerYarn<f64>; 2] {
+    pub fn yarn_shares(&self) -> PerDirection<PerYarn<f64>> {
         let mut count = [[0usize; 3]; 2];
         for s in &self.springs[..self.grid_springs] {
             count[s.direction.index()][s.yarn.index() as usize] += 1;
         }
-        count.map(|per_yarn| {
+        PerDirection::from(count.map(|per_yarn| {
             let total = per_yarn.iter().sum::<usize>().max(1) as f64;
             per_yarn.map(|n| n as f64 / total)
-        })
+        }))
     }
 
     /// Rest lengths of the grid's course and wale springs, metres (the first of each; a grid's

@@ -409,7 +409,7 @@ impl TubeSettings {
                 "at {wales}×{courses} the rings would be centimetres apart over the heel and the \
                  toe, where such a coarse fit chatters instead of settling; give at least \
                  {SMALLEST_STOCKING}×{SMALLEST_STOCKING} (--resolution, tube.wales and \
-                 tube.courses)"
+                 tube.courses), or end the stocking at the ankle (--bottom ankle)"
             ),
         )
         .with(&["courses"]))

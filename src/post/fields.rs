@@ -39,7 +39,7 @@
 use nalgebra::{Matrix3, Point3};
 use rayon::prelude::*;
 
-use crate::base::{Direction, Vec3};
+use crate::base::{Direction, PerDirection, Vec3};
 use crate::knit::fabric::PA_PER_MMHG;
 use crate::knit::{Fabric, Knit, PointId};
 use crate::leg::SkinCurvature;
@@ -60,12 +60,11 @@ pub const MEASURE_SPAN_M: f64 = 0.008;
 /// cleft under the fabric's bridge lies further.
 pub const PRESSED_WITHIN_M: f64 = 0.002;
 
-/// Stretch around and along at every point (`(course, wale)`, see [`stretch`]): what density,
-/// coverage and tension are computed from.
-pub type Stretch = (Vec<f64>, Vec<f64>);
+/// A value per direction at every point of a knit: `course[i]`, `wale[i]` of point `i`.
+pub type PerPoint = PerDirection<Vec<f64>>;
 
 /// Real stitches per cm² of fabric at every point, from its `stretch` (see module docs).
-pub fn stitch_density(fabric: &Fabric, (course, wale): &Stretch) -> Vec<f64> {
+pub fn stitch_density(fabric: &Fabric, PerDirection { course, wale }: &PerPoint) -> Vec<f64> {
     let relaxed = fabric.relaxed_stitches_per_m2() * M2_PER_CM2;
     course
         .iter()
@@ -81,14 +80,14 @@ pub fn stitch_density(fabric: &Fabric, (course, wale): &Stretch) -> Vec<f64> {
         .collect()
 }
 
-/// Stretch along the course and along the wale at every point: `(course, wale)` (see module
-/// docs): the arc through the fabric [`MEASURE_SPAN_M`] of relaxed fabric either way and the
+/// Stretch along the course and along the wale at every point (see module docs): what density,
+/// coverage and tension are computed from: the arc through the fabric [`MEASURE_SPAN_M`] of relaxed fabric either way and the
 /// point itself, over that rest length (fractional spans, interpolated). Along the wale the
 /// span follows the wale through the heel pocket's short rows and on over the toe seam; around,
 /// a short row's point has only its own springs. Where the span folds back on itself (the toe
 /// seam's folds) it is shortened to the part that does not. A point with no neighbour in a
 /// direction gets 1 there.
-pub fn stretch(knit: &Knit) -> Stretch {
+pub fn stretch(knit: &Knit) -> PerPoint {
     let spans = Spans::of(knit);
     let [rest_course, rest_wale] = knit.grid_rest_m().to_array();
     let [reach_course, reach_wale] = spans.reach;
@@ -121,7 +120,7 @@ pub fn stretch(knit: &Knit) -> Stretch {
             }
         });
     }
-    (course, wale)
+    PerDirection { course, wale }
 }
 
 /// The fabric either side of a point along one direction, at whole grid steps: its ends,
@@ -410,9 +409,12 @@ struct WaleLine<'a> {
 pub fn coverage(
     knit: &Knit,
     fabric: &Fabric,
-    (stretch_course, stretch_wale): &Stretch,
+    PerDirection {
+        course: stretch_course,
+        wale: stretch_wale,
+    }: &PerPoint,
 ) -> Vec<f64> {
-    let [course_shares, _] = knit.yarn_shares();
+    let course_shares = knit.yarn_shares().course;
     let lengths = loop_shapes(fabric).map(|shape| shape.in_plane_length());
     let [w, c] = fabric.stitch_m.to_array();
     stretch_course
@@ -442,13 +444,12 @@ pub fn tension(
     knit: &Knit,
     fabric: &Fabric,
     terms: &ForceTerms,
-    (course, wale): &Stretch,
-) -> [Vec<f64>; 2] {
+    PerDirection { course, wale }: &PerPoint,
+) -> PerPoint {
     let membrane = fabric.membrane_n_per_m().to_array();
     // The fabric's membrane, whatever yarn a point lies on: the grid's yarns blended.
     let shares = knit.yarn_shares();
-    let stiffness =
-        [Direction::Course, Direction::Wale].map(|d| terms.blended(shares[d.index()], d));
+    let stiffness = [Direction::Course, Direction::Wale].map(|d| terms.blended(shares[d], d));
     let of = |d: usize, along: &[f64], across: &[f64]| -> Vec<f64> {
         along
             .iter()
@@ -456,14 +457,20 @@ pub fn tension(
             .map(|(&s, &other)| stiffness[d] * membrane[d] * (s - 1.0).max(0.0) / other)
             .collect()
     };
-    [of(0, course, wale), of(1, wale, course)]
+    PerDirection::new(of(0, course, wale), of(1, wale, course))
 }
 
 /// The fabric's membrane stress at every point of a tube, N/m, a tensor on its tangent plane:
 /// `T_course t_course⊗t_course + T_wale t_wale⊗t_wale` with `t` the unit tangents over the whole
 /// steps within [`MEASURE_SPAN_M`]; zero for a knit whose courses do not close (a patch), which
 /// presses on nothing.
-pub fn stress(knit: &Knit, [around, along]: &[Vec<f64>; 2]) -> Vec<Matrix3<f64>> {
+pub fn stress(
+    knit: &Knit,
+    PerDirection {
+        course: around,
+        wale: along,
+    }: &PerPoint,
+) -> Vec<Matrix3<f64>> {
     let mut out = vec![Matrix3::zeros(); knit.len()];
     if !knit.closed_courses || knit.wales < 3 || knit.courses < 3 {
         return out;
@@ -596,10 +603,13 @@ impl KnitFields {
         let tension = tension(knit, fabric, terms, &stretch);
         let stress = stress(knit, &tension);
         let pressure = pressure(knit, &stress, skin, offset);
-        let [around, _] = tension;
+        let around = tension.course;
         let stitch_density = stitch_density(fabric, &stretch);
         let coverage = coverage(knit, fabric, &stretch);
-        let (stretch_course, stretch_wale) = stretch;
+        let PerDirection {
+            course: stretch_course,
+            wale: stretch_wale,
+        } = stretch;
         KnitFields {
             stitch_density,
             stretch_course,
@@ -728,7 +738,7 @@ pub(crate) mod tests {
             let knit = Knit::grid(n, courses, true, &Tile::of(Pattern::Plain), a, b, at)
                 .with_toe_seam(seam);
             assert!((knit.toe_seam_steps() - seam / b).abs() < 1e-12);
-            let (course, wale) = stretch(&knit);
+            let PerDirection { course, wale } = stretch(&knit);
             for c in 0..courses {
                 for w in 0..n {
                     let i = knit.point(w, c).index();
@@ -750,9 +760,9 @@ pub(crate) mod tests {
 
     #[test]
     fn stretch_is_one_at_rest_and_follows_each_direction() {
-        let (course, wale) = stretch(&flat(Pattern::Plain, 6, 0.0005, 1.0, 1.0));
+        let PerDirection { course, wale } = stretch(&flat(Pattern::Plain, 6, 0.0005, 1.0, 1.0));
         assert!(course.iter().chain(&wale).all(|&s| (s - 1.0).abs() < 1e-12));
-        let (course, wale) = stretch(&flat(Pattern::Plain, 6, 0.0005, 1.5, 1.2));
+        let PerDirection { course, wale } = stretch(&flat(Pattern::Plain, 6, 0.0005, 1.5, 1.2));
         assert!(course.iter().all(|&s| (s - 1.5).abs() < 1e-12));
         assert!(wale.iter().all(|&s| (s - 1.2).abs() < 1e-12));
     }
@@ -781,7 +791,7 @@ pub(crate) mod tests {
         )
         .with_course_intervals(&intervals);
         assert!(knit.is_graded());
-        let (course, wale) = stretch(&knit);
+        let PerDirection { course, wale } = stretch(&knit);
         for (i, (&sc, &sw)) in course.iter().zip(&wale).enumerate() {
             assert!((sc - around).abs() < 2e-3, "point {i}: around {sc}");
             assert!((sw - along).abs() < 1e-9, "point {i}: along {sw}");
@@ -813,7 +823,7 @@ pub(crate) mod tests {
                 Vec3::new(w as f64 * s, c as f64 * s + zig, 0.0)
             },
         );
-        let (course, _) = stretch(&knit);
+        let course = stretch(&knit).course;
         let middle = knit.point(20, 21).index();
         assert!((course[middle] - 1.0).abs() < 1e-12, "{}", course[middle]);
     }
@@ -835,7 +845,7 @@ pub(crate) mod tests {
                 Vec3::new(r * t.cos(), c as f64 * 0.001, r * t.sin())
             },
         );
-        let (course, _) = stretch(&knit);
+        let course = stretch(&knit).course;
         assert!(
             course.iter().all(|&s| (s - 1.0).abs() < 1e-9),
             "{:?}",
@@ -1013,7 +1023,10 @@ pub(crate) mod tests {
         let skin = SkinCurvature::of(&surface, MEASURE_SPAN_M);
         for wales in [60, 240] {
             let knit = cylinder(wales, 30, radius, 1.5);
-            let [around, along] = tension(&knit, &real, &terms, &stretch(&knit));
+            let PerDirection {
+                course: around,
+                wale: along,
+            } = tension(&knit, &real, &terms, &stretch(&knit));
             let t = real.membrane_n_per_m().course * 0.5;
             for (i, &ti) in around.iter().enumerate() {
                 assert!((ti - t).abs() < 1e-6 * t, "{wales}: point {i}: {ti} vs {t}");
@@ -1022,7 +1035,8 @@ pub(crate) mod tests {
                 along.iter().all(|&t| t.abs() < 1e-9),
                 "no tension along a relaxed wale"
             );
-            let p = pressure(&knit, &stress(&knit, &[around, along]), &skin, 0.0);
+            let tension = PerDirection::new(around, along);
+            let p = pressure(&knit, &stress(&knit, &tension), &skin, 0.0);
             let expected = t / radius / PA_PER_MMHG;
             // The same on every point, the end courses too: the skin's curvature (its quadric
             // fit reads the round ~1 % tight), not the fabric's, which its ends cannot measure.
@@ -1046,13 +1060,13 @@ pub(crate) mod tests {
         let skin = SkinCurvature::of(&surface, MEASURE_SPAN_M);
         let slack = cylinder(60, 10, 0.04, 0.8);
         let t = tension(&slack, &real, &terms, &stretch(&slack));
-        assert!(t[0].iter().all(|&v| v == 0.0));
+        assert!(t.course.iter().all(|&v| v == 0.0));
         let p = pressure(&slack, &stress(&slack, &t), &skin, 0.0);
         assert!(p.iter().all(|&v| v == 0.0));
         // Stretched, but 5 mm clear of the skin: bridging, not pressing.
         let clear = cylinder(60, 10, 0.045, 1.5);
         let t = tension(&clear, &real, &terms, &stretch(&clear));
-        assert!(t[0].iter().all(|&v| v > 0.0));
+        assert!(t.course.iter().all(|&v| v > 0.0));
         let p = pressure(&clear, &stress(&clear, &t), &skin, 0.0);
         assert!(p.iter().all(|&v| v == 0.0));
         // Within the yarn's offset of it, pressing.

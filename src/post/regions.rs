@@ -12,6 +12,7 @@
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
+use crate::base::PerDirection;
 use crate::knit::path::{PathPart, TubePath};
 use crate::knit::tube::{part_at, Centreline};
 use crate::knit::{Knit, PointId};
@@ -120,14 +121,14 @@ pub fn regions(
         .collect()
 }
 
-/// Mean stretch of each region that has points, toe to thigh, from the per-point stretch along
-/// the course and the wale.
+/// Mean stretch of each region that has points, toe to thigh, from the per-point `stretch`
+/// along the course and the wale.
 pub fn stretch_by_region(
     regions: &[Region],
-    stretch_course: &[f64],
-    stretch_wale: &[f64],
+    stretch: &PerDirection<Vec<f64>>,
     fabric_shares: Option<&[f64]>,
 ) -> Vec<RegionStretch> {
+    let (stretch_course, stretch_wale) = (&stretch.course, &stretch.wale);
     // Each point weighs the fabric it stands for (a graded grid's toe tip has more, smaller
     // cells); alike on an even grid.
     let share = |i: usize| fabric_shares.map_or(1.0, |s| s[i]);

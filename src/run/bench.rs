@@ -283,7 +283,8 @@ fn fit_case(base: &Scene, case: &BenchCase) -> Result<(SolvedFit, f64, Option<u6
     let mut clock = StageClock::new(&plan);
     let leg = Path::new(BUNDLED_SCENE_DIR).join(case.leg);
     let (leg, _) = fit::load(&leg, &settings, &mut clock)?;
-    let fitted = fit::fit(leg, &settings, &mut clock, &mut NoProgress)?;
+    let fitted =
+        fit::fit(leg, &settings, &mut clock, &mut NoProgress).map_err(|e| loaded.named(e))?;
     let seconds = clock.seconds_in(&[Stage::Fit, Stage::ExactContactPass]);
     Ok((fitted.solved, seconds, peak_memory()))
 }

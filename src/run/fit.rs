@@ -12,7 +12,6 @@ use crate::knit::{TubeBottom, TubeHeel};
 use crate::limits::{peak_memory, MemoryCheck};
 use crate::plan::{fit_files, Plan, PREVIEW_FILE};
 use crate::post::surfaces::{STOCKING_CLEARANCE_M, STOCKING_LIFT_M};
-use crate::preview::PreviewInput;
 use crate::preview::PreviewStats;
 use crate::report::{
     Bounds, ContactDetails, DensityRange, FieldRange, FitDetails, KnitDetails, LandmarkDetails,
@@ -54,11 +53,7 @@ pub fn run_fit(
     let mut preview = None;
     if plan.has(Stage::RenderPreview) {
         let (bytes, stats) = run.stage(Stage::RenderPreview, || {
-            // The real loops (those of the files where they hold loops); a density preview
-            // draws no yarn.
-            let drawn = products.preview_loops.as_ref().unwrap_or(&products.yarns);
-            let input = PreviewInput::new(&products.leg_mesh, drawn, &scene.yarns, products.stance);
-            crate::preview::encode_preview(input, &scene.render, PREVIEW_FILE)
+            products.render_preview(&scene.yarns, &scene.render, PREVIEW_FILE)
         })?;
         run.keep(PREVIEW_FILE, bytes);
         preview = Some(stats);

@@ -46,7 +46,7 @@ impl ForceTerms {
     /// cells stand for blocks of stitches, the blend's ([`ForceTerms::blended`]).
     pub(crate) fn c1_of(&self, knit: &Knit, yarn: YarnKind, direction: Direction) -> f64 {
         let stiffness = match &knit.yarn_blend {
-            Some(shares) => self.blended(shares[direction.index()], direction),
+            Some(shares) => self.blended(shares[direction], direction),
             None => self.stiffness[yarn.index() as usize],
         };
         let seam = match yarn {

@@ -7,8 +7,8 @@
 //! them, [`grid_sizes_following`]: its foot rests where the coarse levels leave it).
 //! A coarse grid stands for the same stocking: its rest lengths are twice as long, so the same
 //! relaxed circumference and length. Its rest state is interpolated (bilinearly, around the
-//! closed courses and along the wales by relaxed fabric) onto the next finer grid, the constraints put any
-//! interpolated point that fell inside the leg back out ([`Constraints::settle`]), and the
+//! closed courses and along the wales by relaxed fabric) onto the next finer grid, the
+//! constraints put any interpolated point that fell inside the leg back out ([`Constraints::settle`]), and the
 //! accelerated iteration ([`super::accelerated`]) continues there.
 //!
 //! Why: a local iteration removes error on the scale of a few stitches quickly, but error that

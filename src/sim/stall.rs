@@ -30,8 +30,25 @@ pub struct StockingOnLeg<'a> {
     pub landmarks: Option<&'a Landmarks>,
     /// The relaxed stocking's circumference, metres.
     pub circumference_m: f64,
+    /// The yarns' stiffness.
+    pub yarn_stiffness: YarnStiffness,
+}
+
+/// The two yarns' stiffness (`yarns.nylon.stiffness`, `yarns.support.stiffness`): what the
+/// advice of a stalled or bunched fit names.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct YarnStiffness {
+    /// The nylon's.
+    pub nylon: f64,
+    /// The support yarn's.
+    pub support: f64,
+}
+
+impl YarnStiffness {
     /// Support yarn's stiffness over nylon's.
-    pub support_ratio: f64,
+    pub fn support_ratio(self) -> f64 {
+        self.support / self.nylon
+    }
 }
 
 impl StockingOnLeg<'_> {
@@ -245,10 +262,10 @@ impl StockingOnLeg<'_> {
                  places the stocking on the leg's landmarks.",
                 axis.source.describe()
             ),
-            _ if self.support_ratio >= 100.0 => format!(
+            _ if self.yarn_stiffness.support >= 100.0 * self.yarn_stiffness.nylon => format!(
                 "The support yarn ({}× nylon's) barely stretches: lower yarns.support.stiffness, or \
                  raise tube.relaxed_circumference_m (now {circumference} m).",
-                self.support_ratio
+                self.yarn_stiffness.support_ratio()
             ),
             _ if level.wales < COARSE_GRID_WALES => format!(
                 "The {} grid is coarse for this leg: its rings are polygons whose corners catch \

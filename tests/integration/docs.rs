@@ -171,6 +171,31 @@ fn architecture_names_every_source_file_and_only_files_that_exist() {
 }
 
 #[test]
+fn the_readmes_library_example_is_the_one_the_doc_test_runs() {
+    // Each line of the README's Rust block (less `mut` and comments) is a line of the fit
+    // library's doc example, which `cargo test` compiles and runs.
+    let code = |text: &str, opening: &str, prefix: &str| -> Vec<String> {
+        let block = text.split(opening).nth(1).expect("a Rust block");
+        block
+            .lines()
+            .map(|l| l.trim_start().trim_start_matches(prefix).trim())
+            .take_while(|l| !l.starts_with("```"))
+            .map(|l| l.split(" //").next().unwrap().replace("let mut ", "let "))
+            .filter(|l| !l.is_empty())
+            .collect()
+    };
+    let readme = code(&read(&root().join("README.md")), "```rust\n", "");
+    let example = code(&read(&root().join("src/fit/mod.rs")), "//! ```\n", "//!");
+    assert!(readme.len() >= 3, "{readme:?}");
+    for line in &readme {
+        assert!(
+            example.contains(line),
+            "README's {line:?} is not in src/fit/mod.rs's example"
+        );
+    }
+}
+
+#[test]
 fn the_glossary_is_short_and_names_the_words_the_code_uses() {
     let architecture = read(&root().join("ARCHITECTURE.md"));
     let glossary = architecture

@@ -27,9 +27,9 @@ fn heel_stretch(fit: &SolvedFit) -> f64 {
     let p = &fit.placement;
     let landmarks = p.landmarks.as_ref().unwrap();
     let regions = regions(&fit.knit, &p.centreline, p.path.as_ref(), landmarks);
-    let (course, wale) = stretch(&fit.knit);
+    let stretch = stretch(&fit.knit);
     let shares = fit.knit.point_fabric_shares();
-    stretch_by_region(&regions, &course, &wale, shares.as_deref())
+    stretch_by_region(&regions, &stretch, shares.as_deref())
         .into_iter()
         .find(|r| r.region == Region::Heel)
         .expect("a heel region")

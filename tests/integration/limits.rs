@@ -226,7 +226,7 @@ fn regression_real_stitches_past_32_bit_indices_are_refused_even_with_allow_larg
             dir.path(),
             &out,
             &[
-                "s.json: knit: the real stitches of this stocking, 30000×",
+                "s.json: knit.needles: the real stitches of this stocking, 30000×",
                 expect,
             ],
         );
