@@ -21,7 +21,7 @@ slowest=$(awk '
   }
 ' "$log" | sort -rn | head -n "$n")
 if [ -n "$slowest" ]; then
-  echo "The $n slowest tests (wall seconds, on however many threads the test harness ran):"
+  echo "The $n slowest tests (wall seconds; tests run side by side, sharing the cores):"
   echo "$slowest"
 else
   echo "No test times in $log: was tools/report_time.sh the test runner?"
