@@ -354,6 +354,11 @@ fn a_stocking_to_the_toe_settles_at_coarse_grids_and_at_the_real_stitch_count() 
         ("makehuman_body.glb", "100x100"),
         ("makehuman_leg_foot.glb", "400x1000"),
     ] {
+        // 400×1000, past the real count along the leg, in the long profile only: the real
+        // count itself (400×701) settles in units::a_whole_stockings_fields_are_the_same_….
+        if grid == "400x1000" && !crate::support::long::enabled() {
+            continue;
+        }
         let (_dir, r) = crate::support::fit(&sample(leg), grid, &[]);
         let m = &r.metrics;
         assert!(m.converged, "{leg} {grid}: {m:?}");

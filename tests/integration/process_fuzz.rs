@@ -639,12 +639,14 @@ fn check_run(case: &Case) -> Result<(), TestCaseError> {
     checked
 }
 
-/// How many cases to run: [`RUNS_VARIABLE`] where set, else [`DEFAULT_RUNS`].
+/// How many cases to run: [`RUNS_VARIABLE`] where set, else [`DEFAULT_RUNS`] (ten times as
+/// many in the long profile).
 fn runs() -> u32 {
+    let long = crate::support::long::enabled();
     std::env::var(RUNS_VARIABLE)
         .ok()
         .and_then(|v| v.parse().ok())
-        .unwrap_or(DEFAULT_RUNS)
+        .unwrap_or(if long { 10 } else { 1 } * DEFAULT_RUNS)
 }
 
 /// Exit codes seen (`timeout` and `signal` included), and cases per kind; printed at the end

@@ -3,6 +3,7 @@
 
 pub mod files;
 pub mod fixtures;
+pub mod long;
 pub mod process;
 pub mod prop_config;
 

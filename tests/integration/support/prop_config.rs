@@ -11,12 +11,14 @@ use proptest::test_runner::{Config, RngSeed};
 /// The seed of every property and fuzz test.
 const SEED: u64 = 0x6b6e_6974_6669_7421;
 
-/// A configuration running `default_cases` cases, or `PROPTEST_CASES` where that is set.
+/// A configuration running `default_cases` cases (ten times as many in the long profile,
+/// `KNITFIT_LONG=1`), or `PROPTEST_CASES` where that is set.
 pub fn config(default_cases: u32) -> Config {
+    let long = std::env::var_os("KNITFIT_LONG").is_some_and(|v| v != "0");
     let cases = std::env::var("PROPTEST_CASES")
         .ok()
         .and_then(|v| v.parse().ok())
-        .unwrap_or(default_cases);
+        .unwrap_or(if long { 10 } else { 1 } * default_cases);
     let shard = std::env::var("KNITFIT_FUZZ_SHARD")
         .ok()
         .and_then(|v| v.parse::<u64>().ok())
