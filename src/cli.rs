@@ -167,6 +167,10 @@ pub struct FitArgs {
     /// Run even when the memory estimate is over the limit. Sets limits.allow_large.
     #[arg(long)]
     pub allow_large: bool,
+    /// Files to write besides report.json, comma-separated: ply, glb, picture, preview,
+    /// stitches, loops (e.g. ply,glb: no pictures, the fastest run). Overrides outputs.
+    #[arg(long, value_name = "LIST")]
+    pub outputs: Option<String>,
     /// Output directory, created if missing (default: out).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
@@ -201,6 +205,7 @@ impl FitArgs {
             tolerance,
             memory_limit,
             allow_large,
+            outputs,
             out,
         } = self;
         scene.is_some()
@@ -217,6 +222,7 @@ impl FitArgs {
             || tolerance.is_some()
             || memory_limit.is_some()
             || *allow_large
+            || outputs.is_some()
             || out.is_some()
     }
 
@@ -287,6 +293,16 @@ impl FitArgs {
         }
         if self.allow_large {
             set.push(Override::new("--allow-large", "limits.allow_large", true));
+        }
+        if let Some(list) = &self.outputs {
+            // The names are checked where the scene's `outputs` are: an unknown one is refused
+            // naming this flag.
+            let names: Vec<&str> = list
+                .split(',')
+                .map(str::trim)
+                .filter(|name| !name.is_empty())
+                .collect();
+            set.push(Override::new("--outputs", "outputs", json!(names)));
         }
         LoadedScene::load(self.scene.as_deref(), set)
     }

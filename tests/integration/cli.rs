@@ -326,6 +326,42 @@ fn fails(code: i32, args: &[&str], files: &[(&str, &str)], expect: &str) {
 }
 
 #[test]
+fn outputs_names_the_files_a_fit_writes_and_no_stage_runs_for_the_others() {
+    let dir = tempfile::tempdir().unwrap();
+    let leg = procedural_leg();
+    let leg = leg.to_str().unwrap();
+    let args = [
+        "fit",
+        "--leg",
+        leg,
+        "--resolution",
+        "20x12",
+        "--bottom",
+        "ankle",
+        "-q",
+    ];
+    let out = knitfit(
+        dir.path(),
+        &[&args[..], &["--outputs", "ply, glb"]].concat(),
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(
+        files_in(&dir.path().join("out")),
+        ["leg.ply", "report.json", "stocking.glb", "stocking.ply"]
+    );
+    let stages = stage_names(&read_fit_report(&dir.path().join("out")));
+    for picture in ["render preview", "lay stitches", "encode density.png"] {
+        assert!(!stages.iter().any(|s| s == picture), "{stages:?}");
+    }
+    // An unknown name is refused naming the flag, before anything is read or written.
+    refused(
+        &[&args[..], &["--outputs", "ply,jpeg"]].concat(),
+        &[],
+        "--outputs: unknown variant `jpeg`, expected one of `ply`, `glb`, `picture`, `preview`",
+    );
+}
+
+#[test]
 fn a_bad_units_up_axis_or_side_is_refused_naming_the_flag() {
     for command in ["fit", "plan"] {
         for (flag, value, expect) in [
