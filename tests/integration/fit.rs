@@ -12,13 +12,14 @@ use ply_rs_bw::ply::Encoding;
 
 use crate::support::{
     base64, edited_sample, files_in, fit, float, knitfit, leg_as_ply, load_sample, point,
-    procedural_leg, read_fit_report, read_ply, sample_legs, stderr, write_tube_leg, OPEN_TUBE,
+    procedural_leg, read_fit_report, read_ply, sample_legs, shared_fit, stderr, write_tube_leg,
+    OPEN_TUBE,
 };
 
 #[test]
 fn every_sample_leg_fits_without_penetration_between_the_axis_points() {
     for leg_path in sample_legs() {
-        let (dir, r) = fit(&leg_path, "60x60", OPEN_TUBE);
+        let (dir, r) = shared_fit(&leg_path, "60x60", OPEN_TUBE);
         let out = dir.path().join("out");
         let name = leg_path.display();
         assert!(r.metrics.converged, "{name}");
@@ -73,7 +74,7 @@ fn every_sample_leg_fits_without_penetration_between_the_axis_points() {
 #[test]
 fn stitch_density_is_positive_on_covered_skin_and_higher_at_the_ankle_than_the_thigh() {
     for leg_path in sample_legs() {
-        let (dir, r) = fit(&leg_path, "60x60", OPEN_TUBE);
+        let (dir, r) = shared_fit(&leg_path, "60x60", OPEN_TUBE);
         let name = leg_path.display();
         let legply = read_ply(&dir.path().join("out").join("leg.ply"));
         let vertices = &legply.payload["vertex"];

@@ -8,7 +8,7 @@ use knitfit::report::{FitDetails, Report, SolverDetails};
 use knitfit::scene::Scene;
 use knitfit::sim::SolverMethod;
 
-use crate::support::{fit, sample_legs, solve_on, stage_names, OPEN_TUBE};
+use crate::support::{fit, sample_legs, shared_fit, solve_on, stage_names, OPEN_TUBE};
 
 fn solve(leg: &std::path::Path, method: SolverMethod, tolerance: f64) -> (SolvedFit, Scene) {
     solve_grid(leg, method, tolerance, (60, 60))
@@ -95,7 +95,7 @@ fn both_solvers_reach_the_same_rest_state_on_every_sample_leg() {
 #[test]
 fn the_report_says_which_solver_ran_and_how_each_level_went() {
     let leg = &sample_legs()[0];
-    let (_dir, r) = fit(leg, "60x60", OPEN_TUBE);
+    let (_dir, r) = shared_fit(leg, "60x60", OPEN_TUBE);
     let solver = &r.details.solver;
     let SolverDetails::Multilevel { levels, .. } = solver else {
         panic!("not multilevel: {solver:?}")
@@ -107,7 +107,7 @@ fn the_report_says_which_solver_ran_and_how_each_level_went() {
     assert!(last.force_step < 1e-3);
     assert!(r.metrics.force_step.unwrap() < 1e-3);
     assert!(r.metrics.max_move.is_finite());
-    let stages = stage_names(&r);
+    let stages = stage_names(r);
     assert!(!stages.iter().any(|s| s == "knit tube"), "{stages:?}");
 
     let (_dir, r) = fit(leg, "30x30", &["--solver", "paper", "--bottom", "ankle"]);

@@ -15,6 +15,6 @@ pub use fixtures::{
 };
 pub use process::{
     files_in, fit, knitfit, knitfit_env, knitfit_within, read_fit_report, read_patch_report,
-    read_render_report, read_report_file, run_scene, scene_for, stage_names, stderr, stdout, write,
-    OPEN_TUBE,
+    read_render_report, read_report_file, run_scene, scene_for, shared_fit, stage_names, stderr,
+    stdout, write, OPEN_TUBE,
 };

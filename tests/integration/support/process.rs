@@ -1,8 +1,10 @@
 //! Running the `knitfit` binary and reading what it wrote: its exit, its streams, its output
 //! directory and its report.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::Output;
+use std::sync::{Mutex, OnceLock};
 
 use knitfit::report::{CommandDetails, FitDetails, PatchDetails, RenderDetails, Report};
 use serde::de::DeserializeOwned;
@@ -82,6 +84,12 @@ pub fn read_render_report(dir: &Path) -> Report<RenderDetails> {
 /// axis or at grids too coarse for a stocking to the toe.
 pub const OPEN_TUBE: &[&str] = &["--bottom", "ankle"];
 
+/// The files [`fit`] writes unless a test names its own, with `--outputs` or a scene file: the
+/// stocking and leg files.
+/// The pictures (the preview and the real stitches it draws, `density.png`) are most of a
+/// coarse fit's time and are checked by the tests about them, which ask for them.
+const FILES: &[&str] = &["--outputs", "ply,glb"];
+
 /// Fits `leg` at `resolution` into a fresh directory and returns (dir, report).
 pub fn fit(
     leg: &Path,
@@ -89,6 +97,12 @@ pub fn fit(
     extra: &[&str],
 ) -> (tempfile::TempDir, Report<FitDetails>) {
     let dir = tempfile::tempdir().unwrap();
+    let r = fit_in(dir.path(), leg, resolution, extra);
+    (dir, r)
+}
+
+/// Fits `leg` at `resolution` into `dir/out` and returns the report.
+fn fit_in(dir: &Path, leg: &Path, resolution: &str, extra: &[&str]) -> Report<FitDetails> {
     let mut args = vec![
         "fit",
         "--leg",
@@ -98,10 +112,41 @@ pub fn fit(
         "-q",
     ];
     args.extend_from_slice(extra);
-    let out = knitfit(dir.path(), &args);
+    let names_outputs = |arg: &&str| *arg == "--outputs" || arg.ends_with(".json");
+    if !extra.iter().any(names_outputs) {
+        args.extend_from_slice(FILES);
+    }
+    let out = knitfit(dir, &args);
     assert!(out.status.success(), "{}: {}", leg.display(), stderr(&out));
-    let r = read_fit_report(&dir.path().join("out"));
-    (dir, r)
+    read_fit_report(&dir.join("out"))
+}
+
+/// [`fit`], run once per test binary for each distinct call and read by every test that makes
+/// it: the open tube on each sample at 60×60 is read by five tests. Its directory must only be
+/// read. Statics are never dropped, so it is made in cargo's scratch folder for tests
+/// (`target/tmp`), not the system's.
+pub fn shared_fit(
+    leg: &Path,
+    resolution: &str,
+    extra: &[&str],
+) -> (&'static tempfile::TempDir, &'static Report<FitDetails>) {
+    type Fitted = OnceLock<(tempfile::TempDir, Report<FitDetails>)>;
+    static FITS: OnceLock<Mutex<HashMap<String, &'static Fitted>>> = OnceLock::new();
+    let call = format!("{} {resolution} {}", leg.display(), extra.join(" "));
+    // The map's lock is held only to find the call's cell: different calls fit side by side,
+    // and a test making a call already under way waits for it.
+    let fitted: &'static Fitted = FITS
+        .get_or_init(Default::default)
+        .lock()
+        .unwrap()
+        .entry(call)
+        .or_insert_with(|| Box::leak(Box::default()));
+    let (dir, report) = fitted.get_or_init(|| {
+        let dir = tempfile::tempdir_in(env!("CARGO_TARGET_TMPDIR")).unwrap();
+        let report = fit_in(dir.path(), leg, resolution, extra);
+        (dir, report)
+    });
+    (dir, report)
 }
 
 /// The names of the stages in a report, in order.
