@@ -355,8 +355,8 @@ fn stiffness_ratios_10_and_1000_fit_every_sample_leg_without_penetration() {
 fn stiffness_ratio_1000_on_a_narrow_stocking_is_refused_as_bunched_not_written() {
     // Support courses 1000× stiffer than nylon barely stretch: relaxed at 0.2 m, they slide down
     // the leg to where it is that thin and the stocking bunches at the ankle. It converges, but
-    // it is not a stocking.
-    for leg_path in crate::support::sample_legs() {
+    // it is not a stocking. On two samples here, on every one in the long profile.
+    for leg_path in crate::support::long::samples(crate::support::sample_legs()) {
         let scene = scene_for(&leg_path, json!({}), stiffness(1000.0, 0.2));
         let (dir, out) = run_scene(&scene, "32x32", &[]);
         check_refused(
@@ -1128,7 +1128,8 @@ fn stiff_and_narrow_stockings_to_the_toe_fit_or_are_refused_as_bunched() {
             "tube": { "relaxed_circumference_m": circumference_m },
         })
     };
-    for foot in crate::support::FEET {
+    // On two feet here, on every foot in the long profile.
+    for foot in crate::support::long::samples(crate::support::FEET) {
         let leg_path = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("samples")
             .join(foot);

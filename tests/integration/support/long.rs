@@ -7,3 +7,20 @@
 pub fn enabled() -> bool {
     std::env::var_os("KNITFIT_LONG").is_some_and(|v| v != "0")
 }
+
+/// The samples a costly hard case runs on: all of them in the long profile; in the default
+/// suite the two legs made most differently among the quick ones, a MakeHuman leg with its foot
+/// and a low-poly game leg. The whole body and the heavy hips take two to three times as long to
+/// fit and take no other path through the case's code.
+pub fn samples<T: AsRef<std::path::Path>>(all: impl IntoIterator<Item = T>) -> Vec<T> {
+    const KEPT: [&str; 2] = ["makehuman_leg_foot.glb", "lowpoly_leg.glb"];
+    let long = enabled();
+    all.into_iter()
+        .filter(|leg| {
+            long || leg
+                .as_ref()
+                .file_name()
+                .is_some_and(|name| KEPT.iter().any(|kept| name == *kept))
+        })
+        .collect()
+}
