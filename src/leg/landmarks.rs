@@ -36,6 +36,7 @@
 use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
 
+use super::caps::open_cut_caps;
 use super::slice::{Loop, Slicer};
 use super::Side;
 use crate::base::Stance;
@@ -282,7 +283,10 @@ pub fn find_landmarks(
     up: Vector3<f64>,
     side: Side,
 ) -> Result<Landmarks, String> {
-    let slicer = Slicer::new(positions, triangles, up);
+    // The sections follow the skin: a cap over the cut would make the leg seem to narrow to a
+    // point at its top.
+    let (skin, _) = open_cut_caps(positions, triangles, &up);
+    let slicer = Slicer::new(positions, &skin, up);
     let (lo, hi) = slicer.range();
     // Sections every few millimetres over a span no body has would take minutes, for nothing.
     if hi - lo > MAX_SPAN_M {

@@ -2,6 +2,7 @@
 //! where the stocking goes, the axis it is stretched along, and the collider the yarn slides on.
 
 pub mod axis;
+pub mod caps;
 pub mod clean;
 pub mod collider;
 pub mod curvature;

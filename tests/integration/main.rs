@@ -4,6 +4,7 @@
 mod anatomy;
 mod cli;
 mod contact;
+mod cuts;
 mod docs;
 mod evaluation;
 mod fit;
