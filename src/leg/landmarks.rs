@@ -26,6 +26,9 @@
 //!   the leg's lowest section). Toe and sole are taken only from vertices nearer the leg's own
 //!   centre line than another leg's: the other foot is within reach, and may be lower.
 //!
+//! The sections are of the skin without a flat cap over the cut ([`super::caps`]): a leg closed
+//! at its cut is read as the open cut.
+//!
 //! Why this holds on character exports: girths are convex-hull perimeters of loops, so folds,
 //! dents and small self-intersections do not move them; loops are walked on the cleaned mesh
 //! ([`super::clean`]), so repeated faces and debris are gone; following a loop by enclosure
