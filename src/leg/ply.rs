@@ -3,8 +3,9 @@
 //!
 //! What is read: the `vertex` element's `x`, `y`, `z` (float or double), in the file's
 //! coordinates and units; and the `face` element's `vertex_indices` list (or `vertex_index`, as
-//! some tools name it; any integer type), each polygon fanned into triangles from its first
-//! vertex. Every other property and element (normals, colours, edges, materials) is read past.
+//! some tools name it; any integer type), each polygon triangulated in its own plane: a convex
+//! one as a fan from its first vertex, any other by ear clipping (a fan would cover the notch
+//! of a concave quad and fold back over itself). Every other property and element (normals, colours, edges, materials) is read past.
 //! What is checked, as for glTF geometry: every coordinate finite, every index naming a vertex,
 //! at least one triangle. A refusal is [`Error::Leg`] in one line.
 //!
@@ -127,19 +128,21 @@ fn decode_bytes(bytes: &[u8]) -> std::result::Result<PlyMesh, String> {
             }
         })
         .collect::<std::result::Result<Vec<_>, _>>()?;
-    let triangles = fan_triangulate(&faces, positions.len())?;
+    let triangles = triangulate(&faces, &positions)?;
     Ok(PlyMesh {
         positions,
         triangles,
     })
 }
 
-/// Every face of three or more vertices as a fan of triangles from its first vertex; each index
-/// must name one of the `vertices`.
-fn fan_triangulate(
+/// Every face of three or more vertices as triangles: a convex polygon as a fan from its first
+/// vertex, any other by ear clipping in its own plane ([`ear_clip`]); each index must name one
+/// of the `positions`.
+fn triangulate(
     faces: &[FaceRow],
-    vertices: usize,
+    positions: &[Point3<f64>],
 ) -> std::result::Result<Vec<[u32; 3]>, String> {
+    let vertices = positions.len();
     let mut triangles = Vec::with_capacity(faces.len());
     for (f, FaceRow(indices)) in faces.iter().enumerate() {
         // At most u32::MAX vertices, checked with the header, so an index in range fits.
@@ -153,8 +156,14 @@ fn fan_triangulate(
             .iter()
             .map(|&i| index(i))
             .collect::<std::result::Result<Vec<u32>, _>>()?;
-        for k in 1..indices.len().saturating_sub(1) {
-            triangles.push([indices[0], indices[k], indices[k + 1]]);
+        let corners: Vec<Point3<f64>> = indices.iter().map(|&i| positions[i as usize]).collect();
+        match ear_clip(&corners) {
+            Some(ears) => triangles.extend(ears.iter().map(|t| t.map(|k| indices[k]))),
+            None => {
+                for k in 1..indices.len().saturating_sub(1) {
+                    triangles.push([indices[0], indices[k], indices[k + 1]]);
+                }
+            }
         }
     }
     if triangles.is_empty() {
@@ -165,6 +174,95 @@ fn fan_triangulate(
         });
     }
     Ok(triangles)
+}
+
+/// The most corners a polygon is ear-clipped with: clipping costs up to the cube of the corners,
+/// and a file must not be able to stall the reader with one face of a million (a larger
+/// polygon is fanned; modellers' n-gons have tens).
+pub const MAX_EAR_CLIPPED: usize = 256;
+
+/// A polygon that is not convex as triangles of its corners (indices into `corners`), clipped
+/// ear by ear in the polygon's own plane, as modellers triangulate (Eberly, "Triangulation by
+/// Ear Clipping", 2002); the winding of each triangle is the polygon's. `None` where the fan
+/// from the first corner is right: a triangle, a convex polygon (so files of convex faces read
+/// as they always have), or one without a plane (no area); and past [`MAX_EAR_CLIPPED`].
+fn ear_clip(corners: &[Point3<f64>]) -> Option<Vec<[usize; 3]>> {
+    let n = corners.len();
+    if !(4..=MAX_EAR_CLIPPED).contains(&n) {
+        return None;
+    }
+    // Newell's normal: the polygon's plane even where some corners are off it.
+    let mut normal = nalgebra::Vector3::zeros();
+    for k in 0..n {
+        let (a, b) = (corners[k], corners[(k + 1) % n]);
+        normal += nalgebra::Vector3::new(
+            (a.y - b.y) * (a.z + b.z),
+            (a.z - b.z) * (a.x + b.x),
+            (a.x - b.x) * (a.y + b.y),
+        );
+    }
+    let normal = normal.try_normalize(0.0)?;
+    let u = normal.cross(&if normal.x.abs() < 0.9 {
+        nalgebra::Vector3::x()
+    } else {
+        nalgebra::Vector3::y()
+    });
+    let u = u.normalize();
+    let v = normal.cross(&u);
+    // Counter-clockwise about the normal in (u, v).
+    let flat: Vec<[f64; 2]> = corners
+        .iter()
+        .map(|p| [p.coords.dot(&u), p.coords.dot(&v)])
+        .collect();
+    let turn = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
+        (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    };
+    if (0..n).all(|k| turn(flat[k], flat[(k + 1) % n], flat[(k + 2) % n]) >= 0.0) {
+        return None;
+    }
+    // On an edge (to rounding) counts as inside: clipping there would leave a triangle of no
+    // area behind.
+    let size = corners
+        .iter()
+        .map(|p| (p - corners[0]).norm())
+        .fold(0.0, f64::max);
+    let on = -1e-12 * size * size;
+    let inside = |p: [f64; 2], [a, b, c]: [[f64; 2]; 3]| {
+        turn(a, b, p) >= on && turn(b, c, p) >= on && turn(c, a, p) >= on
+    };
+    let mut ring: Vec<usize> = (0..n).collect();
+    let mut triangles = Vec::with_capacity(n - 2);
+    while ring.len() > 3 {
+        let m = ring.len();
+        let ear = (0..m).find(|&k| {
+            let [a, b, c] = [ring[(k + m - 1) % m], ring[k], ring[(k + 1) % m]];
+            let corner = [flat[a], flat[b], flat[c]];
+            turn(corner[0], corner[1], corner[2]) > 0.0
+                && ring
+                    .iter()
+                    .filter(|&&o| o != a && o != b && o != c)
+                    .all(|&o| !inside(flat[o], corner))
+        });
+        // A polygon that crosses itself may have no ear: its most convex corner goes next.
+        let k = ear.unwrap_or_else(|| {
+            (0..m)
+                .max_by(|&i, &j| {
+                    let area = |k: usize| {
+                        turn(
+                            flat[ring[(k + m - 1) % m]],
+                            flat[ring[k]],
+                            flat[ring[(k + 1) % m]],
+                        )
+                    };
+                    area(i).total_cmp(&area(j))
+                })
+                .expect("a ring of more than three corners")
+        });
+        triangles.push([ring[(k + m - 1) % m], ring[k], ring[(k + 1) % m]]);
+        ring.remove(k);
+    }
+    triangles.push([ring[0], ring[1], ring[2]]);
+    Some(triangles)
 }
 
 /// Checks what [`decode`] relies on; `payload_bytes` is what follows the header.
@@ -458,6 +556,48 @@ mod tests {
         assert_eq!(text.lines().count(), 1, "one line: {text}");
         assert!(text.starts_with("leg.ply: "), "{text}");
         text
+    }
+
+    #[test]
+    fn a_concave_polygon_is_cut_into_ears_that_cover_it_once() {
+        // An arrowhead quad from a wing: the fan from corner 0 would fill the notch and fold
+        // back over the arrow. And an L-shaped hexagon; both tilted out of every axis plane.
+        let arrow = [(-1.0, -1.0), (0.0, -0.4), (1.0, -1.0), (0.0, 1.0)];
+        let l_shape = [(0., 0.), (2., 0.), (2., 1.), (1., 1.), (1., 2.), (0., 2.)];
+        let tilt = nalgebra::Rotation3::from_euler_angles(0.3, 0.5, 0.7);
+        for outline in [&arrow[..], &l_shape[..]] {
+            let corners: Vec<Point3<f64>> = outline
+                .iter()
+                .map(|&(x, y)| tilt * Point3::new(x, y, 0.0))
+                .collect();
+            let triangles = ear_clip(&corners).expect("not convex");
+            assert_eq!(triangles.len(), outline.len() - 2);
+            // Same winding as the polygon, and areas that add up to the polygon's (shoelace).
+            let normal = tilt * nalgebra::Vector3::z();
+            let area: f64 = triangles
+                .iter()
+                .map(|[a, b, c]| {
+                    let (a, b, c) = (corners[*a], corners[*b], corners[*c]);
+                    let signed = (b - a).cross(&(c - a)).dot(&normal) / 2.0;
+                    assert!(signed > 0.0, "{outline:?}: a triangle wound the other way");
+                    signed
+                })
+                .sum();
+            let shoelace: f64 = (0..outline.len())
+                .map(|k| {
+                    let ((x0, y0), (x1, y1)) = (outline[k], outline[(k + 1) % outline.len()]);
+                    x0 * y1 - x1 * y0
+                })
+                .sum::<f64>()
+                / 2.0;
+            assert!(
+                (area - shoelace).abs() < 1e-12,
+                "{outline:?}: {area} vs {shoelace}"
+            );
+        }
+        // A convex quad is left to the fan, as files of convex faces always read.
+        let square = [(0., 0.), (1., 0.), (1., 1.), (0., 1.)].map(|(x, y)| Point3::new(x, y, 0.0));
+        assert_eq!(ear_clip(&square), None);
     }
 
     #[test]
