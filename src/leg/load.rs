@@ -4,10 +4,11 @@
 //! From glTF, every triangle primitive under the default scene's nodes is taken, with node
 //! transforms applied; from PLY, every face, triangulated in its own plane. Either way the mesh
 //! is then handled here, in one place: scaled to metres, cleaned ([`super::clean`]: repeated
-//! vertices and faces, slivers, debris), and turned so that the file's up axis is +Y (glTF's own convention,
-//! so a well-formed glTF file needs no turning; PLY has none). With `up_axis: auto` the up axis is
-//! the file axis nearest the body's own up ([`anatomical_up`]). The mesh is checked: it must have
-//! triangles, finite coordinates, no compressed geometry, and a plausible height.
+//! vertices and faces, slivers, debris), and turned so that the file's up axis is +Y (glTF's
+//! own convention, so a well-formed glTF file needs no turning; PLY has none). With
+//! `up_axis: auto` the up axis is the file axis nearest the body's own up ([`anatomical_up`]).
+//! The mesh is checked: it must have triangles, finite coordinates, no compressed geometry, and
+//! a plausible height.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
