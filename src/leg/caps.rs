@@ -76,26 +76,17 @@ pub fn open_cut_caps(
         let origin = positions[triangles[seed][0] as usize];
         let on_plane =
             |i: u32| (positions[i as usize] - origin).dot(&normal).abs() <= PLANE_TOLERANCE;
-        let mut region = vec![seed];
         region_of[seed] = seed;
-        let mut queue = VecDeque::from([seed]);
-        while let Some(k) = queue.pop_front() {
-            let t = triangles[k];
-            for e in 0..3 {
-                let (a, b) = (t[e], t[(e + 1) % 3]);
-                for &n in &by_edge[&(a.min(b), a.max(b))] {
-                    if region_of[n] == usize::MAX
-                        && normal_area[n].1 > 0.0
-                        && normal_area[n].0.dot(&normal).abs() >= cos_planar
-                        && triangles[n].iter().all(|&i| on_plane(i))
-                    {
-                        region_of[n] = seed;
-                        region.push(n);
-                        queue.push_back(n);
-                    }
-                }
+        let region = flood(triangles, &by_edge, seed, |n| {
+            let joins = region_of[n] == usize::MAX
+                && normal_area[n].1 > 0.0
+                && normal_area[n].0.dot(&normal).abs() >= cos_planar
+                && triangles[n].iter().all(|&i| on_plane(i));
+            if joins {
+                region_of[n] = seed;
             }
-        }
+            joins
+        });
         let area: f64 = region.iter().map(|&k| normal_area[k].1).sum();
         // The cap's normal pointed up the body: the side its piece must lie below.
         let outward = if normal.dot(up) >= 0.0 {
@@ -143,25 +134,43 @@ fn pieces(
         if piece_of[start] != usize::MAX {
             continue;
         }
-        piece_of[start] = pieces.len();
-        let mut piece = vec![start];
-        let mut queue = VecDeque::from([start]);
-        while let Some(k) = queue.pop_front() {
-            let t = triangles[k];
-            for e in 0..3 {
-                let (a, b) = (t[e], t[(e + 1) % 3]);
-                for &n in &by_edge[&(a.min(b), a.max(b))] {
-                    if piece_of[n] == usize::MAX {
-                        piece_of[n] = pieces.len();
-                        piece.push(n);
-                        queue.push_back(n);
-                    }
-                }
+        let id = pieces.len();
+        piece_of[start] = id;
+        let piece = flood(triangles, by_edge, start, |n| {
+            let joins = piece_of[n] == usize::MAX;
+            if joins {
+                piece_of[n] = id;
             }
-        }
+            joins
+        });
         pieces.push(piece);
     }
     (piece_of, pieces)
+}
+
+/// The triangles reached from `seed` across shared edges, `seed` first: `join` says whether a
+/// neighbour joins (and marks it, so it is not offered again).
+fn flood(
+    triangles: &[[u32; 3]],
+    by_edge: &HashMap<(u32, u32), Vec<usize>>,
+    seed: usize,
+    mut join: impl FnMut(usize) -> bool,
+) -> Vec<usize> {
+    let mut grown = vec![seed];
+    let mut queue = VecDeque::from([seed]);
+    while let Some(k) = queue.pop_front() {
+        let t = triangles[k];
+        for e in 0..3 {
+            let (a, b) = (t[e], t[(e + 1) % 3]);
+            for &n in &by_edge[&(a.min(b), a.max(b))] {
+                if join(n) {
+                    grown.push(n);
+                    queue.push_back(n);
+                }
+            }
+        }
+    }
+    grown
 }
 
 #[cfg(test)]
