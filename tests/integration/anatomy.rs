@@ -573,9 +573,12 @@ fn split_band(m: &mut RawMesh, at: &Point3<f64>, up: &Vector3<f64>) -> usize {
 #[test]
 fn every_kind_of_export_damage_to_every_sample_fits_like_the_clean_file() {
     let dir = tempfile::tempdir().unwrap();
-    for path in sample_legs() {
-        let sample = file_name(&path);
-        let clean = fit_checked(&sample, &path, json!({}));
+    let samples = sample_legs();
+    // Every damage on every sample in the long profile; each damage once here.
+    let pairs = crate::support::long::pairs(&samples, &Damage::ALL);
+    for path in &samples {
+        let sample = file_name(path);
+        let clean = fit_checked(&sample, path, json!({}));
         // The samples are Y-up files: their file coordinates are world coordinates.
         assert_eq!(clean.report.details.leg.up_axis, UpAxis::PosY, "{sample}");
         let raw = read_glb_meshes(&path);
@@ -585,7 +588,7 @@ fn every_kind_of_export_damage_to_every_sample_fits_like_the_clean_file() {
             &load_sample(&path),
             &debris_centres(&raw[skin(&raw)], &places),
         );
-        for damage in Damage::ALL {
+        for damage in pairs.iter().filter(|(p, _)| p == path).map(|&(_, d)| d) {
             let name = format!("{sample}, {}", damage.name());
             let (meshes, done) = damage.apply(&raw, &places);
             let file = write_raw_meshes(dir.path(), "damaged.glb", &meshes);
@@ -650,11 +653,16 @@ fn motions() -> [(&'static str, Isometry3<f64>, Option<UpAxis>); 3] {
 #[test]
 fn every_sample_turned_or_moved_fits_as_upright_up_to_the_motion() {
     let dir = tempfile::tempdir().unwrap();
-    for path in sample_legs() {
-        let sample = file_name(&path);
-        let upright = fit_checked(&sample, &path, json!({}));
-        let raw = read_glb_meshes(&path);
-        for (motion_name, file_from_upright, up_axis) in motions() {
+    let samples = sample_legs();
+    // Every motion of every sample in the long profile; each motion once here.
+    let pairs = crate::support::long::pairs(&samples, &motions());
+    for path in &samples {
+        let sample = file_name(path);
+        let upright = fit_checked(&sample, path, json!({}));
+        let raw = read_glb_meshes(path);
+        for (_, (motion_name, file_from_upright, up_axis)) in
+            pairs.iter().filter(|(p, _)| p == path)
+        {
             let name = format!("{sample}, {motion_name}");
             let moved: Vec<RawMesh> = raw
                 .iter()
@@ -667,7 +675,7 @@ fn every_sample_turned_or_moved_fits_as_upright_up_to_the_motion() {
             let got = fit_checked(&name, &file, json!({}));
             let leg = &got.report.details.leg;
             assert!(leg.up_axis_found, "{name}");
-            if let Some(up) = up_axis {
+            if let Some(up) = *up_axis {
                 assert_eq!(leg.up_axis, up, "{name}");
             }
             // The axis, taken back to the upright file.

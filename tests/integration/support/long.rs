@@ -24,3 +24,27 @@ pub fn samples<T: AsRef<std::path::Path>>(all: impl IntoIterator<Item = T>) -> V
         })
         .collect()
 }
+
+/// The (sample, case) pairs a costly matrix runs: every pair in the long profile; in the
+/// default suite each case once and each sample at least once, dealt round-robin so each case
+/// meets a different sample (every sample still runs through the test's other checks).
+pub fn pairs<S: Clone, C: Clone>(samples: &[S], cases: &[C]) -> Vec<(S, C)> {
+    if enabled() {
+        return samples
+            .iter()
+            .flat_map(|s| cases.iter().map(move |c| (s.clone(), c.clone())))
+            .collect();
+    }
+    let n = samples.len().max(cases.len());
+    if samples.is_empty() || cases.is_empty() {
+        return Vec::new();
+    }
+    (0..n)
+        .map(|i| {
+            (
+                samples[i % samples.len()].clone(),
+                cases[i % cases.len()].clone(),
+            )
+        })
+        .collect()
+}
