@@ -581,11 +581,11 @@ fn every_kind_of_export_damage_to_every_sample_fits_like_the_clean_file() {
         let clean = fit_checked(&sample, path, json!({}));
         // The samples are Y-up files: their file coordinates are world coordinates.
         assert_eq!(clean.report.details.leg.up_axis, UpAxis::PosY, "{sample}");
-        let raw = read_glb_meshes(&path);
+        let raw = read_glb_meshes(path);
         let places = Places::of(&clean);
         let gaps = check_debris_places(
             &sample,
-            &load_sample(&path),
+            &load_sample(path),
             &debris_centres(&raw[skin(&raw)], &places),
         );
         for damage in pairs.iter().filter(|(p, _)| p == path).map(|&(_, d)| d) {
