@@ -21,7 +21,9 @@ use knitfit::Error;
 #[command(
     after_help = "Exit codes: 0 done, 1 run failed, 2 bad input, 3 did not converge \
                         (at the step limit: files written, report.json says \"converged\": \
-                        false; stopped early as going nowhere: nothing written)."
+                        false; stopped early as going nowhere: nothing written), 4 converged \
+                        but failed a check (yarn through the skin, density jumping between \
+                        neighbours: files written, report.json details.checks says which)."
 )]
 pub struct Cli {
     #[command(subcommand)]

@@ -39,6 +39,10 @@ use knitfit::Error;
 /// Exit code of a run that finished but did not converge (its files are written and its report
 /// says so).
 const EXIT_NOT_CONVERGED: u8 = 3;
+/// Exit code of a fit that converged but failed a check of a finished fit (yarn left through
+/// the skin, density jumping between neighbours): its files are written, its report's
+/// `details.checks` says which.
+const EXIT_FAILED_CHECKS: u8 = 4;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
@@ -151,6 +155,15 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
         } => format!("{place}; {advice}"),
         _ => advice.to_string(),
     };
+    let failures = report.details.checks.failures();
+    if m.converged && !failures.is_empty() {
+        eprintln!(
+            "knitfit: warning: the fit converged but is not sound: {}; its files are written to \
+             show where (report.json details.checks)",
+            failures.join("; ")
+        );
+        return Ok(ExitCode::from(EXIT_FAILED_CHECKS));
+    }
     Ok(finish(m.converged, scene, &hint))
 }
 

@@ -13,6 +13,7 @@ use serde::{de, Deserialize, Deserializer, Serialize};
 
 use crate::base::{GridSize, PerDirection};
 use crate::export::YarnsWritten;
+use crate::fit::FitChecks;
 use crate::knit::{Pattern, Stretch, TubeBottom, TubeHeel};
 use crate::leg::landmarks::Ring;
 use crate::leg::{Axis, Cleaned, ContactMethod, Landmarks, Leg, Side, ThighTopKind, Units, UpAxis};
@@ -196,6 +197,9 @@ pub struct FitDetails {
     pub coverage: FieldRange,
     /// Pressure on the skin over the covered leg vertices, mmHg.
     pub pressure_mmhg: FieldRange,
+    /// The checks a converged fit must also pass to be done (`knitfit fit` exits 4 when one
+    /// fails).
+    pub checks: FitChecks,
     /// Mean stretch of the knit on each part of the leg, toe to thigh (empty where the leg's
     /// landmarks were not looked for: a given axis).
     pub stretch_by_region: Vec<RegionStretch>,

@@ -10,9 +10,11 @@
 //! 5. [`measure`]: density, coverage, stretch, tension and pressure per point and per leg
 //!    vertex, in the real stocking's units at any grid;
 //! 6. [`products()`]: the yarns, the real stitches, the stocking surface; then each file's bytes
-//!    ([`Products::encode`]) and the preview ([`Products::render_preview`]).
+//!    ([`Products::encode`]) and the preview ([`Products::render_preview`]);
+//! 7. [`checks`]: what a converged fit must also be to be done (no yarn left through the skin,
+//!    no tenfold density jump between neighbours).
 //!
-//! [`fit()`] runs 2–6 in one call. `knitfit fit`, `bench`, `plan` and the tests call the same
+//! [`fit()`] runs 2–7 in one call. `knitfit fit`, `bench`, `plan` and the tests call the same
 //! functions: a command builds the [`FitSettings`] from its scene and plan
 //! ([`crate::plan::Plan::fit_settings`]) and times each stage on its clock ([`StageTimes`]).
 //!
@@ -28,6 +30,7 @@
 //! # Ok::<(), knitfit::Error>(())
 //! ```
 
+pub mod checks;
 mod levels;
 pub mod measure;
 pub mod place;
@@ -37,6 +40,7 @@ pub mod solve;
 
 use std::path::Path;
 
+pub use checks::FitChecks;
 pub use measure::Fields;
 pub use place::{place, PlaceSettings, Placement};
 pub use products::{products, ProductSettings, Products};
@@ -120,6 +124,8 @@ pub struct Fitted {
     pub fields: Fields,
     /// Its products, where asked for.
     pub products: Option<Products>,
+    /// The checks a finished fit must pass to be done, besides converging.
+    pub checks: FitChecks,
 }
 
 /// Reads the leg file at `path`, refuses a fit too large for memory before the leg is decoded
@@ -182,9 +188,12 @@ pub fn fit(
         .products
         .as_ref()
         .map(|wanted| products(&solved, &fields, &settings.fabric, forces, wanted, times));
+    let fix = products.as_ref().and_then(|p| p.penetration_fix.as_ref());
+    let checks = FitChecks::of(&solved.leg, &fields.on_leg.stitch_density, fix);
     Ok(Fitted {
         solved,
         fields,
         products,
+        checks,
     })
 }

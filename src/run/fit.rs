@@ -185,6 +185,7 @@ fn details(
                 triangles_dipping: *dipping,
             }
         }),
+        checks: fitted.checks.clone(),
         stretch_by_region: measure::stretch_by_part(fit),
         knit: KnitDetails {
             needles: fabric.needles,

@@ -727,3 +727,70 @@ fn a_ply_of_partly_concave_quads_reads_as_its_triangles() {
     assert_eq!(r.metrics.max_penetration_m, Some(0.0));
     assert_eq!(r.details.penetration_fix.unwrap().still_crossing, 0);
 }
+
+/// `ply`, a PLY of `leg_as_quads`, with every polygon fanned from its first corner into
+/// triangles: how a careless exporter triangulates, and the concave quads folded back over the
+/// skin.
+fn fanned(ply: &str) -> String {
+    let (header, body) = ply.split_once("end_header\n").unwrap();
+    let count = |element: &str| -> usize {
+        let line = header.lines().find(|l| l.starts_with(element)).unwrap();
+        line.rsplit(' ').next().unwrap().parse().unwrap()
+    };
+    let (vertices, faces) = (count("element vertex "), count("element face "));
+    let lines: Vec<&str> = body.lines().collect();
+    let triangles: Vec<String> = (lines[vertices..vertices + faces].iter())
+        .flat_map(|face| {
+            let corners: Vec<&str> = face.split(' ').skip(1).collect();
+            (1..corners.len() - 1)
+                .map(|k| format!("3 {} {} {}", corners[0], corners[k], corners[k + 1]))
+                .collect::<Vec<_>>()
+        })
+        .collect();
+    let header = header.replace(
+        &format!("element face {faces}"),
+        &format!("element face {}", triangles.len()),
+    );
+    format!(
+        "{header}end_header\n{}\n{}\n",
+        lines[..vertices].join("\n"),
+        triangles.join("\n")
+    )
+}
+
+#[test]
+fn a_fit_with_yarn_left_through_a_folded_skin_is_written_but_not_done() {
+    // The whole body with its concave quads fanned across their outside diagonals: the fit
+    // converged with yarn through the leg and density spanning three orders of magnitude, and
+    // said "converged", exit 0.
+    let dir = tempfile::tempdir().unwrap();
+    let (quads, outside) = leg_as_quads(&load_sample(&sample("makehuman_body.glb")));
+    assert!(outside.len() > 100, "{} concave quads", outside.len());
+    let path = dir.path().join("folded.ply");
+    std::fs::write(&path, fanned(&quads)).unwrap();
+    let out = crate::support::knitfit(
+        dir.path(),
+        &[
+            "fit",
+            "--leg",
+            path.to_str().unwrap(),
+            "--resolution",
+            "60x60",
+            "-q",
+        ],
+    );
+    let err = crate::support::stderr(&out);
+    eprintln!("{err}");
+    assert_eq!(out.status.code(), Some(4), "{err}");
+    assert!(err.contains("converged but is not sound"), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    let report = crate::support::read_fit_report(&dir.path().join("out"));
+    assert!(report.metrics.converged);
+    let failures = report.details.checks.failures();
+    assert!(
+        !failures.is_empty() && err.contains(&failures[0]),
+        "{failures:?}\n{err}"
+    );
+    // The files are written, to show where.
+    assert!(dir.path().join("out/stocking.glb").is_file());
+}
