@@ -14,6 +14,7 @@ use crate::base::GridSize;
 use crate::error::{Error, Result};
 use crate::knit::tube::{Centreline, TubeSpec};
 use crate::knit::{Knit, TubeHeel};
+use crate::leg::solid::outer_skin;
 use crate::leg::{Collider, ContactMethod, Leg};
 use crate::limits::MemoryCheck;
 use crate::post::stitches::refuse_bunched;
@@ -110,12 +111,18 @@ pub fn solve(
     progress: &mut dyn Progress,
 ) -> Result<SolvedFit> {
     let (collider, toe_box) = timed(times, Stage::BuildCollider, || -> Result<_> {
-        let collider = Collider::new(&leg, settings.contact)?;
+        // Contact sees the solid's skin: a piece's triangles inside another piece (a ball joint
+        // in its shin) are not where yarn rests (leg::solid).
+        let skin = Leg {
+            triangles: outer_skin(&leg.positions, &leg.triangles),
+            ..leg.clone()
+        };
+        let collider = Collider::new(&skin, settings.contact)?;
         // The fit's contact sees the toes boxed (TubePath::box_the_toes).
         let boxed = placement
             .path
             .as_ref()
-            .and_then(|path| path.box_the_toes(&leg.positions, &leg.triangles));
+            .and_then(|path| path.box_the_toes(&skin.positions, &skin.triangles));
         let toe_box = match boxed {
             Some((positions, triangles)) => {
                 let mut boxed = leg.clone();

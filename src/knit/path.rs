@@ -189,6 +189,7 @@ pub fn path_to_toe(
     let sections = Sections {
         positions,
         triangles,
+        piece: slice::triangle_pieces(positions, triangles),
         side,
     };
 
@@ -515,6 +516,9 @@ fn star_extent(points: Vec<[f64; 2]>) -> ([f64; 2], Vec<f64>) {
 struct Sections<'a> {
     positions: &'a [Point3<f64>],
     triangles: &'a [[u32; 3]],
+    /// Each triangle's connected piece: the sections of a leg modelled in pieces are their
+    /// union.
+    piece: Vec<u32>,
     /// The leg's side-to-side direction: each station's `u` is this made square to its plane's
     /// normal.
     side: Vector3<f64>,
@@ -557,10 +561,11 @@ impl Sections<'_> {
     ) -> Option<Hull> {
         let u = (self.side - t * t.dot(&self.side)).normalize();
         let v = t.cross(&u);
-        let loops: Vec<slice::Loop> = slice::section(self.positions, self.triangles, origin, t)
-            .into_iter()
-            .filter(|l| l.closed && l.points.len() >= 3)
-            .collect();
+        let loops: Vec<slice::Loop> =
+            slice::section(self.positions, self.triangles, &self.piece, origin, t)
+                .into_iter()
+                .filter(|l| l.closed && l.points.len() >= 3)
+                .collect();
         let flat = |p: &Point3<f64>| [(p - origin).dot(&u), (p - origin).dot(&v)];
         let probe_flat = flat(probe);
         let reach = previous.map_or(f64::INFINITY, |s| {

@@ -31,11 +31,16 @@ use std::collections::{HashMap, HashSet};
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
+use super::solid::{touching_groups, triangle_pieces};
 use super::weld::welded_ids;
 
 /// Pieces smaller than this fraction of the largest body-like piece's area are dropped as
 /// debris.
 pub const DEBRIS_AREA_FRACTION: f64 = 0.02;
+/// A piece that neither touches nor passes into the body's solid ([`touching_groups`]) and has
+/// at most this fraction of its area is dropped too: a box or a prop beside the leg. A second
+/// leg or body modelled apart is far larger.
+pub const APART_AREA_FRACTION: f64 = 0.1;
 /// A piece with at least this fraction of its triangles' edges open (used by one triangle) is a
 /// sheet, not a body: a floor, a backdrop, a card for hair or lashes.
 pub const SHEET_OPEN_FRACTION: f64 = 0.2;
@@ -105,7 +110,7 @@ pub fn clean_mesh(
     // 4. T-junctions closed.
     cleaned.split_triangles = close_t_junctions(positions, &mut kept);
     // 5. Pieces, by shared vertices; the small ones go.
-    let piece = pieces(positions.len(), &kept);
+    let piece = triangle_pieces(positions, &kept);
     let mut piece_area: HashMap<u32, f64> = HashMap::new();
     for (t, p) in kept.iter().zip(&piece) {
         *piece_area.entry(*p).or_default() += area(positions, t);
@@ -138,8 +143,35 @@ pub fn clean_mesh(
     } else {
         piece_area.values().copied().fold(0.0, f64::max)
     };
+    // The solid the largest body-like piece belongs to (pieces that touch or pass into it, a
+    // mannequin's limbs): a piece apart from it, a tenth of its size or less, is a prop or a
+    // box beside the body, not a part of it. Asked only where pieces are left to ask about.
+    let main = (piece_area.iter())
+        .filter(|(p, _)| !sheet(p) || largest_body == 0.0)
+        .max_by(|a, b| a.1.total_cmp(b.1).then(b.0.cmp(a.0)))
+        .map(|(&p, _)| p);
+    let big = |p: &u32| piece_area[p] >= DEBRIS_AREA_FRACTION * largest && !sheet(p);
+    let group = match piece_area.keys().filter(|p| big(p)).count() {
+        0 | 1 => None,
+        _ => Some(touching_groups(positions, &kept, &piece)),
+    };
+    let solid_area: f64 = (piece_area.iter())
+        .filter(|(p, _)| match (&group, main) {
+            (Some(g), Some(m)) => g[**p as usize] == g[m as usize],
+            _ => Some(**p) == main,
+        })
+        .map(|(_, a)| a)
+        .sum();
+    let apart = |p: &u32| match (&group, main) {
+        (Some(g), Some(m)) => {
+            g[*p as usize] != g[m as usize] && piece_area[p] < APART_AREA_FRACTION * solid_area
+        }
+        _ => false,
+    };
     let debris = |p: &u32| {
-        piece_area[p] < DEBRIS_AREA_FRACTION * largest || (largest_body > 0.0 && sheet(p))
+        piece_area[p] < DEBRIS_AREA_FRACTION * largest
+            || (largest_body > 0.0 && sheet(p))
+            || apart(p)
     };
     cleaned.debris_pieces = piece_area.keys().filter(|p| debris(p)).count();
     let before = kept.len();
@@ -309,25 +341,6 @@ fn open_edges(triangles: &[[u32; 3]]) -> Vec<OpenEdge> {
 fn area(positions: &[Point3<f64>], t: &[u32; 3]) -> f64 {
     let [a, b, c] = t.map(|i| positions[i as usize]);
     (b - a).cross(&(c - a)).norm() / 2.0
-}
-
-/// Per triangle, the id of its connected piece (union-find over shared vertices).
-fn pieces(vertex_count: usize, triangles: &[[u32; 3]]) -> Vec<u32> {
-    let mut root: Vec<u32> = (0..vertex_count as u32).collect();
-    fn find(root: &mut [u32], mut v: u32) -> u32 {
-        while root[v as usize] != v {
-            root[v as usize] = root[root[v as usize] as usize];
-            v = root[v as usize];
-        }
-        v
-    }
-    for t in triangles {
-        for k in 1..3 {
-            let (a, b) = (find(&mut root, t[0]), find(&mut root, t[k]));
-            root[a.max(b) as usize] = a.min(b);
-        }
-    }
-    triangles.iter().map(|t| find(&mut root, t[0])).collect()
 }
 
 #[cfg(test)]

@@ -10,7 +10,7 @@ use nalgebra::{Point3, Vector3};
 use parry3d_f64::query::{PointQuery, PointQueryWithLocation, Ray, RayCast};
 use parry3d_f64::shape::{TriMesh, TriMeshFlags, TrianglePointLocation};
 
-use super::Leg;
+use super::{solid, Leg};
 use crate::error::{Error, Result};
 use crate::leg::ContactMethod;
 
@@ -186,26 +186,12 @@ impl Collider {
         triangle: u32,
         location: TrianglePointLocation,
     ) -> bool {
-        let normal = match (self.mesh.pseudo_normals_if_oriented(), location) {
-            (Some(pn), TrianglePointLocation::OnEdge(i, _)) => {
-                pn.edges_pseudo_normal[triangle as usize][i as usize]
-            }
-            (Some(pn), TrianglePointLocation::OnVertex(i)) => {
-                let v = self.mesh.indices()[triangle as usize][i as usize];
-                pn.vertices_pseudo_normal[v as usize]
-            }
-            _ => self.face_normal(triangle),
-        };
-        (p - closest).dot(&normal) < 0.0
+        solid::is_inside(&self.mesh, p, closest, triangle, location)
     }
 
     /// Outward unit normal of a triangle (+Y for a degenerate one).
     pub fn face_normal(&self, triangle: u32) -> Vector3<f64> {
-        self.mesh
-            .triangle(triangle)
-            .normal()
-            .map(|n| n.into_inner())
-            .unwrap_or_else(Vector3::y)
+        solid::face_normal(&self.mesh, triangle)
     }
 
     /// True when `p` is inside the leg (a cheaper question than [`Collider::closest`] only in

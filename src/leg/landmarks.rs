@@ -40,7 +40,7 @@ use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::caps::open_cut_caps;
-use super::slice::{Loop, Slicer};
+use super::slice::{piece_bit, Loop, Slicer};
 use super::Side;
 use crate::base::Stance;
 
@@ -50,6 +50,9 @@ pub const SEED_HEIGHT_M: f64 = 0.08;
 /// Longest span along up that can be a body, metres (the tallest leg file accepted is 3 m tall
 /// along its file axis; a turned one may span a little more).
 pub const MAX_SPAN_M: f64 = 4.5;
+/// How far a leg's loop goes on up from its seed, at the least, metres: a shin above an ankle
+/// does for ten centimetres or more, a box beside the leg does not.
+const MIN_LIMB_RISE_M: f64 = 0.10;
 /// Spacing of the sections, metres.
 pub const SLICE_STEP_M: f64 = 0.0025;
 /// Furthest a limb's centre may move between two sections, metres.
@@ -91,6 +94,10 @@ pub struct Ring {
     /// none).
     #[serde(skip)]
     pub gap_m: f64,
+    /// The mesh's connected pieces the section runs through ([`Slicer::pieces_of`]): one for a
+    /// limb modelled whole, several where it is modelled in pieces.
+    #[serde(skip)]
+    pub pieces: u64,
 }
 
 /// How the top of the thigh was found.
@@ -315,6 +322,22 @@ pub fn find_landmarks(
                 best
             }
         });
+    // A seed is a limb only where its loop goes on up for a limb's length: a box or a prop
+    // standing in the seeds' band ends within centimetres, and would be dressed as the leftmost
+    // leg.
+    let rises = |seed: &Ring| {
+        let top = seed.s + MIN_LIMB_RISE_M;
+        let followed = follow(
+            &slicer,
+            &[*seed],
+            heights(seed.s, top, SLICE_STEP_M).skip(1),
+            false,
+        );
+        followed.rings[0]
+            .last()
+            .is_some_and(|r| r.s >= top - SLICE_STEP_M)
+    };
+    let seeds: Vec<Ring> = seeds.into_iter().filter(rises).collect();
     let seeds = Some(seeds).filter(|rings| !rings.is_empty()).ok_or(
         "no closed cross-section near its lowest point looks like a leg (the mesh is open \
                 all around there, or has holes)",
@@ -331,7 +354,8 @@ pub fn find_landmarks(
             let mut low = down.rings[i].clone();
             low.reverse();
             low.push(seeds[i]);
-            foot(positions, &up, &low, &seeds, i)
+            let on_limb = on_pieces(&slicer, &low);
+            foot(positions, &up, &low, &seeds, i, on_limb)
         })
         .collect();
     let soles: Vec<Option<f64>> = down.rings.iter().map(|r| Some(r.last()?.s)).collect();
@@ -384,7 +408,16 @@ pub fn find_landmarks(
         )?;
     }
     let foot = feet[chosen];
-    let sole = sole(positions, &up, &profile, foot.is_some(), &seeds, chosen);
+    let on_limb = on_pieces(&slicer, &profile);
+    let sole = sole(
+        positions,
+        &up,
+        &profile,
+        foot.is_some(),
+        &seeds,
+        chosen,
+        on_limb,
+    );
     let sole_s = sole.coords.dot(&up);
     let top = *profile
         .last()
@@ -518,6 +551,7 @@ fn ring(slicer: &Slicer, l: &Loop, s: f64) -> Ring {
         centre: l.centre().coords.into(),
         girth_m: slicer.girth(l),
         gap_m: f64::INFINITY,
+        pieces: slicer.pieces_of(l),
     }
 }
 
@@ -563,13 +597,17 @@ fn follow(
         for (i, prev) in last.iter().enumerate() {
             let Some(prev) = prev else { continue };
             let at = Point3::from(prev.centre);
+            // Only a loop of the pieces the limb runs through: a box standing beside the leg
+            // where its section ends is not where the leg goes on.
+            let on_limb = |l: &Loop| slicer.pieces_of(l) & prev.pieces != 0;
             taken[i] = loops
                 .iter()
-                .position(|l| slicer.encloses(l, &at))
+                .position(|l| on_limb(l) && slicer.encloses(l, &at))
                 .or_else(|| {
                     loops
                         .iter()
                         .enumerate()
+                        .filter(|(_, l)| on_limb(l))
                         .map(|(k, l)| (k, (l.centre() - at - slicer.up() * (s - prev.s)).norm()))
                         .filter(|&(_, d)| d <= MAX_STEP_M)
                         .min_by(|a, b| a.1.total_cmp(&b.1))
@@ -616,6 +654,17 @@ fn follow(
     }
 }
 
+/// Whether a vertex is on the pieces the sections `rings` of a limb run through: its foot and
+/// sole are looked for there, not on a box standing beside it.
+fn on_pieces<'a>(slicer: &'a Slicer, rings: &[Ring]) -> impl Fn(usize) -> bool + 'a {
+    let pieces = rings.iter().fold(0, |bits, r| bits | r.pieces);
+    move |k| {
+        slicer
+            .piece_of_vertex(k)
+            .is_some_and(|p| pieces & piece_bit(p) != 0)
+    }
+}
+
 /// The foot of limb `i`, from its rings ascending from the bottom to its seed (`low`): the
 /// vertices below the seed's section, nearer its centre line than any other limb's.
 fn foot(
@@ -624,6 +673,7 @@ fn foot(
     low: &[Ring],
     seeds: &[Ring],
     i: usize,
+    on_limb: impl Fn(usize) -> bool,
 ) -> Option<Foot> {
     // The seed's section, at the ankle or above it: a narrower one lower down can be a patch of
     // sole, off to one side of the foot.
@@ -634,9 +684,9 @@ fn foot(
         d - up * d.dot(up)
     };
     let (mut toe, mut reach) = (None, 0.0);
-    for p in positions {
+    for (k, p) in positions.iter().enumerate() {
         let p = p.coords;
-        if p.dot(up) >= ankle.s {
+        if p.dot(up) >= ankle.s || !on_limb(k) {
             continue;
         }
         let d = across(&p, &centre).norm();
@@ -679,6 +729,7 @@ fn sole(
     has_foot: bool,
     seeds: &[Ring],
     chosen: usize,
+    on_limb: impl Fn(usize) -> bool,
 ) -> Point3<f64> {
     let bottom = profile[0];
     let centre = Vector3::from(bottom.centre);
@@ -692,12 +743,13 @@ fn sole(
         let d = p - c;
         (d - up * d.dot(up)).norm()
     };
-    positions
-        .iter()
-        .filter(|p| {
-            across(&p.coords, &centre) <= reach
+    (positions.iter().enumerate())
+        .filter(|&(k, p)| {
+            on_limb(k)
+                && across(&p.coords, &centre) <= reach
                 && !nearer_other_limb(&p.coords, up, across(&p.coords, &seed), seeds, chosen)
         })
+        .map(|(_, p)| p)
         .min_by(|a, b| a.coords.dot(up).total_cmp(&b.coords.dot(up)))
         .copied()
         .unwrap_or(Point3::from(bottom.centre))
@@ -796,13 +848,14 @@ mod tests {
     }
 
     /// Two legs 0.8 m tall, 0.3 m apart, the left one (+X) standing at y = 0 and the right one
-    /// `right_lift` metres higher, each with a box foot forward (+Z); the right foot turned out
-    /// `right_turn_deg` about its leg's axis, towards −X.
+    /// `right_lift` metres higher, each with a box foot forward (+Z), a piece of its own pushed
+    /// 1 cm into the leg; the right foot turned out `right_turn_deg` about its leg's axis,
+    /// towards −X.
     fn legs_with_feet(right_turn_deg: f64, right_lift: f64) -> (Vec<Point3<f64>>, Vec<[u32; 3]>) {
         let (mut positions, mut triangles) = (Vec::new(), Vec::new());
         for (x, y) in [(0.15, 0.0), (-0.15, right_lift)] {
             let leg = ([x - 0.05, y, -0.05], [x + 0.05, y + 0.8, 0.05]);
-            let foot = ([x - 0.05, y, 0.06], [x + 0.05, y + 0.04, 0.25]);
+            let foot = ([x - 0.05, y, 0.04], [x + 0.05, y + 0.04, 0.25]);
             add_box(&mut positions, &mut triangles, leg.0, leg.1);
             add_box(&mut positions, &mut triangles, foot.0, foot.1);
         }

@@ -12,6 +12,7 @@ pub mod orient;
 pub mod ply;
 pub mod settings;
 pub mod slice;
+pub mod solid;
 pub mod weld;
 
 pub use axis::{leaves_mesh, Axis, AxisSource};

@@ -20,6 +20,8 @@ use std::collections::HashMap;
 
 use nalgebra::{Point3, Vector3};
 
+use super::solid::connected_pieces;
+pub use super::solid::triangle_pieces;
 use crate::base::perpendicular_frame;
 
 /// Widest gap an open chain may have and still count as a closed loop, metres: a small hole in
@@ -51,6 +53,10 @@ pub struct Slicer<'a> {
     tallest: f64,
     u: Vector3<f64>,
     v: Vector3<f64>,
+    /// Per triangle, its connected piece (triangles sharing vertices).
+    piece: Vec<u32>,
+    /// Per vertex, the piece of the triangles that use it (`u32::MAX` for none).
+    vertex_piece: Vec<u32>,
 }
 
 impl<'a> Slicer<'a> {
@@ -71,6 +77,10 @@ impl<'a> Slicer<'a> {
             .collect();
         by_low.sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let (u, v) = perpendicular_frame(&up);
+        let vertex_piece = connected_pieces(positions.len(), triangles);
+        let piece = (triangles.iter())
+            .map(|t| vertex_piece[t[0] as usize])
+            .collect();
         Slicer {
             positions,
             triangles,
@@ -80,7 +90,19 @@ impl<'a> Slicer<'a> {
             tallest,
             u,
             v,
+            piece,
+            vertex_piece,
         }
+    }
+
+    /// The connected piece vertex `i` is on, where a triangle uses it.
+    pub fn piece_of_vertex(&self, i: usize) -> Option<u32> {
+        Some(self.vertex_piece[i]).filter(|&p| p != u32::MAX)
+    }
+
+    /// The pieces loop `l` runs through, as bits (piece `k` as bit `k % 64`).
+    pub fn pieces_of(&self, l: &Loop) -> u64 {
+        (l.triangles.iter()).fold(0, |bits, &k| bits | piece_bit(self.piece[k as usize]))
     }
 
     /// Lowest and highest vertex height.
@@ -104,7 +126,8 @@ impl<'a> Slicer<'a> {
             .partition_point(|&(lo, _)| lo < s - self.tallest);
         let last = self.by_low.partition_point(|&(lo, _)| lo < s);
         let cut = self.by_low[first..last].iter().map(|&(_, k)| k);
-        loops_of_cut(self.positions, self.triangles, &self.height, s, cut)
+        let loops = loops_of_cut(self.positions, self.triangles, &self.height, s, cut);
+        merged_across_pieces(loops, &self.piece, &self.up, s)
     }
 
     /// `p` in the plane's 2-D frame.
@@ -127,18 +150,8 @@ impl<'a> Slicer<'a> {
         if !l.closed || l.points.len() < 3 {
             return false;
         }
-        let [px, py] = self.flat(p);
         let flat: Vec<[f64; 2]> = l.points.iter().map(|q| self.flat(q)).collect();
-        let mut inside = false;
-        for (a, b) in flat.iter().zip(flat.iter().cycle().skip(1)) {
-            if (a[1] > py) != (b[1] > py) {
-                let x = a[0] + (b[0] - a[0]) * (py - a[1]) / (b[1] - a[1]);
-                if x > px {
-                    inside = !inside;
-                }
-            }
-        }
-        inside
+        inside_polygon(&flat, self.flat(p))
     }
 }
 
@@ -164,11 +177,12 @@ impl Loop {
 }
 
 /// The loops of one plane's section: the plane through `origin` square to the unit vector
-/// `normal`. For a few planes of different directions; [`Slicer`] is faster for many parallel
-/// ones.
+/// `normal`; `piece` is each triangle's connected piece ([`triangle_pieces`]). For a few planes
+/// of different directions; [`Slicer`] is faster for many parallel ones.
 pub fn section(
     positions: &[Point3<f64>],
     triangles: &[[u32; 3]],
+    piece: &[u32],
     origin: &Point3<f64>,
     normal: &Vector3<f64>,
 ) -> Vec<Loop> {
@@ -178,7 +192,114 @@ pub fn section(
         let h = triangles[k as usize].map(|i| height[i as usize] >= s);
         h[0] != h[1] || h[1] != h[2]
     });
-    loops_of_cut(positions, triangles, &height, s, cut)
+    let loops = loops_of_cut(positions, triangles, &height, s, cut);
+    merged_across_pieces(loops, piece, normal, s)
+}
+
+/// `loops`, of the plane at height `s` along the unit vector `normal`, with the closed ones of
+/// different pieces (`piece`, per triangle) that overlap in the plane made one: the section of
+/// a solid modelled in pieces (a mannequin's ball joint inside its shin, a foot modelled apart
+/// and pushed into the leg) is their union, and a tape measure goes round its convex hull.
+/// Loops of one piece never merge: two legs of one body that touch at the knees stay two.
+fn merged_across_pieces(
+    loops: Vec<Loop>,
+    piece: &[u32],
+    normal: &Vector3<f64>,
+    s: f64,
+) -> Vec<Loop> {
+    let piece_at: Vec<Option<u32>> = (loops.iter())
+        .map(|l| l.triangles.first().map(|&k| piece[k as usize]))
+        .collect();
+    if piece_at.iter().flatten().all(|&p| Some(p) == piece_at[0]) {
+        return loops;
+    }
+    let (u, v) = perpendicular_frame(normal);
+    let flats: Vec<Vec<[f64; 2]>> = (loops.iter())
+        .map(|l| {
+            (l.points.iter())
+                .map(|p| [p.coords.dot(&u), p.coords.dot(&v)])
+                .collect()
+        })
+        .collect();
+    let closed: Vec<usize> = (0..loops.len())
+        .filter(|&i| loops[i].closed && flats[i].len() >= 3 && piece_at[i].is_some())
+        .collect();
+    let inside = |a: usize, b: usize| flats[b].iter().all(|p| inside_polygon(&flats[a], *p));
+    let overlap = |a: usize, b: usize| {
+        flats[b].iter().any(|p| inside_polygon(&flats[a], *p))
+            || flats[a].iter().any(|p| inside_polygon(&flats[b], *p))
+    };
+    // An open chain of one piece wholly inside a closed loop of another (a hole in a ball
+    // joint inside the shin) is inside the solid: no opening of its skin.
+    let buried: Vec<bool> = (0..loops.len())
+        .map(|i| {
+            !loops[i].closed
+                && closed
+                    .iter()
+                    .any(|&j| piece_at[j] != piece_at[i] && inside(j, i))
+        })
+        .collect();
+    // Groups of overlapping closed loops of different pieces, each named by its first loop.
+    let mut group: Vec<usize> = (0..loops.len()).collect();
+    let root = |group: &[usize], mut i: usize| {
+        while group[i] != i {
+            i = group[i];
+        }
+        i
+    };
+    for (n, &i) in closed.iter().enumerate() {
+        for &j in &closed[n + 1..] {
+            if piece_at[i] != piece_at[j] && overlap(i, j) {
+                let (a, b) = (root(&group, i), root(&group, j));
+                group[a.max(b)] = a.min(b);
+            }
+        }
+    }
+    let roots: Vec<usize> = (0..loops.len()).map(|i| root(&group, i)).collect();
+    let mut merged: Vec<Option<Loop>> = loops.into_iter().map(Some).collect();
+    let mut points: Vec<Vec<[f64; 2]>> = vec![Vec::new(); merged.len()];
+    for (i, &r) in roots.iter().enumerate() {
+        if r != i {
+            let member = merged[i].take().expect("each loop is taken once");
+            let into = merged[r].as_mut().expect("a group's first loop stays");
+            into.triangles.extend(member.triangles);
+            points[r].extend(&flats[i]);
+        }
+    }
+    // A group is the convex hull of all its loops' points, walked in order.
+    let lift = |[x, y]: [f64; 2]| Point3::from(u * x + v * y + normal * s);
+    (0..merged.len())
+        .filter_map(|i| {
+            let l = merged[i].take()?;
+            if buried[i] {
+                return None;
+            }
+            if points[i].is_empty() {
+                return Some(l);
+            }
+            points[i].extend(&flats[i]);
+            let hull = convex_hull(std::mem::take(&mut points[i]));
+            Some(Loop {
+                points: hull.into_iter().map(lift).collect(),
+                closed: true,
+                triangles: l.triangles,
+            })
+        })
+        .collect()
+}
+
+/// True when `p` lies inside the polygon `corners` (crossing number, half-open rule).
+fn inside_polygon(corners: &[[f64; 2]], [px, py]: [f64; 2]) -> bool {
+    let mut inside = false;
+    for (a, b) in corners.iter().zip(corners.iter().cycle().skip(1)) {
+        if (a[1] > py) != (b[1] > py) {
+            let x = a[0] + (b[0] - a[0]) * (py - a[1]) / (b[1] - a[1]);
+            if x > px {
+                inside = !inside;
+            }
+        }
+    }
+    inside
 }
 
 /// The convex hull of `points` in the plane through `centre` spanned by the unit vectors `u`
@@ -197,6 +318,12 @@ pub fn hull_in_plane(
             })
             .collect(),
     )
+}
+
+/// Bit `piece % 64`: a set of pieces in a word (two pieces 64 apart share a bit; a file with
+/// that many pieces around one leg is not a leg).
+pub fn piece_bit(piece: u32) -> u64 {
+    1 << (piece % 64)
 }
 
 /// Loops of the section at height `s` (per-vertex `height`) through the triangles `cut` (those

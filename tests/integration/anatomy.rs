@@ -949,7 +949,9 @@ fn t_posed_figure(dir: &Path) -> PathBuf {
         add(leg, &|p| Point3::new(p.x + x, p.y, p.z));
     }
     add(revolved("torso", 48, 40, (0.8, 1.45), |_| 0.16), &|p| *p);
-    let head = revolved("head", 32, 20, (1.5, 1.75), |h| {
+    // The head a piece of its own, pushed a centimetre into the torso, as a head modelled
+    // apart is.
+    let head = revolved("head", 32, 20, (1.44, 1.75), |h| {
         0.02 + 0.08 * (std::f64::consts::PI * h).sin()
     });
     add(head, &|p| *p);

@@ -1,0 +1,274 @@
+//! The leg as a solid, however it was modelled: a character's limb may be one closed skin, or
+//! pieces that touch or pass into one another (a mannequin's ball joints inside its shin and
+//! thigh, a foot modelled apart and pushed into the leg). The solid is their union; its skin is
+//! what a yarn can rest on. A triangle of one piece that lies inside another piece is inside the
+//! solid, not on its skin: contact that found it nearest would hold yarn inside the leg, and the
+//! penetration check would count every yarn that passes over it.
+//!
+//! Inside a piece is told by the sign of the closest point's angle-weighted pseudo-normal
+//! (Bærentzen & Aanæs 2005), as contact does, against that piece alone: each piece is a closed,
+//! outward-wound surface once cleaned ([`super::clean`], [`super::orient`]), where the sign is
+//! exact. A piece open at a cut still reads right away from its opening. The generalized winding
+//! number (Jacobson, Kavan & Sorkine-Hornung 2013) would also read pieces with holes; a mesh in
+//! one piece, the common case, needs neither and is returned whole.
+
+use std::collections::HashMap;
+
+use nalgebra::{Point3, Vector3};
+use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};
+use parry3d_f64::query::{PointQuery, PointQueryWithLocation, Ray, RayCast};
+use parry3d_f64::shape::{TriMesh, TriMeshFlags, TrianglePointLocation};
+
+/// How far inside another piece a triangle's centre must lie to be buried, metres: pieces that
+/// only touch (a face on a face) keep both their skins.
+const BURIED_DEPTH_M: f64 = 1e-5;
+
+/// Per vertex, its connected piece (vertices joined by triangles), numbered from 0 in the order
+/// of their first vertex; `u32::MAX` for a vertex no triangle uses.
+pub fn connected_pieces(vertices: usize, triangles: &[[u32; 3]]) -> Vec<u32> {
+    let mut parent: Vec<u32> = (0..vertices as u32).collect();
+    fn root(parent: &mut [u32], mut i: u32) -> u32 {
+        while parent[i as usize] != i {
+            parent[i as usize] = parent[parent[i as usize] as usize];
+            i = parent[i as usize];
+        }
+        i
+    }
+    let mut used = vec![false; vertices];
+    for t in triangles {
+        for k in 0..3 {
+            used[t[k] as usize] = true;
+            let (a, b) = (root(&mut parent, t[k]), root(&mut parent, t[(k + 1) % 3]));
+            parent[a.max(b) as usize] = a.min(b);
+        }
+    }
+    let mut number: HashMap<u32, u32> = HashMap::new();
+    (0..vertices as u32)
+        .map(|i| {
+            if !used[i as usize] {
+                return u32::MAX;
+            }
+            let r = root(&mut parent, i);
+            let next = number.len() as u32;
+            *number.entry(r).or_insert(next)
+        })
+        .collect()
+}
+
+/// How near a piece must come to another to touch it, metres.
+pub const TOUCH_M: f64 = 0.002;
+
+/// Per piece (numbered as `piece`, each triangle's), the group it belongs to: pieces that touch
+/// (a vertex within [`TOUCH_M`] of the other) or pass into one another (an edge through the
+/// other's skin), transitively, numbered by their lowest piece. A piece wholly inside another
+/// without touching it stays apart.
+pub fn touching_groups(
+    positions: &[Point3<f64>],
+    triangles: &[[u32; 3]],
+    piece: &[u32],
+) -> Vec<u32> {
+    let count = piece.iter().copied().max().map_or(0, |p| p as usize + 1);
+    let mut own: Vec<Vec<[u32; 3]>> = vec![Vec::new(); count];
+    for (t, &p) in triangles.iter().zip(piece) {
+        own[p as usize].push(*t);
+    }
+    let meshes: Vec<Option<TriMesh>> = (own.iter())
+        .map(|ts| TriMesh::new(positions.to_vec(), ts.clone()).ok())
+        .collect();
+    let boxes: Vec<Option<Aabb>> = (meshes.iter())
+        .map(|m| m.as_ref().map(|m| m.local_aabb().loosened(TOUCH_M)))
+        .collect();
+    let touches = |a: usize, b: usize| {
+        let (Some(mesh), Some(aabb)) = (&meshes[a], &boxes[a]) else {
+            return false;
+        };
+        own[b].iter().any(|t| {
+            let corners = t.map(|i| positions[i as usize]);
+            corners.iter().any(|c| {
+                aabb.contains_local_point(c) && mesh.distance_to_local_point(c, false) <= TOUCH_M
+            }) || (0..3).any(|k| {
+                let (from, to) = (corners[k], corners[(k + 1) % 3]);
+                let ray = Ray::new(from, to - from);
+                mesh.intersects_local_ray(&ray, 1.0)
+            })
+        })
+    };
+    let mut group: Vec<u32> = (0..count as u32).collect();
+    fn root(group: &mut [u32], mut i: u32) -> u32 {
+        while group[i as usize] != i {
+            i = group[i as usize];
+        }
+        i
+    }
+    for a in 0..count {
+        for b in a + 1..count {
+            let overlap = match (&boxes[a], &boxes[b]) {
+                (Some(x), Some(y)) => x.intersects(y),
+                _ => false,
+            };
+            if overlap && (touches(a, b) || touches(b, a)) {
+                let (ra, rb) = (root(&mut group, a as u32), root(&mut group, b as u32));
+                group[ra.max(rb) as usize] = ra.min(rb);
+            }
+        }
+    }
+    (0..count as u32).map(|p| root(&mut group, p)).collect()
+}
+
+/// Per triangle, its connected piece (triangles sharing vertices), numbered as
+/// [`connected_pieces`] numbers them.
+pub fn triangle_pieces(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Vec<u32> {
+    let vertex_piece = connected_pieces(positions.len(), triangles);
+    (triangles.iter())
+        .map(|t| vertex_piece[t[0] as usize])
+        .collect()
+}
+
+/// The triangles of the solid's skin: `triangles` without those whose centre lies inside
+/// another piece (see module docs), in their order.
+pub fn outer_skin(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
+    let piece = triangle_pieces(positions, triangles);
+    let count = piece.iter().copied().max().map_or(0, |p| p as usize + 1);
+    if count <= 1 {
+        return triangles.to_vec();
+    }
+    // Each piece as its own mesh, for inside tests against it alone.
+    let mut own: Vec<Vec<[u32; 3]>> = vec![Vec::new(); count];
+    for (t, &p) in triangles.iter().zip(&piece) {
+        own[p as usize].push(*t);
+    }
+    let flags = TriMeshFlags::ORIENTED | TriMeshFlags::MERGE_DUPLICATE_VERTICES;
+    let meshes: Vec<Option<TriMesh>> = own
+        .into_iter()
+        .map(|ts| TriMesh::with_flags(positions.to_vec(), ts, flags).ok())
+        .collect();
+    let boxes: Vec<Option<Aabb>> = (meshes.iter())
+        .map(|m| m.as_ref().map(|m| m.local_aabb().loosened(BURIED_DEPTH_M)))
+        .collect();
+    let inside = |p: &Point3<f64>, mesh: &TriMesh| {
+        let (projection, (triangle, location)) =
+            mesh.project_local_point_and_get_location(p, false);
+        (projection.point - p).norm() > BURIED_DEPTH_M
+            && is_inside(mesh, p, &projection.point, triangle, location)
+    };
+    // Buried: its centre inside another piece. A triangle across where the pieces meet goes
+    // with the side its centre is on, leaving a gap of under a triangle there.
+    let buried = |t: &[u32; 3], own: u32| {
+        let centre = Point3::from(
+            t.iter()
+                .map(|&i| positions[i as usize].coords)
+                .sum::<Vector3<f64>>()
+                / 3.0,
+        );
+        (meshes.iter().zip(&boxes).enumerate()).any(|(p, (mesh, aabb))| {
+            let (Some(mesh), Some(aabb)) = (mesh, aabb) else {
+                return false;
+            };
+            p as u32 != own && aabb.contains_local_point(&centre) && inside(&centre, mesh)
+        })
+    };
+    (triangles.iter().zip(&piece))
+        .filter(|(t, &p)| !buried(t, p))
+        .map(|(t, _)| *t)
+        .collect()
+}
+
+/// True when `p`, whose closest point on the oriented `mesh` is `closest`, on `triangle` at
+/// `location`, is inside it: behind the pseudo-normal of the closest feature (face, edge or
+/// vertex).
+pub fn is_inside(
+    mesh: &TriMesh,
+    p: &Point3<f64>,
+    closest: &Point3<f64>,
+    triangle: u32,
+    location: TrianglePointLocation,
+) -> bool {
+    let normal = match (mesh.pseudo_normals_if_oriented(), location) {
+        (Some(pn), TrianglePointLocation::OnEdge(i, _)) => {
+            pn.edges_pseudo_normal[triangle as usize][i as usize]
+        }
+        (Some(pn), TrianglePointLocation::OnVertex(i)) => {
+            let v = mesh.indices()[triangle as usize][i as usize];
+            pn.vertices_pseudo_normal[v as usize]
+        }
+        _ => face_normal(mesh, triangle),
+    };
+    (p - closest).dot(&normal) < 0.0
+}
+
+/// Outward unit normal of `triangle` of `mesh` (+Y for a degenerate one).
+pub fn face_normal(mesh: &TriMesh, triangle: u32) -> Vector3<f64> {
+    mesh.triangle(triangle)
+        .normal()
+        .map(|n| n.into_inner())
+        .unwrap_or_else(Vector3::y)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A closed box from `lo` to `hi`, wound outwards, appended to the mesh.
+    fn add_box(positions: &mut Vec<Point3<f64>>, triangles: &mut Vec<[u32; 3]>, lo: f64, hi: f64) {
+        let first = positions.len() as u32;
+        for k in 0..8 {
+            let pick = |bit: u32| if k & bit != 0 { hi } else { lo };
+            positions.push(Point3::new(pick(1), pick(2), pick(4)));
+        }
+        let faces = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        for [a, b, c, d] in faces {
+            triangles.push([first + a, first + b, first + c]);
+            triangles.push([first + a, first + c, first + d]);
+        }
+    }
+
+    #[test]
+    fn a_piece_inside_another_is_buried_and_pieces_apart_keep_their_skins() {
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        add_box(&mut positions, &mut triangles, 0.0, 1.0);
+        add_box(&mut positions, &mut triangles, 0.25, 0.75); // inside the first
+        add_box(&mut positions, &mut triangles, 2.0, 3.0); // apart
+        let pieces = connected_pieces(positions.len(), &triangles);
+        assert_eq!(pieces.iter().copied().max(), Some(2));
+        let skin = outer_skin(&positions, &triangles);
+        assert_eq!(skin.len(), 24, "the inner box's 12 triangles go");
+        assert!(skin
+            .iter()
+            .all(|t| t.iter().all(|&i| !(8..16).contains(&i))));
+    }
+
+    #[test]
+    fn pieces_that_touch_or_pass_into_each_other_group_and_others_stay_apart() {
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        add_box(&mut positions, &mut triangles, 0.0, 1.0);
+        add_box(&mut positions, &mut triangles, 0.25, 0.75); // inside, not touching
+        add_box(&mut positions, &mut triangles, 0.9, 1.9); // passing into the first
+        add_box(&mut positions, &mut triangles, 1.9005, 2.5); // touching the third
+        add_box(&mut positions, &mut triangles, 3.0, 3.5); // apart
+        let piece = triangle_pieces(&positions, &triangles);
+        assert_eq!(
+            touching_groups(&positions, &triangles, &piece),
+            [0, 1, 0, 0, 4]
+        );
+    }
+
+    #[test]
+    fn pieces_that_pass_into_each_other_lose_what_is_inside() {
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        add_box(&mut positions, &mut triangles, 0.0, 1.0);
+        // A second box passing into the first: the three faces of each whose triangles' centres
+        // lie inside the other go (coarse triangles: a face is kept or dropped whole).
+        add_box(&mut positions, &mut triangles, 0.25, 1.25);
+        assert_eq!(outer_skin(&positions, &triangles).len(), 12);
+        // One piece alone is returned whole.
+        let one = &triangles[..12];
+        assert_eq!(outer_skin(&positions, one), one);
+    }
+}
