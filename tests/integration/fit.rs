@@ -10,6 +10,7 @@ use knitfit::scene::Effect;
 use nalgebra::Point3;
 use ply_rs_bw::ply::Encoding;
 
+use crate::support::variants::{fanned, leg_as_quads};
 use crate::support::{
     base64, edited_sample, files_in, fit, float, knitfit, leg_as_ply, load_sample, point,
     procedural_leg, read_fit_report, read_ply, sample, sample_legs, shared_fit, stderr,
@@ -614,81 +615,6 @@ fn a_stocking_longer_than_the_axis_is_refused_before_fitting() {
     assert!(files_in(&dir.path().join("out")).is_empty());
 }
 
-/// `leg` as an ASCII PLY of quads, each two triangles sharing an edge, written from the corner
-/// that makes a fan from the first corner take the other diagonal wherever the quad is concave
-/// (as a quad-dominant modeller's export may); with the concave quads' outside diagonals.
-fn leg_as_quads(leg: &knitfit::leg::Leg) -> (String, Vec<[u32; 2]>) {
-    let mut by_edge: std::collections::HashMap<(u32, u32), usize> = Default::default();
-    for (k, t) in leg.triangles.iter().enumerate() {
-        for e in 0..3 {
-            by_edge.insert((t[e], t[(e + 1) % 3]), k);
-        }
-    }
-    let mut used = vec![false; leg.triangles.len()];
-    let (mut faces, mut outside) = (Vec::new(), Vec::new());
-    for k in 0..leg.triangles.len() {
-        if used[k] {
-            continue;
-        }
-        used[k] = true;
-        let t = leg.triangles[k];
-        // A neighbour across one of t's edges, not yet used: t = (a, b, c), it = (c, b, d).
-        let pair = (0..3).find_map(|e| {
-            let (b, c) = (t[(e + 1) % 3], t[(e + 2) % 3]);
-            let n = *by_edge.get(&(c, b))?;
-            (!used[n]).then(|| {
-                let d = leg.triangles[n]
-                    .into_iter()
-                    .find(|&v| v != b && v != c)
-                    .unwrap();
-                (n, [t[e], b, d, c])
-            })
-        });
-        let Some((n, [a, b, d, c])) = pair else {
-            faces.push(t.to_vec());
-            continue;
-        };
-        used[n] = true;
-        let p = |i: u32| leg.positions[i as usize];
-        // Concave where a corner turns against the quad's normal (the two triangles' summed).
-        let normal = (p(b) - p(a)).cross(&(p(c) - p(a))) + (p(b) - p(c)).cross(&(p(d) - p(c)));
-        let ring = [a, b, d, c];
-        // Clearly: a reflex corner turning back by more than 6°, in a quad whose halves are
-        // within 20° of one plane (a quad folded more is no polygon of one plane, and either
-        // diagonal is a reading of it).
-        let (n1, n2) = (
-            (p(b) - p(a)).cross(&(p(c) - p(a))).normalize(),
-            (p(b) - p(c)).cross(&(p(d) - p(c))).normalize(),
-        );
-        let normal = normal.normalize();
-        let is_concave = n1.dot(&n2) > 20f64.to_radians().cos()
-            && (0..4).any(|k| {
-                let (u, v, w) = (p(ring[k]), p(ring[(k + 1) % 4]), p(ring[(k + 2) % 4]));
-                (v - u).cross(&(w - v)).dot(&normal) < -0.1 * (v - u).norm() * (w - v).norm()
-            });
-        if is_concave {
-            outside.push([a.min(d), a.max(d)]);
-            faces.push(vec![a, b, d, c]); // the fan from a takes the diagonal a–d, outside
-        } else {
-            faces.push(vec![b, d, c, a]); // the fan from b gives back the two triangles
-        }
-    }
-    let mut text = format!(
-        "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\n\
-         property float z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
-        leg.positions.len(),
-        faces.len()
-    );
-    for q in &leg.positions {
-        text += &format!("{} {} {}\n", q.x as f32, q.y as f32, q.z as f32);
-    }
-    for f in &faces {
-        let corners: Vec<String> = f.iter().map(u32::to_string).collect();
-        text += &format!("{} {}\n", f.len(), corners.join(" "));
-    }
-    (text, outside)
-}
-
 #[test]
 fn a_ply_of_partly_concave_quads_reads_as_its_triangles() {
     // Fanned from their first corner, concave quads folded back over the skin: the fit said
@@ -696,7 +622,7 @@ fn a_ply_of_partly_concave_quads_reads_as_its_triangles() {
     let dir = tempfile::tempdir().unwrap();
     for name in ["lowpoly_leg.glb", "makehuman_body.glb"] {
         let leg = load_sample(&sample(name));
-        let (text, outside) = leg_as_quads(&leg);
+        let (text, outside) = leg_as_quads(&leg.positions, &leg.triangles);
         assert!(
             outside.len() > 10,
             "{name}: {} concave quads",
@@ -728,43 +654,16 @@ fn a_ply_of_partly_concave_quads_reads_as_its_triangles() {
     assert_eq!(r.details.penetration_fix.unwrap().still_crossing, 0);
 }
 
-/// `ply`, a PLY of `leg_as_quads`, with every polygon fanned from its first corner into
-/// triangles: how a careless exporter triangulates, and the concave quads folded back over the
-/// skin.
-fn fanned(ply: &str) -> String {
-    let (header, body) = ply.split_once("end_header\n").unwrap();
-    let count = |element: &str| -> usize {
-        let line = header.lines().find(|l| l.starts_with(element)).unwrap();
-        line.rsplit(' ').next().unwrap().parse().unwrap()
-    };
-    let (vertices, faces) = (count("element vertex "), count("element face "));
-    let lines: Vec<&str> = body.lines().collect();
-    let triangles: Vec<String> = (lines[vertices..vertices + faces].iter())
-        .flat_map(|face| {
-            let corners: Vec<&str> = face.split(' ').skip(1).collect();
-            (1..corners.len() - 1)
-                .map(|k| format!("3 {} {} {}", corners[0], corners[k], corners[k + 1]))
-                .collect::<Vec<_>>()
-        })
-        .collect();
-    let header = header.replace(
-        &format!("element face {faces}"),
-        &format!("element face {}", triangles.len()),
-    );
-    format!(
-        "{header}end_header\n{}\n{}\n",
-        lines[..vertices].join("\n"),
-        triangles.join("\n")
-    )
-}
-
 #[test]
 fn a_fit_with_yarn_left_through_a_folded_skin_is_written_but_not_done() {
     // The whole body with its concave quads fanned across their outside diagonals: the fit
     // converged with yarn through the leg and density spanning three orders of magnitude, and
     // said "converged", exit 0.
     let dir = tempfile::tempdir().unwrap();
-    let (quads, outside) = leg_as_quads(&load_sample(&sample("makehuman_body.glb")));
+    let (quads, outside) = {
+        let body = load_sample(&sample("makehuman_body.glb"));
+        leg_as_quads(&body.positions, &body.triangles)
+    };
     assert!(outside.len() > 100, "{} concave quads", outside.len());
     let path = dir.path().join("folded.ply");
     std::fs::write(&path, fanned(&quads)).unwrap();

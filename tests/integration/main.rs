@@ -4,7 +4,6 @@
 mod anatomy;
 mod cli;
 mod contact;
-mod cuts;
 mod docs;
 mod evaluation;
 mod fit;
@@ -27,3 +26,4 @@ mod skin;
 mod solvers;
 mod support;
 mod units;
+mod zoo;

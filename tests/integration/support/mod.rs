@@ -6,6 +6,7 @@ pub mod fixtures;
 pub mod long;
 pub mod process;
 pub mod prop_config;
+pub mod variants;
 
 pub use files::{base64, exact_json, float, point, read_ply, rust_files};
 pub use fixtures::{

@@ -1,0 +1,718 @@
+//! The leg zoo (issue 45): legs made the ways users bring them, crossed along the axes they
+//! vary, each fitted by the binary as a user runs it (at the defaults; the CI subset at 100×100,
+//! where 60×60 leaves a cut leg's forefoot unsettled) and held to what its construction knows.
+//!
+//! A variant is a **source** cut to an **export form** (the MakeHuman body whole, as a lower body,
+//! its left leg cut open, closed, slanted or in pieces; the procedural leg closed, open, slanted or
+//! in pieces), written in a **mesh form** (as exported, subdivided, as quads in a PLY, damaged
+//! with repeated and zero-area faces and small holes, cluttered with debris and a floor) and a
+//! **frame** (Y-up metres, Z-up metres, Z-up centimetres, turned and moved, inches, Z-up
+//! millimetres). Randomness (the turn, where the holes and debris go) comes from the variant's
+//! seed, so a variant is the same file on every run.
+//!
+//! The truth a variant is held to is its source's landmarks found once on the clean source in
+//! world space (`find_landmarks`), taken through the variant's frame: ankle, knee and toe tip
+//! within 1.5 cm of where the clean source has them. Every variant fits (exit 0) with no yarn
+//! inside the leg, passes the fit's checks and, where the source has a foot, gets a stocking to
+//! the toe; unless [`known_failing`] names it and says why.
+//!
+//! The whole zoo (every crossing, 300 variants) is the long profile:
+//! `KNITFIT_LONG=1 cargo test --release zoo -- --include-ignored --nocapture`; it writes its table
+//! to `target/zoo/all.md` (`KNITFIT_ZOO_KEEP=DIR` keeps every variant's file there too, named
+//! after it; `KNITFIT_ZOO_ONLY=TEXT` runs only the variants whose name holds it). CI runs [`ci_subset`], 40 variants covering every value of every axis, and writes
+//! `target/zoo/ci.md`.
+
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+use std::time::Instant;
+
+use knitfit::knit::TubeBottom;
+use knitfit::leg::{Side, Units, UpChoice};
+use knitfit::report::{FitDetails, LandmarkDetails, Report};
+use nalgebra::{Point3, Rotation3, Unit, Vector3};
+
+use crate::support::variants::{closed_at_the_cut, cut_below, leg_as_quads};
+use crate::support::{knitfit, read_glb_meshes, sample, stderr, write_raw_meshes, RawMesh};
+
+/// Where a leg comes from and how the user cut it out.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Form {
+    /// The MakeHuman body as exported: both legs, arms, head.
+    Body,
+    /// The body cut 15 cm above the crotch: both legs and the pelvis, open at the waist.
+    LowerBody,
+    /// Its left leg cut 4 cm below the crotch, open at the cut.
+    LeftLegOpen,
+    /// The same, closed at the cut (watertight).
+    LeftLegClosed,
+    /// Cut on a 20° slant and closed.
+    LeftLegSlanted,
+    /// The closed left leg in three watertight pieces (foot, shin, thigh), each a little wider
+    /// than the one below where they overlap by 2 cm, with ball joints inside at the ankle and
+    /// the knee: a mannequin's limb.
+    LeftLegPieces,
+    /// The procedural leg (no foot) as made: closed at both ends.
+    Procedural,
+    /// Cut 3 cm below its top, open there.
+    ProceduralOpen,
+    /// Cut 3 cm below its top on a 20° slant, closed.
+    ProceduralSlanted,
+    /// In two watertight pieces overlapping 2 cm at the knee, with a ball joint inside.
+    ProceduralPieces,
+}
+
+const FORMS: [Form; 10] = [
+    Form::Body,
+    Form::LowerBody,
+    Form::LeftLegOpen,
+    Form::LeftLegClosed,
+    Form::LeftLegSlanted,
+    Form::LeftLegPieces,
+    Form::Procedural,
+    Form::ProceduralOpen,
+    Form::ProceduralSlanted,
+    Form::ProceduralPieces,
+];
+
+/// How the mesh is written.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum MeshForm {
+    /// Triangles as cut, in a GLB.
+    AsIs,
+    /// Every triangle split in four at its edges' middles (flat).
+    Subdivided,
+    /// Welded and written as quads in an ASCII PLY, concave ones included.
+    QuadPly,
+    /// Every 10th face repeated, a zero-area face every 15th, three small holes.
+    Damaged,
+    /// Four small boxes floating beside the leg and a 2 m floor under the sole.
+    Cluttered,
+}
+
+const MESH_FORMS: [MeshForm; 5] = [
+    MeshForm::AsIs,
+    MeshForm::Subdivided,
+    MeshForm::QuadPly,
+    MeshForm::Damaged,
+    MeshForm::Cluttered,
+];
+
+/// The file's frame and units.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Frame {
+    YUpMetres,
+    ZUpMetres,
+    ZUpCentimetres,
+    /// Turned about up by any angle, tipped up to 10°, moved up to a metre; metres.
+    TurnedMetres,
+    YUpInches,
+    ZUpMillimetres,
+}
+
+const FRAMES: [Frame; 6] = [
+    Frame::YUpMetres,
+    Frame::ZUpMetres,
+    Frame::ZUpCentimetres,
+    Frame::TurnedMetres,
+    Frame::YUpInches,
+    Frame::ZUpMillimetres,
+];
+
+/// Why `variant` is known not to fit yet, where it is; every other variant must fit.
+fn known_failing(variant: &Variant) -> Option<&'static str> {
+    match (variant.form, variant.mesh, variant.frame) {
+        (Form::LeftLegPieces | Form::ProceduralPieces, ..) => Some(
+            "pieces 1–2 % wider than the one below leave millimetre ledges; the triangles \
+             dropped inside the other piece leave a gap there that yarn falls through, or the \
+             fit stalls on (issue 45: clip the pieces against each other)",
+        ),
+        _ => None,
+    }
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Variant {
+    form: Form,
+    mesh: MeshForm,
+    frame: Frame,
+    seed: u64,
+}
+
+impl Variant {
+    fn name(&self) -> String {
+        format!("{:?} / {:?} / {:?}", self.form, self.mesh, self.frame)
+    }
+}
+
+/// Every crossing of the axes.
+fn all_variants() -> Vec<Variant> {
+    let mut all = Vec::new();
+    for form in FORMS {
+        for mesh in MESH_FORMS {
+            for frame in FRAMES {
+                let seed = all.len() as u64 + 1;
+                all.push(Variant {
+                    form,
+                    mesh,
+                    frame,
+                    seed,
+                });
+            }
+        }
+    }
+    all
+}
+
+/// 40 variants, every form four times, every mesh form and frame at least six times, and no two
+/// alike.
+fn ci_subset() -> Vec<Variant> {
+    let all = all_variants();
+    (0..40)
+        .map(|i| {
+            let (form, mesh, frame) = (i % 10, (i + i / 10) % 5, (i + i / 10) % 6);
+            all[(form * 5 + mesh) * 6 + frame]
+        })
+        .collect()
+}
+
+/// A small seeded generator (SplitMix64): the variants' randomness.
+struct Seeded(u64);
+
+impl Seeded {
+    fn next(&mut self) -> f64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        (z ^ (z >> 31)) as f64 / u64::MAX as f64
+    }
+}
+
+/// A source's meshes (world space: metres, Y up, the character facing +Z) and its landmarks.
+struct Source {
+    meshes: Vec<RawMesh>,
+    truth: LandmarkDetails,
+}
+
+fn source(path: PathBuf) -> Source {
+    let leg = knitfit::leg::load_leg(&path, Units::Metres, UpChoice::Auto).unwrap();
+    let landmarks =
+        knitfit::leg::find_landmarks(&leg.positions, &leg.triangles, leg.up, Side::Left).unwrap();
+    Source {
+        meshes: read_glb_meshes(&path),
+        truth: LandmarkDetails::of(&landmarks, &leg),
+    }
+}
+
+fn body() -> &'static Source {
+    static BODY: OnceLock<Source> = OnceLock::new();
+    BODY.get_or_init(|| source(sample("makehuman_body.glb")))
+}
+
+fn procedural() -> &'static Source {
+    static LEG: OnceLock<Source> = OnceLock::new();
+    LEG.get_or_init(|| source(sample("procedural_leg.glb")))
+}
+
+/// `meshes` below the plane through `at` tilted `tilt_deg` about the front–back axis, where
+/// `keep` accepts a triangle's centre.
+fn cut(
+    meshes: &[RawMesh],
+    at: Point3<f64>,
+    tilt_deg: f64,
+    keep: impl Fn(&Point3<f64>) -> bool + Copy,
+) -> Vec<RawMesh> {
+    let t = tilt_deg.to_radians();
+    let up = Vector3::new(t.sin(), t.cos(), 0.0);
+    meshes.iter().map(|m| cut_below(m, at, up, keep)).collect()
+}
+
+/// The part of the closed `meshes` between heights `low` and `high`, closed at both cuts, and
+/// widened `widen` times about the vertical line through `centre`: a piece modelled apart, whose
+/// skin does not coincide with its neighbour's where they overlap.
+fn piece(meshes: &[RawMesh], low: f64, high: f64, centre: [f64; 3], widen: f64) -> Vec<RawMesh> {
+    meshes
+        .iter()
+        .map(|m| {
+            let below = cut_below(m, Point3::new(0.0, high, 0.0), Vector3::y(), |_| true);
+            let between = cut_below(&below, Point3::new(0.0, low, 0.0), -Vector3::y(), |_| true);
+            let mut closed = closed_at_the_cut(&between);
+            for p in &mut closed.positions {
+                p.x = centre[0] + (p.x - centre[0]) * widen;
+                p.z = centre[2] + (p.z - centre[2]) * widen;
+            }
+            closed
+        })
+        .filter(|m| !m.triangles.is_empty())
+        .collect()
+}
+
+/// A ball joint: a sphere inside the limb's section `ring`, nine tenths of its radius.
+fn ball(name: &str, ring: &knitfit::report::LandmarkRing) -> RawMesh {
+    let radius = 0.9 * ring.girth_m / std::f64::consts::TAU;
+    let centre = Point3::from(ring.centre.m);
+    let (bands, around) = (12, 24);
+    let mut positions = Vec::new();
+    for i in 0..=bands {
+        let polar = std::f64::consts::PI * i as f64 / bands as f64;
+        for k in 0..around {
+            let azimuth = std::f64::consts::TAU * k as f64 / around as f64;
+            let (sp, cp) = polar.sin_cos();
+            positions
+                .push(centre + radius * Vector3::new(sp * azimuth.cos(), cp, sp * azimuth.sin()));
+        }
+    }
+    let at = |i: u32, k: u32| i * around + k % around;
+    let mut triangles = Vec::new();
+    for i in 0..bands {
+        for k in 0..around {
+            triangles.push([at(i, k), at(i, k + 1), at(i + 1, k)]);
+            triangles.push([at(i, k + 1), at(i + 1, k + 1), at(i + 1, k)]);
+        }
+    }
+    RawMesh {
+        name: name.into(),
+        positions,
+        triangles,
+    }
+}
+
+/// The variant's meshes in world space and which source it is held to.
+fn formed(form: Form) -> (Vec<RawMesh>, &'static Source) {
+    let at = |p: [f64; 3], dy: f64| Point3::new(p[0], p[1] + dy, p[2]);
+    let left = |c: &Point3<f64>| c.x > 0.0;
+    let all = |_: &Point3<f64>| true;
+    let closed = |m: Vec<RawMesh>| m.iter().map(closed_at_the_cut).collect::<Vec<_>>();
+    let (b, p) = (body(), procedural());
+    let crotch = b.truth.thigh_top.centre.m;
+    let top = p.truth.thigh_top.centre.m;
+    let meshes = match form {
+        Form::Body => return (b.meshes.clone(), b),
+        Form::LowerBody => cut(&b.meshes, at(crotch, 0.15), 0.0, all),
+        Form::LeftLegOpen => cut(&b.meshes, at(crotch, -0.04), 0.0, left),
+        Form::LeftLegClosed => closed(cut(&b.meshes, at(crotch, -0.04), 0.0, left)),
+        Form::LeftLegSlanted => closed(cut(&b.meshes, at(crotch, -0.04), 20.0, left)),
+        Form::LeftLegPieces => {
+            let leg = closed(cut(&b.meshes, at(crotch, -0.04), 0.0, left));
+            let (ankle, knee) = (&b.truth.ankle, &b.truth.knee);
+            let (a, k) = (ankle.centre.m, knee.centre.m);
+            let mut pieces = piece(&leg, -10.0, a[1] + 0.01, a, 1.0);
+            pieces.extend(piece(&leg, a[1] - 0.01, k[1] + 0.01, a, 1.01));
+            pieces.extend(piece(&leg, k[1] - 0.01, 10.0, k, 1.02));
+            pieces.extend([ball("knee joint", knee)]);
+            pieces
+        }
+        Form::Procedural => return (p.meshes.clone(), p),
+        Form::ProceduralOpen => cut(&p.meshes, at(top, -0.03), 0.0, all),
+        Form::ProceduralSlanted => closed(cut(&p.meshes, at(top, -0.03), 20.0, all)),
+        Form::ProceduralPieces => {
+            let knee = &p.truth.knee;
+            let k = knee.centre.m;
+            let mut pieces = piece(&p.meshes, -10.0, k[1] + 0.01, k, 1.0);
+            pieces.extend(piece(&p.meshes, k[1] - 0.01, 10.0, k, 1.02));
+            pieces.push(ball("knee joint", knee));
+            pieces
+        }
+    };
+    let source = match form {
+        Form::ProceduralOpen | Form::ProceduralSlanted | Form::ProceduralPieces => p,
+        _ => b,
+    };
+    (meshes, source)
+}
+
+/// `meshes` in `form`, made with `rng`; world space still.
+fn meshed(meshes: Vec<RawMesh>, form: MeshForm, rng: &mut Seeded) -> Vec<RawMesh> {
+    match form {
+        MeshForm::AsIs | MeshForm::QuadPly => meshes,
+        MeshForm::Subdivided => meshes.iter().map(subdivided).collect(),
+        MeshForm::Damaged => meshes.iter().map(|m| damaged(m, rng)).collect(),
+        MeshForm::Cluttered => {
+            let mut meshes = meshes;
+            let (low, high) = bounds(&meshes);
+            for k in 0..4 {
+                let side = if k % 2 == 0 { 1.0 } else { -1.0 };
+                let centre = Point3::new(
+                    (high.x + low.x) / 2.0 + side * (0.25 + 0.2 * rng.next()),
+                    low.y + 0.1 + (high.y - low.y - 0.2) * rng.next(),
+                    (high.z + low.z) / 2.0 + 0.3 * (rng.next() - 0.5),
+                );
+                meshes.push(cube(
+                    &format!("debris{k}"),
+                    centre,
+                    0.01 + 0.02 * rng.next(),
+                ));
+            }
+            meshes.push(floor(
+                low.y - 0.001,
+                Point3::from((low.coords + high.coords) / 2.0),
+            ));
+            meshes
+        }
+    }
+}
+
+fn bounds(meshes: &[RawMesh]) -> (Point3<f64>, Point3<f64>) {
+    let points = meshes.iter().flat_map(|m| &m.positions);
+    let low = points
+        .clone()
+        .fold(Point3::from([f64::MAX; 3]), |a, p| a.inf(p));
+    let high = points.fold(Point3::from([f64::MIN; 3]), |a, p| a.sup(p));
+    (low, high)
+}
+
+fn subdivided(mesh: &RawMesh) -> RawMesh {
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    // Each edge's middle from its ends in one order: the two triangles on an edge get the same
+    // point, and the loader welds them.
+    let middle = |a: Point3<f64>, b: Point3<f64>| {
+        let (a, b) = if [a.x, a.y, a.z] < [b.x, b.y, b.z] {
+            (a, b)
+        } else {
+            (b, a)
+        };
+        nalgebra::center(&a, &b)
+    };
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| mesh.positions[i as usize]);
+        let (ab, bc, ca) = (middle(a, b), middle(b, c), middle(c, a));
+        for corners in [[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]] {
+            let first = positions.len() as u32;
+            positions.extend(corners);
+            triangles.push([first, first + 1, first + 2]);
+        }
+    }
+    RawMesh {
+        name: mesh.name.clone(),
+        positions,
+        triangles,
+    }
+}
+
+fn damaged(mesh: &RawMesh, rng: &mut Seeded) -> RawMesh {
+    let mut out = mesh.clone();
+    let n = mesh.triangles.len();
+    // Three small holes: a triangle each, away from the ends.
+    let mut holes: Vec<usize> = (0..3)
+        .map(|_| (n as f64 * (0.2 + 0.6 * rng.next())) as usize)
+        .collect();
+    holes.sort_unstable();
+    holes.dedup();
+    for &h in holes.iter().rev() {
+        if h < out.triangles.len() {
+            out.triangles.remove(h);
+        }
+    }
+    let kept = out.triangles.clone();
+    for (k, t) in kept.iter().enumerate() {
+        if k % 10 == 0 {
+            out.triangles.push(*t);
+        }
+        if k % 15 == 0 {
+            out.triangles.push([t[0], t[1], t[1]]);
+        }
+    }
+    out
+}
+
+fn cube(name: &str, centre: Point3<f64>, half: f64) -> RawMesh {
+    let positions: Vec<Point3<f64>> = (0..8)
+        .map(|k| {
+            let s = |bit: u32| if k & bit != 0 { half } else { -half };
+            centre + Vector3::new(s(1), s(2), s(4))
+        })
+        .collect();
+    let faces = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let triangles = faces
+        .iter()
+        .flat_map(|[a, b, c, d]| [[*a, *b, *c], [*a, *c, *d]])
+        .collect();
+    RawMesh {
+        name: name.into(),
+        positions,
+        triangles,
+    }
+}
+
+fn floor(y: f64, centre: Point3<f64>) -> RawMesh {
+    let corner = |dx: f64, dz: f64| Point3::new(centre.x + dx, y, centre.z + dz);
+    RawMesh {
+        name: "floor".into(),
+        positions: vec![
+            corner(-1.0, -1.0),
+            corner(1.0, -1.0),
+            corner(1.0, 1.0),
+            corner(-1.0, 1.0),
+        ],
+        triangles: vec![[0, 2, 1], [0, 3, 2]],
+    }
+}
+
+impl Frame {
+    /// The file's coordinates from world space (metres, Y up), and the file's units.
+    fn placement(self, rng: &mut Seeded) -> (nalgebra::Similarity3<f64>, Units) {
+        use nalgebra::{Similarity3, Translation3, UnitQuaternion};
+        let z_up = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(
+            nalgebra::Matrix3::new(1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 1.0, 0.0),
+        ));
+        let none = Translation3::identity();
+        let (rotation, translation, scale, units) = match self {
+            Frame::YUpMetres => (UnitQuaternion::identity(), none, 1.0, Units::Metres),
+            Frame::ZUpMetres => (z_up, none, 1.0, Units::Metres),
+            Frame::ZUpCentimetres => (z_up, none, 100.0, Units::Centimetres),
+            Frame::ZUpMillimetres => (z_up, none, 1000.0, Units::Millimetres),
+            Frame::YUpInches => (
+                UnitQuaternion::identity(),
+                none,
+                1.0 / 0.0254,
+                Units::Inches,
+            ),
+            Frame::TurnedMetres => {
+                let yaw = UnitQuaternion::from_axis_angle(
+                    &Vector3::y_axis(),
+                    std::f64::consts::TAU * rng.next(),
+                );
+                let about = std::f64::consts::TAU * rng.next();
+                let tip = UnitQuaternion::from_axis_angle(
+                    &Unit::new_normalize(Vector3::new(about.cos(), 0.0, about.sin())),
+                    10f64.to_radians() * rng.next(),
+                );
+                let shift =
+                    Vector3::new(rng.next(), rng.next(), rng.next()) * 2.0 - Vector3::repeat(1.0);
+                (tip * yaw, Translation3::from(shift), 1.0, Units::Metres)
+            }
+        };
+        (Similarity3::from_parts(translation, rotation, scale), units)
+    }
+}
+
+/// What happened to one variant.
+struct Outcome {
+    variant: Variant,
+    code: Option<i32>,
+    seconds: f64,
+    /// The error's or warning's line, where there was one.
+    said: String,
+    report: Option<Report<FitDetails>>,
+    /// The worst of ankle, knee and toe tip off their truth, metres.
+    landmarks_off_m: Option<f64>,
+    /// The source has a foot: the stocking must cover it.
+    has_foot: bool,
+}
+
+impl Outcome {
+    fn fits(&self) -> bool {
+        self.code == Some(0)
+            && self.report.as_ref().is_some_and(|r| {
+                r.metrics.max_penetration_m == Some(0.0)
+                    && r.details.checks.passed()
+                    && (!self.has_foot || r.details.tube.bottom == TubeBottom::Toe)
+            })
+            && self.landmarks_off_m.is_some_and(|off| off <= 0.015)
+    }
+
+    fn row(&self) -> String {
+        let r = self.report.as_ref();
+        let outcome = if self.fits() {
+            "fits".to_string()
+        } else {
+            match self.code {
+                Some(0) => "fits, off its truth".to_string(),
+                Some(code) => format!("exit {code}: {}", self.said.replace('|', "/")),
+                None => "killed".to_string(),
+            }
+        };
+        format!(
+            "| {} | {outcome} | {} | {} | {:.1} |",
+            self.variant.name(),
+            r.map_or("–".into(), |r| format!(
+                "{:?} {}×{}",
+                r.details.tube.bottom, r.details.tube.wales, r.details.tube.courses
+            )),
+            self.landmarks_off_m
+                .map_or("–".into(), |m| format!("{:.1}", 1e3 * m)),
+            self.seconds
+        )
+    }
+}
+
+/// Writes `variant` into `dir` and fits it at `resolution` (the defaults where `None`) as a
+/// user would.
+fn run(dir: &Path, variant: Variant, resolution: Option<&str>) -> Outcome {
+    let mut rng = Seeded(variant.seed);
+    let (world, source) = formed(variant.form);
+    let world = meshed(world, variant.mesh, &mut rng);
+    let (file_from_world, units) = variant.frame.placement(&mut rng);
+    let in_file: Vec<RawMesh> = (world.iter())
+        .map(|m| RawMesh {
+            positions: m.positions.iter().map(|p| file_from_world * p).collect(),
+            ..m.clone()
+        })
+        .collect();
+    let leg = write_variant(dir, &in_file, variant.mesh);
+    if let Some(keep) = std::env::var_os("KNITFIT_ZOO_KEEP") {
+        // The variant's file, to run by hand: named after the variant.
+        let name = variant.name().replace(" / ", "-");
+        let extension = leg.extension().unwrap().to_str().unwrap();
+        std::fs::create_dir_all(&keep).unwrap();
+        std::fs::copy(&leg, Path::new(&keep).join(format!("{name}.{extension}"))).unwrap();
+    }
+    let units_flag = serde_json::to_value(units).unwrap();
+    let units_flag = units_flag.as_str().unwrap();
+    let start = Instant::now();
+    let mut args = vec!["fit", "--leg", leg.to_str().unwrap(), "--units", units_flag];
+    args.extend(["--outputs", "ply", "-q"]);
+    if let Some(grid) = resolution {
+        args.extend(["--resolution", grid]);
+    }
+    let out = knitfit(dir, &args);
+    let seconds = start.elapsed().as_secs_f64();
+    let said = stderr(&out).lines().next().unwrap_or("").to_string();
+    // Exit 3 stopped early writes nothing.
+    let report = (dir.join("out/report.json").is_file())
+        .then(|| crate::support::read_fit_report(&dir.join("out")));
+    let metres_per_unit = 1.0 / file_from_world.scaling();
+    let landmarks_off_m = (report.as_ref())
+        .and_then(|r| r.details.leg.landmarks.as_ref())
+        .map(|got| {
+            let truth = &source.truth;
+            let mut pairs = vec![
+                (got.ankle.centre.file, truth.ankle.centre.m),
+                (got.knee.centre.file, truth.knee.centre.m),
+            ];
+            if let (Some(g), Some(t)) = (&got.toe_tip, &truth.toe_tip) {
+                pairs.push((g.file, t.m));
+            } else if got.toe_tip.is_some() != truth.toe_tip.is_some() {
+                return f64::INFINITY;
+            }
+            pairs
+                .into_iter()
+                .map(|(g, t)| {
+                    let t = file_from_world * Point3::from(t);
+                    (Point3::from(g) - t).norm() * metres_per_unit
+                })
+                .fold(0.0, f64::max)
+        });
+    Outcome {
+        variant,
+        code: out.status.code(),
+        seconds,
+        said,
+        report,
+        landmarks_off_m,
+        has_foot: source.truth.toe_tip.is_some(),
+    }
+}
+
+/// Writes the file of a variant: a GLB, or for [`MeshForm::QuadPly`] an ASCII PLY of its meshes
+/// welded into one.
+fn write_variant(dir: &Path, meshes: &[RawMesh], form: MeshForm) -> PathBuf {
+    if form != MeshForm::QuadPly {
+        return write_raw_meshes(dir, "leg.glb", meshes);
+    }
+    let mut welded: std::collections::HashMap<[u64; 3], u32> = Default::default();
+    let mut positions = Vec::new();
+    let mut triangles = Vec::new();
+    for m in meshes {
+        let ids: Vec<u32> = (m.positions.iter())
+            .map(|p| {
+                let key = [p.x, p.y, p.z].map(|c| (c as f32).to_bits() as u64);
+                *welded.entry(key).or_insert_with(|| {
+                    positions.push(*p);
+                    positions.len() as u32 - 1
+                })
+            })
+            .collect();
+        triangles.extend(m.triangles.iter().map(|t| t.map(|i| ids[i as usize])));
+    }
+    let (text, _) = leg_as_quads(&positions, &triangles);
+    let path = dir.join("leg.ply");
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// Runs `variants` at `resolution` (the defaults where `None`), writes their table to `target/zoo/NAME.md` and returns
+/// what failed unexpectedly.
+fn run_zoo(variants: &[Variant], resolution: Option<&str>, name: &str) -> Vec<String> {
+    let mut rows = vec![
+        "| variant (form / mesh / frame) | outcome | stocking | landmarks off, mm | seconds |"
+            .to_string(),
+        "|---|---|---|---:|---:|".to_string(),
+    ];
+    let (mut failed, mut known) = (Vec::new(), Vec::new());
+    let mut fitted = 0;
+    // `KNITFIT_ZOO_ONLY=Pieces` runs the variants whose name holds it: for a look at a few.
+    let only = std::env::var("KNITFIT_ZOO_ONLY").unwrap_or_default();
+    let variants: Vec<Variant> = (variants.iter())
+        .filter(|v| v.name().contains(only.as_str()))
+        .copied()
+        .collect();
+    for &variant in &variants {
+        let dir = tempfile::tempdir().unwrap();
+        let outcome = run(dir.path(), variant, resolution);
+        let row = outcome.row();
+        println!("{row}");
+        rows.push(row.clone());
+        fitted += usize::from(outcome.fits());
+        match known_failing(&variant) {
+            None if !outcome.fits() => failed.push(row),
+            Some(why) if !outcome.fits() => known.push(format!("{} ({why})", variant.name())),
+            _ => {}
+        }
+    }
+    rows.push(String::new());
+    rows.push(format!(
+        "{fitted} of {} variants fit at {}: exit 0, no yarn inside the leg, the fit's \
+         checks passed, a stocking to the toe where the leg has a foot, landmarks within 15 mm \
+         of their truth. Known not to fit yet: {}.",
+        variants.len(),
+        resolution.unwrap_or("the defaults"),
+        if known.is_empty() {
+            "none".to_string()
+        } else {
+            known.len().to_string()
+        }
+    ));
+    rows.extend(known.iter().map(|k| format!("- {k}")));
+    let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("../zoo");
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::write(out.join(format!("{name}.md")), rows.join("\n") + "\n").unwrap();
+    failed
+}
+
+#[test]
+fn the_zoo_ci_subset_fits_every_leg_it_should() {
+    let failed = run_zoo(&ci_subset(), Some("100x100"), "ci");
+    assert!(failed.is_empty(), "{}", failed.join("\n"));
+}
+
+#[test]
+#[ignore = "the whole zoo, 300 fits: the long profile (docs/TESTING.md)"]
+fn the_whole_zoo_fits_every_leg_it_should() {
+    let failed = run_zoo(&all_variants(), None, "all");
+    assert!(failed.is_empty(), "{}", failed.join("\n"));
+}
+
+#[test]
+fn the_ci_subset_covers_every_value_of_every_axis_once_each_variant() {
+    let subset = ci_subset();
+    let names: std::collections::HashSet<String> = subset.iter().map(Variant::name).collect();
+    assert_eq!(names.len(), 40);
+    assert!(FORMS
+        .iter()
+        .all(|f| subset.iter().filter(|v| v.form == *f).count() == 4));
+    assert!(MESH_FORMS
+        .iter()
+        .all(|m| subset.iter().filter(|v| v.mesh == *m).count() >= 6));
+    assert!(FRAMES
+        .iter()
+        .all(|f| subset.iter().filter(|v| v.frame == *f).count() >= 6));
+}
