@@ -48,8 +48,8 @@ enum Form {
     /// Cut on a 20° slant and closed.
     LeftLegSlanted,
     /// The closed left leg in three watertight pieces (foot, shin, thigh), each a little wider
-    /// than the one below where they overlap by 2 cm, with ball joints inside at the ankle and
-    /// the knee: a mannequin's limb.
+    /// than the one below where they overlap by 2 cm, with a ball joint inside at the knee: a
+    /// mannequin's limb.
     LeftLegPieces,
     /// The procedural leg (no foot) as made: closed at both ends.
     Procedural,
@@ -299,7 +299,7 @@ fn formed(form: Form) -> (Vec<RawMesh>, &'static Source) {
             let mut pieces = piece(&leg, -10.0, a[1] + 0.01, a, 1.0);
             pieces.extend(piece(&leg, a[1] - 0.01, k[1] + 0.01, a, 1.01));
             pieces.extend(piece(&leg, k[1] - 0.01, 10.0, k, 1.02));
-            pieces.extend([ball("knee joint", knee)]);
+            pieces.push(ball("knee joint", knee));
             pieces
         }
         Form::Procedural => return (p.meshes.clone(), p),
