@@ -189,7 +189,7 @@ pub fn path_to_toe(
     let sections = Sections {
         positions,
         triangles,
-        piece: slice::triangle_pieces(positions, triangles),
+        piece: crate::leg::solid::triangle_pieces(positions, triangles),
         side,
     };
 

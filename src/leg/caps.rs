@@ -176,32 +176,12 @@ fn flood(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::leg::test_meshes::add_box;
 
     /// A closed box `w` wide and `h` tall standing on the origin: two triangles a face.
     fn closed_box(w: f64, h: f64) -> (Vec<Point3<f64>>, Vec<[u32; 3]>) {
-        let p = |x: f64, y: f64, z: f64| Point3::new(x * w, y * h, z * w);
-        let positions = vec![
-            p(0., 0., 0.),
-            p(1., 0., 0.),
-            p(1., 0., 1.),
-            p(0., 0., 1.),
-            p(0., 1., 0.),
-            p(1., 1., 0.),
-            p(1., 1., 1.),
-            p(0., 1., 1.),
-        ];
-        let quads = [
-            [0, 1, 2, 3],
-            [4, 7, 6, 5],
-            [0, 4, 5, 1],
-            [1, 5, 6, 2],
-            [2, 6, 7, 3],
-            [3, 7, 4, 0],
-        ];
-        let triangles = quads
-            .iter()
-            .flat_map(|[a, b, c, d]| [[*a, *b, *c], [*a, *c, *d]])
-            .collect();
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        add_box(&mut positions, &mut triangles, [0.0; 3], [w, h, w]);
         (positions, triangles)
     }
 

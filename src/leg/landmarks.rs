@@ -758,38 +758,7 @@ fn sole(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Appends the closed box from `lo` to `hi` to `positions` and `triangles`, wound outwards.
-    fn add_box(
-        positions: &mut Vec<Point3<f64>>,
-        triangles: &mut Vec<[u32; 3]>,
-        lo: [f64; 3],
-        hi: [f64; 3],
-    ) {
-        let first = positions.len() as u32;
-        for k in 0..8 {
-            let pick = |axis: usize| {
-                if k >> axis & 1 == 0 {
-                    lo[axis]
-                } else {
-                    hi[axis]
-                }
-            };
-            positions.push(Point3::new(pick(0), pick(1), pick(2)));
-        }
-        let quads = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        for q in quads {
-            triangles.push([q[0], q[1], q[2]].map(|i| first + i));
-            triangles.push([q[0], q[2], q[3]].map(|i| first + i));
-        }
-    }
+    use crate::leg::test_meshes::add_box;
 
     #[test]
     fn a_mesh_longer_than_any_body_is_refused_before_slicing() {

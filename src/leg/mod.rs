@@ -13,6 +13,8 @@ pub mod ply;
 pub mod settings;
 pub mod slice;
 pub mod solid;
+#[cfg(test)]
+mod test_meshes;
 pub mod weld;
 
 pub use axis::{leaves_mesh, Axis, AxisSource};

@@ -21,7 +21,6 @@ use std::collections::HashMap;
 use nalgebra::{Point3, Vector3};
 
 use super::solid::connected_pieces;
-pub use super::solid::triangle_pieces;
 use crate::base::perpendicular_frame;
 
 /// Widest gap an open chain may have and still count as a closed loop, metres: a small hole in
@@ -177,7 +176,7 @@ impl Loop {
 }
 
 /// The loops of one plane's section: the plane through `origin` square to the unit vector
-/// `normal`; `piece` is each triangle's connected piece ([`triangle_pieces`]). For a few planes
+/// `normal`; `piece` is each triangle's connected piece ([`super::solid::triangle_pieces`]). For a few planes
 /// of different directions; [`Slicer`] is faster for many parallel ones.
 pub fn section(
     positions: &[Point3<f64>],

@@ -207,26 +207,11 @@ pub fn face_normal(mesh: &TriMesh, triangle: u32) -> Vector3<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::leg::test_meshes;
 
-    /// A closed box from `lo` to `hi`, wound outwards, appended to the mesh.
+    /// Appends the cube from `lo` to `hi` along every axis.
     fn add_box(positions: &mut Vec<Point3<f64>>, triangles: &mut Vec<[u32; 3]>, lo: f64, hi: f64) {
-        let first = positions.len() as u32;
-        for k in 0..8 {
-            let pick = |bit: u32| if k & bit != 0 { hi } else { lo };
-            positions.push(Point3::new(pick(1), pick(2), pick(4)));
-        }
-        let faces = [
-            [0, 2, 3, 1],
-            [4, 5, 7, 6],
-            [0, 1, 5, 4],
-            [2, 6, 7, 3],
-            [0, 4, 6, 2],
-            [1, 3, 7, 5],
-        ];
-        for [a, b, c, d] in faces {
-            triangles.push([first + a, first + b, first + c]);
-            triangles.push([first + a, first + c, first + d]);
-        }
+        test_meshes::add_box(positions, triangles, [lo; 3], [hi; 3]);
     }
 
     #[test]

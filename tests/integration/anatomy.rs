@@ -16,6 +16,7 @@ use knitfit::report::{FitDetails, LandmarkDetails, LandmarkRing, LegDetails, Rep
 use nalgebra::{Isometry3, Matrix3, Point3, Rotation3, Translation3, Unit, Vector3};
 use serde_json::{json, Value};
 
+use crate::support::variants::cube;
 use crate::support::{
     float, knitfit, load_sample, point, read_fit_report, read_glb_meshes, read_ply, run_scene,
     sample, sample_legs, scene_for, stderr, write_raw_meshes, RawMesh,
@@ -438,27 +439,6 @@ fn debris_centres(skin: &RawMesh, places: &Places) -> Vec<Point3<f64>> {
         centres.push(furthest + out * (DEBRIS_HALF_SIDE_M + 0.008));
     }
     centres
-}
-
-/// The closed axis-aligned box of half side `half` around `centre`, wound outwards.
-fn cube(centre: &Point3<f64>, half: f64) -> (Vec<Point3<f64>>, Vec<[u32; 3]>) {
-    let corner = |k: u32| {
-        let s = |bit: u32| if k & bit == 0 { -half } else { half };
-        centre + Vector3::new(s(1), s(2), s(4))
-    };
-    let quads: [[u32; 4]; 6] = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let triangles = quads
-        .iter()
-        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-        .collect();
-    ((0..8).map(corner).collect(), triangles)
 }
 
 /// Checks the debris boxes around `centres` are where [`debris_centres`] says, against the

@@ -31,7 +31,7 @@ use knitfit::leg::{Side, Units, UpChoice};
 use knitfit::report::{FitDetails, LandmarkDetails, Report};
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
 
-use crate::support::variants::{closed_at_the_cut, cut_below, leg_as_quads};
+use crate::support::variants::{closed_at_the_cut, cube, cut_below, leg_as_quads};
 use crate::support::{knitfit, read_glb_meshes, sample, stderr, write_raw_meshes, RawMesh};
 
 /// Where a leg comes from and how the user cut it out.
@@ -337,7 +337,7 @@ fn meshed(meshes: Vec<RawMesh>, form: MeshForm, rng: &mut Seeded) -> Vec<RawMesh
                     low.y + 0.1 + (high.y - low.y - 0.2) * rng.next(),
                     (high.z + low.z) / 2.0 + 0.3 * (rng.next() - 0.5),
                 );
-                meshes.push(cube(
+                meshes.push(debris(
                     &format!("debris{k}"),
                     centre,
                     0.01 + 0.02 * rng.next(),
@@ -416,25 +416,9 @@ fn damaged(mesh: &RawMesh, rng: &mut Seeded) -> RawMesh {
     out
 }
 
-fn cube(name: &str, centre: Point3<f64>, half: f64) -> RawMesh {
-    let positions: Vec<Point3<f64>> = (0..8)
-        .map(|k| {
-            let s = |bit: u32| if k & bit != 0 { half } else { -half };
-            centre + Vector3::new(s(1), s(2), s(4))
-        })
-        .collect();
-    let faces = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let triangles = faces
-        .iter()
-        .flat_map(|[a, b, c, d]| [[*a, *b, *c], [*a, *c, *d]])
-        .collect();
+/// A box of half side `half` around `centre`: debris beside the leg.
+fn debris(name: &str, centre: Point3<f64>, half: f64) -> RawMesh {
+    let (positions, triangles) = cube(&centre, half);
     RawMesh {
         name: name.into(),
         positions,

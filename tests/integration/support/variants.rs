@@ -250,3 +250,24 @@ pub fn fanned(ply: &str) -> String {
         triangles.join("\n")
     )
 }
+
+/// The closed axis-aligned box of half side `half` around `centre`, wound outwards.
+pub fn cube(centre: &Point3<f64>, half: f64) -> (Vec<Point3<f64>>, Vec<[u32; 3]>) {
+    let corner = |k: u32| {
+        let s = |bit: u32| if k & bit == 0 { -half } else { half };
+        centre + Vector3::new(s(1), s(2), s(4))
+    };
+    let quads: [[u32; 4]; 6] = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let triangles = quads
+        .iter()
+        .flat_map(|q| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
+        .collect();
+    ((0..8).map(corner).collect(), triangles)
+}
