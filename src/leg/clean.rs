@@ -22,6 +22,10 @@
 //!    body-like piece's area are dropped (eyes, teeth, nails, debris), and so are sheets (a
 //!    floor, a backdrop: open at [`SHEET_OPEN_FRACTION`] of their edges) beside a body. The legs
 //!    of a body exported in pieces that do not share vertices stay, each a large share of it.
+//! 6. small holes are closed: a loop of open edges at most [`HOLE_PERIMETER_M`] around (a face
+//!    or two an exporter or a boolean lost) gets a fan of triangles from its centre, wound as
+//!    its neighbours are. A hole lets contact and the pseudo-normals see through the skin, and
+//!    opens every section that crosses it; a cut, far larger, stays open.
 //!
 //! The result is what every later stage sees: orientation, landmarks, tube, contact, and the
 //! leg written with the fit's attributes. The counts go to the report.
@@ -44,6 +48,16 @@ pub const APART_AREA_FRACTION: f64 = 0.1;
 /// A piece with at least this fraction of its triangles' edges open (used by one triangle) is a
 /// sheet, not a body: a floor, a backdrop, a card for hair or lashes.
 pub const SHEET_OPEN_FRACTION: f64 = 0.2;
+
+/// A loop of open edges at most this long (metres) is a hole in the skin, and is closed. A leg
+/// is cut at 0.18 m around or more (an adult's ankle); a lost face of a coarse export (a whole
+/// body's 3 cm triangles at the knee) is up to about 9 cm around.
+pub const HOLE_PERIMETER_M: f64 = 0.12;
+
+/// A loop of open edges is a hole in its piece only where its length squared is at most this
+/// fraction of the piece's area: a lost face of a leg is a few thousandths of it, the rim of a
+/// lone triangle about twenty times it.
+pub const HOLE_OF_PIECE: f64 = 0.1;
 
 /// A triangle whose doubled area (the cross product of two edges) is at most this times its
 /// longest edge squared has no area worth the name: its third corner lies within a millionth of an edge from the line of the other two.
@@ -73,6 +87,8 @@ pub struct Cleaned {
     pub debris_triangles: usize,
     /// Pieces dropped as debris.
     pub debris_pieces: usize,
+    /// Small holes closed ([`HOLE_PERIMETER_M`]).
+    pub filled_holes: usize,
 }
 
 /// Cleans `positions` and `triangles` as the module docs say: returns the kept vertices
@@ -178,6 +194,9 @@ pub fn clean_mesh(
     let mut keep_piece = piece.iter().map(|p| !debris(p));
     kept.retain(|_| keep_piece.next().unwrap_or(false));
     cleaned.debris_triangles = before - kept.len();
+    // 6. Small holes closed, each fan's centre a vertex after the file's.
+    let mut positions = positions.to_vec();
+    cleaned.filled_holes = fill_small_holes(&mut positions, &mut kept);
     // Renumber the vertices the kept triangles use, keeping the file's order.
     let mut new_id: Vec<u32> = vec![u32::MAX; positions.len()];
     for &i in kept.iter().flatten() {
@@ -294,6 +313,77 @@ fn close_t_junctions(positions: &[Point3<f64>], triangles: &mut Vec<[u32; 3]>) -
         triangles.extend(added);
     }
     split
+}
+
+/// Closes the loops of open edges at most [`HOLE_PERIMETER_M`] long (step 6 of the module docs)
+/// and returns how many. Left open: a loop through a vertex where open edges branch (which edges
+/// form the hole is not clear there), and a loop about as big as its piece (its length squared
+/// over [`HOLE_OF_PIECE`] of the piece's area: the rim of a lone triangle or a patch is its
+/// shape, not a hole in it).
+fn fill_small_holes(positions: &mut Vec<Point3<f64>>, triangles: &mut Vec<[u32; 3]>) -> usize {
+    let open = open_edges(triangles);
+    if open.is_empty() {
+        return 0;
+    }
+    let piece = triangle_pieces(positions, triangles);
+    let mut piece_area: HashMap<u32, f64> = HashMap::new();
+    for (t, p) in triangles.iter().zip(&piece) {
+        *piece_area.entry(*p).or_default() += area(positions, t);
+    }
+    // The boundary runs against its triangles' winding: from `b` to `a` of each open edge.
+    let mut next: HashMap<u32, u32> = HashMap::with_capacity(open.len());
+    let mut branching = HashSet::new();
+    for e in &open {
+        if next.insert(e.b, e.a).is_some() {
+            branching.insert(e.b);
+        }
+    }
+    let mut visited = HashSet::new();
+    let mut filled = 0;
+    for e in &open {
+        if visited.contains(&e.b) {
+            continue;
+        }
+        // Walk the loop from `e.b`, at most as many steps as there are open edges.
+        let mut hole = vec![e.b];
+        let mut length = 0.0;
+        let mut closed = false;
+        let mut at = e.b;
+        while let Some(&to) = next.get(&at) {
+            length += (positions[to as usize] - positions[at as usize]).norm();
+            if to == e.b {
+                closed = true;
+                break;
+            }
+            if visited.contains(&to) || hole.len() > open.len() || length > HOLE_PERIMETER_M {
+                break;
+            }
+            hole.push(to);
+            at = to;
+        }
+        visited.extend(hole.iter().copied());
+        let small = length <= HOLE_PERIMETER_M
+            && length * length <= HOLE_OF_PIECE * piece_area[&piece[e.triangle]];
+        if !closed || !small || hole.iter().any(|v| branching.contains(v)) {
+            continue;
+        }
+        // `hole` runs b → a along each open edge, so triangles over it in its order are wound
+        // as the neighbours across those edges.
+        if hole.len() == 3 {
+            triangles.push([hole[0], hole[1], hole[2]]);
+        } else {
+            let centre = hole.iter().fold(Point3::origin(), |c, &v| {
+                c + positions[v as usize].coords / hole.len() as f64
+            });
+            let c = positions.len() as u32;
+            positions.push(centre);
+            for k in 0..hole.len() {
+                triangles.push([hole[k], hole[(k + 1) % hole.len()], c]);
+            }
+        }
+        filled += 1;
+    }
+    filled
 }
 
 /// An edge used by one triangle only, as that triangle runs along it (`a` then `b`).
@@ -446,7 +536,57 @@ mod tests {
                 split_triangles: 0,
                 debris_triangles: 1,
                 debris_pieces: 1,
+                filled_holes: 0,
             }
         );
+    }
+
+    /// True when every edge of `triangles` is used twice, once each way: closed and wound alike.
+    fn closed_and_consistent(triangles: &[[u32; 3]]) -> bool {
+        let mut uses: HashMap<(u32, u32), i32> = HashMap::new();
+        for t in triangles {
+            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                *uses.entry((a, b)).or_default() += 1;
+            }
+        }
+        (uses.iter()).all(|(&(a, b), &n)| n == 1 && uses.get(&(b, a)) == Some(&1))
+    }
+
+    #[test]
+    fn a_small_hole_is_closed_wound_as_its_neighbours_and_a_cut_stays_open() {
+        use crate::leg::test_meshes::add_sphere;
+        // A ball 0.2 m across, its triangles about 1.3 cm a side, wound outwards.
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        add_sphere(&mut positions, &mut triangles, [0.0; 3], 0.1, 48, 24);
+        assert!(closed_and_consistent(&triangles));
+        let n = triangles.len();
+        // The first band's triangles are the pole's; then each band's in pairs (a quad each).
+        let quad = 2 * 48 + 2 * 48 * 10;
+        // One triangle lost: closed by one triangle.
+        let mut one = triangles.clone();
+        one.remove(quad);
+        let (kept_positions, kept, cleaned) = clean_mesh(&positions, &one);
+        assert_eq!((cleaned.filled_holes, kept.len()), (1, n));
+        assert_eq!(kept_positions.len(), positions.len());
+        assert!(closed_and_consistent(&kept));
+        // A quad (two triangles, about 5 cm around) lost: a fan from its centre, a vertex added.
+        let mut two = triangles.clone();
+        two.drain(quad..quad + 2);
+        let (kept_positions, kept, cleaned) = clean_mesh(&positions, &two);
+        assert_eq!((cleaned.filled_holes, kept.len()), (1, n + 2));
+        assert_eq!(kept_positions.len(), positions.len() + 1);
+        assert!(closed_and_consistent(&kept));
+        // The north pole's cap and the next band cut off (every triangle on the pole or the
+        // first ring): an opening 0.16 m around, left open.
+        let cut: Vec<[u32; 3]> = (triangles.iter())
+            .filter(|t| t.iter().all(|&i| i > 48))
+            .copied()
+            .collect();
+        let (_, kept, cleaned) = clean_mesh(&positions, &cut);
+        assert_eq!((cleaned.filled_holes, kept.len()), (0, cut.len()));
+        // A lone triangle's rim is its shape: it stays a triangle.
+        let lone = [triangles[quad]];
+        let (_, kept, cleaned) = clean_mesh(&positions, &lone);
+        assert_eq!((cleaned.filled_holes, kept.len()), (0, 1));
     }
 }
