@@ -15,7 +15,9 @@ use crate::error::{Error, Result};
 use crate::knit::path::{path_to_toe, TubePath};
 use crate::knit::tube::{tube_axis, Centreline};
 use crate::knit::{TubeBottom, TubeSettings};
-use crate::leg::{find_landmarks, leaves_mesh, Axis, AxisSource, Landmarks, Leg, LegAxis, Side};
+use crate::leg::{
+    find_landmarks, leaves_mesh, Axis, AxisSource, Landmarks, Leg, LegAxis, NoLandmarks, Side,
+};
 use crate::stage::{timed, Stage, StageTimes};
 
 /// What the place stage reads of the scene: the leg's `axis` (if given, and who gave it) and its
@@ -74,10 +76,10 @@ pub fn place(
     let landmarks = match place.axis {
         Some(_) => None,
         None => Some(timed(times, Stage::FindLandmarks, || {
-            find_landmarks(&leg.positions, &leg.triangles, leg.up, place.side).map_err(|message| {
+            find_landmarks(&leg.positions, &leg.triangles, leg.up, place.side).map_err(|no| {
                 Error::Leg {
                     path: leg.path.clone(),
-                    message: format!("cannot find the leg's landmarks: {message}"),
+                    message: format!("cannot find the leg's landmarks: {}", advised(&no, leg)),
                 }
             })
         })?),
@@ -106,6 +108,30 @@ pub fn place(
         centreline,
         side: place.side,
     })
+}
+
+/// What was seen instead of a leg, and where up is in doubt, the way out that fits how up was
+/// chosen: a found up can be overruled by naming the file's axis; a given one can be left to
+/// the anatomy. Never the advice to do what the user already did.
+fn advised(no: &NoLandmarks, leg: &Leg) -> String {
+    if !no.up_in_doubt {
+        return no.seen.clone();
+    }
+    let axis = leg.up_axis.name();
+    if leg.up_axis_found {
+        format!(
+            "{}: up may be the wrong way; it was found from the anatomy as the file's {axis} \
+             (leg.up_axis \"auto\"): if the file's up is another axis, name it with \
+             leg.up_axis (--up-axis)",
+            no.seen
+        )
+    } else {
+        format!(
+            "{}: up may be the wrong way; leg.up_axis (--up-axis) gives it as the file's \
+             {axis}: give the file's real up axis, or \"auto\" to find it from the anatomy",
+            no.seen
+        )
+    }
 }
 
 /// The axis from `place` (converted from file coordinates), or placed on the landmarks by
@@ -173,4 +199,35 @@ pub fn toe_on_a_given_axis() -> Invalid {
          tube.bottom to \"ankle\", or leave leg.axis out",
     )
     .with(&["leg.axis"])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::leg::UpAxis;
+
+    #[test]
+    fn the_advice_on_up_is_the_way_out_the_user_has_not_taken() {
+        let mut leg = Leg::from_world("leg.glb".into(), &[], &[]);
+        let upside_down = NoLandmarks {
+            seen: "the leg found narrows upwards".into(),
+            up_in_doubt: true,
+        };
+        // Up found from the anatomy: name the file's own up axis, not "auto" again.
+        leg.up_axis = UpAxis::PosZ;
+        leg.up_axis_found = true;
+        let found = advised(&upside_down, &leg);
+        assert!(found.starts_with("the leg found narrows upwards: "), "{found}");
+        assert!(found.contains("found from the anatomy as the file's +z"), "{found}");
+        assert!(!found.contains("or \"auto\""), "{found}");
+        // Up given: leaving it to the anatomy is a way out.
+        leg.up_axis = UpAxis::NegY;
+        leg.up_axis_found = false;
+        let given = advised(&upside_down, &leg);
+        assert!(given.contains("gives it as the file's -y"), "{given}");
+        assert!(given.contains("\"auto\" to find it from the anatomy"), "{given}");
+        // What does not put up in doubt is said as seen.
+        let other = NoLandmarks::from("no closed cross-section");
+        assert_eq!(advised(&other, &leg), "no closed cross-section");
+    }
 }

@@ -285,14 +285,46 @@ pub fn stance_of(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Stance {
         .map_or_else(|_| Stance::pictured(up, Vector3::z()), |l| l.stance())
 }
 
+/// Why no leg's landmarks were found: what was seen, in a sentence, and whether it suggests the
+/// mesh was read the wrong way up. The caller knows whether up was given or found from the
+/// anatomy, and so what to advise.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NoLandmarks {
+    /// What was seen, where and how big.
+    pub seen: String,
+    /// True when a leg read the other way up would make sense of what was seen.
+    pub up_in_doubt: bool,
+}
+
+impl From<String> for NoLandmarks {
+    fn from(seen: String) -> Self {
+        NoLandmarks {
+            seen,
+            up_in_doubt: false,
+        }
+    }
+}
+
+impl From<&str> for NoLandmarks {
+    fn from(seen: &str) -> Self {
+        seen.to_string().into()
+    }
+}
+
+impl std::fmt::Display for NoLandmarks {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.seen)
+    }
+}
+
 /// Finds the landmarks of the leg on `side` (see module docs) of the cleaned mesh, with `up`
-/// the unit vector up the body. The error says what is missing, in a sentence.
+/// the unit vector up the body. The error says what was seen instead.
 pub fn find_landmarks(
     positions: &[Point3<f64>],
     triangles: &[[u32; 3]],
     up: Vector3<f64>,
     side: Side,
-) -> Result<Landmarks, String> {
+) -> Result<Landmarks, NoLandmarks> {
     // The sections follow the skin: a cap over the cut would make the leg seem to narrow to a
     // point at its top.
     let (skin, _) = open_cut_caps(positions, triangles, &up);
@@ -304,7 +336,8 @@ pub fn find_landmarks(
             "the mesh spans {:.1} m along its up direction, more than a body's {MAX_SPAN_M} m: \
              check leg.units (--units), or remove the other geometry from the file",
             hi - lo
-        ));
+        )
+        .into());
     }
     let heights = |from: f64, to: f64, step: f64| {
         let n = ((to - from) / step).floor().max(0.0) as usize;
@@ -424,11 +457,13 @@ pub fn find_landmarks(
         .ok_or("the leg has no closed cross-section")?;
     let leg_height = top.s - sole_s;
     if leg_height < 0.15 {
-        return Err(format!(
-            "the leg found is only {leg_height:.3} m from its lowest point to the top of its \
-             thigh: up may be the wrong way; leave leg.up_axis (--up-axis) at \"auto\" or give \
-             the file's real up axis"
-        ));
+        return Err(NoLandmarks {
+            seen: format!(
+                "the leg found is only {leg_height:.3} m from its lowest point to the top of its \
+                 thigh"
+            ),
+            up_in_doubt: true,
+        });
     }
     let narrowest = |from: f64, to: f64| {
         profile
@@ -442,12 +477,13 @@ pub fn find_landmarks(
         narrowest((sole_s + 0.03).max(lowest), sole_s + leg_height / 3.0).unwrap_or(profile[0]);
     // A thigh is wider than an ankle; one clearly narrower means the body is upside down.
     if top.girth_m < 0.9 * ankle.girth_m {
-        return Err(format!(
-            "the leg found narrows upwards (ankle {:.3} m around, top of the thigh {:.3} m): \
-             up is probably the wrong way; leave leg.up_axis (--up-axis) at \"auto\" or give \
-             the file's real up axis",
-            ankle.girth_m, top.girth_m
-        ));
+        return Err(NoLandmarks {
+            seen: format!(
+                "the leg found narrows upwards (ankle {:.3} m around, top of the thigh {:.3} m)",
+                ankle.girth_m, top.girth_m
+            ),
+            up_in_doubt: true,
+        });
     }
     let span = top.s - ankle.s;
     let knee = narrowest(ankle.s + 0.35 * span, ankle.s + 0.7 * span)
@@ -768,7 +804,7 @@ mod tests {
             Point3::new(0.0, 50.0, 0.1),
         ];
         let err = find_landmarks(&positions, &[[0, 1, 2]], Vector3::y(), Side::Left).unwrap_err();
-        assert!(err.contains("spans 50.0 m"), "{err}");
+        assert!(err.seen.contains("spans 50.0 m"), "{err}");
     }
 
     #[test]

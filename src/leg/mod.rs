@@ -21,6 +21,6 @@ pub use axis::{leaves_mesh, Axis, AxisSource};
 pub use clean::Cleaned;
 pub use collider::{Closest, Collider};
 pub use curvature::SkinCurvature;
-pub use landmarks::{find_landmarks, Landmarks, ThighTopKind};
+pub use landmarks::{find_landmarks, Landmarks, NoLandmarks, ThighTopKind};
 pub use load::{decode_leg, load_leg, read_leg_file, Leg, LegFile};
 pub use settings::{ContactMethod, LegAxis, LegSettings, Side, Units, UpAxis, UpChoice};
