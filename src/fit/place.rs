@@ -217,15 +217,24 @@ mod tests {
         leg.up_axis = UpAxis::PosZ;
         leg.up_axis_found = true;
         let found = advised(&upside_down, &leg);
-        assert!(found.starts_with("the leg found narrows upwards: "), "{found}");
-        assert!(found.contains("found from the anatomy as the file's +z"), "{found}");
+        assert!(
+            found.starts_with("the leg found narrows upwards: "),
+            "{found}"
+        );
+        assert!(
+            found.contains("found from the anatomy as the file's +z"),
+            "{found}"
+        );
         assert!(!found.contains("or \"auto\""), "{found}");
         // Up given: leaving it to the anatomy is a way out.
         leg.up_axis = UpAxis::NegY;
         leg.up_axis_found = false;
         let given = advised(&upside_down, &leg);
         assert!(given.contains("gives it as the file's -y"), "{given}");
-        assert!(given.contains("\"auto\" to find it from the anatomy"), "{given}");
+        assert!(
+            given.contains("\"auto\" to find it from the anatomy"),
+            "{given}"
+        );
         // What does not put up in doubt is said as seen.
         let other = NoLandmarks::from("no closed cross-section");
         assert_eq!(advised(&other, &leg), "no closed cross-section");

@@ -113,8 +113,10 @@ pub fn solve(
     let (collider, toe_box) = timed(times, Stage::BuildCollider, || -> Result<_> {
         // Contact sees the solid's skin: a piece's triangles inside another piece (a ball joint
         // in its shin) are not where yarn rests (leg::solid).
+        let (positions, triangles) = outer_skin(&leg.positions, &leg.triangles);
         let skin = Leg {
-            triangles: outer_skin(&leg.positions, &leg.triangles),
+            positions,
+            triangles,
             ..leg.clone()
         };
         let collider = Collider::new(&skin, settings.contact)?;

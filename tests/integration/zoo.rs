@@ -122,9 +122,9 @@ const FRAMES: [Frame; 6] = [
 fn known_failing(variant: &Variant) -> Option<&'static str> {
     match (variant.form, variant.mesh, variant.frame) {
         (Form::LeftLegPieces | Form::ProceduralPieces, ..) => Some(
-            "pieces 1–2 % wider than the one below leave millimetre ledges; the triangles \
-             dropped inside the other piece leave a gap there that yarn falls through, or the \
-             fit stalls on (issue 45: clip the pieces against each other)",
+            "pieces 1–2 % wider than the one below leave millimetre ledges: yarn over a \
+             ledge crosses its corner, which the penetration fix cannot walk across the crack \
+             where the pieces meet (exit 4), or the fit stalls there (issue 45)",
         ),
         _ => None,
     }
