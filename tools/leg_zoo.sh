@@ -10,7 +10,7 @@ status=$?
 {
   echo "# The leg zoo"
   echo
-  echo "Every variant of \`tests/integration/zoo.rs\` fitted by the binary at 60×60, made by"
+  echo "Every variant of \`tests/integration/zoo.rs\` fitted by the binary at the defaults, made by"
   echo "\`tools/leg_zoo.sh\` at $(git rev-parse --short HEAD) on $(nproc) cores. What the forms, mesh"
   echo "forms and frames are, and what a variant is held to: the module doc there and"
   echo "[TESTING.md](TESTING.md#the-leg-zoo)."
