@@ -14,7 +14,10 @@
 //! world space (`find_landmarks`), taken through the variant's frame: ankle, knee and toe tip
 //! within 1.5 cm of where the clean source has them. Every variant fits (exit 0) with no yarn
 //! inside the leg, passes the fit's checks and, where the source has a foot, gets a stocking to
-//! the toe; unless [`known_failing`] names it and says why.
+//! the toe; unless [`known_failing`] names it and says why. Each fitted variant is also held to
+//! the same leg made another way, where that fitted (metamorphic checks: its frame against Y-up
+//! metres, remeshed against as exported, closed at the cut against open): landmarks within 1 cm
+//! of each other, every region's stitch density within 3 %.
 //!
 //! The whole zoo (every crossing, 300 variants) is the long profile:
 //! `KNITFIT_LONG=1 cargo test --release zoo -- --include-ignored --nocapture`; it writes its table
@@ -488,6 +491,9 @@ struct Outcome {
     report: Option<Report<FitDetails>>,
     /// The worst of ankle, knee and toe tip off their truth, metres.
     landmarks_off_m: Option<f64>,
+    /// Ankle, knee and toe tip as found, taken back to world space (metres): for comparing
+    /// variants with each other.
+    world_landmarks: Option<[Option<Point3<f64>>; 3]>,
     /// The source has a foot: the stocking must cover it.
     has_foot: bool,
 }
@@ -583,6 +589,17 @@ fn run(dir: &Path, variant: Variant, settings: &[&str]) -> Outcome {
                 })
                 .fold(0.0, f64::max)
         });
+    let world_from_file = file_from_world.inverse();
+    let world_landmarks = (report.as_ref())
+        .and_then(|r| r.details.leg.landmarks.as_ref())
+        .map(|got| {
+            [
+                Some(got.ankle.centre.file),
+                Some(got.knee.centre.file),
+                got.toe_tip.as_ref().map(|t| t.file),
+            ]
+            .map(|p| p.map(|p| world_from_file * Point3::from(p)))
+        });
     Outcome {
         variant,
         code: out.status.code(),
@@ -590,6 +607,7 @@ fn run(dir: &Path, variant: Variant, settings: &[&str]) -> Outcome {
         said,
         report,
         landmarks_off_m,
+        world_landmarks,
         has_foot: source.truth.toe_tip.is_some(),
     }
 }
@@ -621,6 +639,68 @@ fn write_variant(dir: &Path, meshes: &[RawMesh], form: MeshForm) -> PathBuf {
     path
 }
 
+/// The same leg made another way fits the same: landmarks within this of each other, metres...
+const SAME_LANDMARKS_M: f64 = 0.01;
+/// ...and each region's mean stitch area (so its stitch density) within this fraction.
+const SAME_DENSITY: f64 = 0.03;
+
+/// The metamorphic checks (issue 45): each fitted variant against the same leg made another
+/// way, where that fitted too: in Y-up metres instead of its frame; as exported instead of
+/// remeshed (subdivided, or quads in a PLY); open at the cut instead of closed. Returns a line
+/// per pair compared and whether it held.
+fn metamorphic(outcomes: &[Outcome]) -> Vec<(String, bool)> {
+    let find = |form: Form, mesh: MeshForm, frame: Frame| {
+        (outcomes.iter())
+            .find(|o| (o.variant.form, o.variant.mesh, o.variant.frame) == (form, mesh, frame))
+    };
+    let mut lines = Vec::new();
+    for o in outcomes.iter().filter(|o| o.fits()) {
+        let v = o.variant;
+        let mut references = Vec::new();
+        if v.frame != Frame::YUpMetres {
+            references.push(("frame", find(v.form, v.mesh, Frame::YUpMetres)));
+        }
+        if matches!(v.mesh, MeshForm::Subdivided | MeshForm::QuadPly) {
+            references.push(("remeshed", find(v.form, MeshForm::AsIs, v.frame)));
+        }
+        if v.form == Form::LeftLegClosed {
+            references.push(("closed", find(Form::LeftLegOpen, v.mesh, v.frame)));
+        }
+        for (how, reference) in references {
+            let Some(r) = reference.filter(|r| r.fits()) else {
+                continue;
+            };
+            let (Some(a), Some(b)) = (&o.world_landmarks, &r.world_landmarks) else {
+                continue;
+            };
+            let landmarks_m = (a.iter().zip(b))
+                .filter_map(|(p, q)| Some((p.as_ref()? - q.as_ref()?).norm()))
+                .fold(0.0, f64::max);
+            let regions =
+                |o: &Outcome| o.report.as_ref().unwrap().details.stretch_by_region.clone();
+            let density = (regions(o).iter())
+                .filter_map(|x| {
+                    let y = regions(r).into_iter().find(|y| y.region == x.region)?;
+                    Some((y.area / x.area - 1.0).abs())
+                })
+                .fold(0.0, f64::max);
+            let held = landmarks_m <= SAME_LANDMARKS_M && density <= SAME_DENSITY;
+            lines.push((
+                format!(
+                    "| {} | {how}: {} | {:.2} | {:.2} | {} |",
+                    v.name(),
+                    r.variant.name(),
+                    1e3 * landmarks_m,
+                    1e2 * density,
+                    if held { "same" } else { "differs" }
+                ),
+                held,
+            ));
+        }
+    }
+    lines
+}
+
 /// Runs `variants` with the flags `settings` (the defaults where empty), writes their table to
 /// `target/zoo/NAME.md` and returns what failed unexpectedly.
 fn run_zoo(variants: &[Variant], settings: &[&str], name: &str) -> Vec<String> {
@@ -637,6 +717,7 @@ fn run_zoo(variants: &[Variant], settings: &[&str], name: &str) -> Vec<String> {
         .filter(|v| v.name().contains(only.as_str()))
         .copied()
         .collect();
+    let mut outcomes = Vec::new();
     for &variant in &variants {
         let dir = tempfile::tempdir().unwrap();
         let outcome = run(dir.path(), variant, settings);
@@ -649,6 +730,7 @@ fn run_zoo(variants: &[Variant], settings: &[&str], name: &str) -> Vec<String> {
             Some(why) if !outcome.fits() => known.push(format!("{} ({why})", variant.name())),
             _ => {}
         }
+        outcomes.push(outcome);
     }
     rows.push(String::new());
     rows.push(format!(
@@ -668,6 +750,28 @@ fn run_zoo(variants: &[Variant], settings: &[&str], name: &str) -> Vec<String> {
         }
     ));
     rows.extend(known.iter().map(|k| format!("- {k}")));
+    let pairs = metamorphic(&outcomes);
+    if !pairs.is_empty() {
+        let held = pairs.iter().filter(|(_, held)| *held).count();
+        rows.push(String::new());
+        rows.push(format!(
+            "The same leg made another way (metamorphic checks): {held} of {} pairs of fitted \
+             variants have landmarks within {} mm of each other and every region's stitch \
+             density within {} %.",
+            pairs.len(),
+            1e3 * SAME_LANDMARKS_M,
+            1e2 * SAME_DENSITY
+        ));
+        rows.push(String::new());
+        rows.push("| variant | against | landmarks apart, mm | density apart, % | |".to_string());
+        rows.push("|---|---|---:|---:|---|".to_string());
+        for (line, held) in pairs {
+            if !held {
+                failed.push(line.clone());
+            }
+            rows.push(line);
+        }
+    }
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join("../zoo");
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(out.join(format!("{name}.md")), rows.join("\n") + "\n").unwrap();
