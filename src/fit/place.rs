@@ -163,12 +163,23 @@ fn choose_axis(
         (None, None) => unreachable!("landmarks are found whenever no axis is given"),
     };
     if let Some(at) = leaves_mesh(leg, &axis) {
+        // A given axis is the user's to check; one placed on the landmarks is straight from
+        // ankle to thigh, and leaves a leg that bends between them.
+        let why = match axis.source {
+            AxisSource::Landmarks => "the leg bends between its ankle and its thigh more than a \
+                 straight stocking allows (a bent knee, a stride): fit it standing straight, or \
+                 give the part to dress with --axis (knitfit plan prints the landmarks)"
+                .to_string(),
+            _ => format!(
+                "it misses the leg, or runs between two legs; check its coordinates (file \
+                 units, {} up)",
+                leg.up_axis.name()
+            ),
+        };
         return Err(fail(format!(
-            "{} runs outside the leg {:.0}% of the way from its bottom end to its top: it \
-             misses the leg, or runs between two legs; check its coordinates (file units, {} up)",
+            "{} runs outside the leg {:.0}% of the way from its bottom end to its top: {why}",
             axis.source.describe(),
             100.0 * at,
-            leg.up_axis.name()
         )));
     }
     Ok(axis)

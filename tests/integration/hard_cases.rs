@@ -1024,6 +1024,43 @@ fn a_stocking_far_smaller_than_the_ankle_is_refused_on_the_coarse_grid() {
 }
 
 #[test]
+fn a_leg_bent_at_the_knee_is_refused_saying_it_bends_not_to_check_an_axis_never_given() {
+    // The procedural leg with its thigh swung 70° forward about the knee, blended over 6 cm: the
+    // straight axis from ankle to thigh leaves it. The user gave no axis, so the way out is not
+    // to check one.
+    let dir = tempfile::tempdir().unwrap();
+    let leg = procedural();
+    let knee_y = 0.43;
+    let bent: Vec<Point3<f64>> = (leg.positions.iter())
+        .map(|p| {
+            let t = ((p.y - knee_y + 0.03) / 0.06).clamp(0.0, 1.0);
+            let angle = 70f64.to_radians() * t * t * (3.0 - 2.0 * t);
+            let about = Point3::new(0.0, knee_y, 0.0);
+            about + Rotation3::from_axis_angle(&Vector3::x_axis(), -angle) * (p - about)
+        })
+        .collect();
+    let path = write_mesh(dir.path(), "bent.glb", &bent, leg.triangles.clone());
+    let scene = scene_for(&path, json!({}), json!({}));
+    let (run, out) = run_scene(&scene, "24x24", &[]);
+    check_refused(
+        "bent at the knee",
+        run.path(),
+        &out,
+        2,
+        &[
+            "bent.glb",
+            "bends between its ankle and its thigh",
+            "--axis",
+        ],
+    );
+    assert!(
+        !stderr(&out).contains("check its coordinates"),
+        "{}",
+        stderr(&out)
+    );
+}
+
+#[test]
 fn an_axis_that_misses_the_leg_is_refused_not_fitted_onto_air() {
     let leg = sample("makehuman_leg_foot.glb");
     let scene = scene_for(&leg, json!({}), json!({}));
