@@ -1,6 +1,6 @@
-//! What a finished fit must be, besides converged, before it is called done: no yarn left
-//! through the skin by the penetration fix, and a stitch density that changes smoothly over the
-//! skin. A stocking's density changes a few times over from ankle to thigh, never tenfold
+//! What a finished fit must be, besides converged, before it is called done: no yarn point
+//! inside the skin, no yarn left through the skin by the penetration fix, and a stitch density
+//! that changes smoothly over the skin. A stocking's density changes a few times over from ankle to thigh, never tenfold
 //! between two neighbouring vertices: a jump like that is fabric folded through itself or torn
 //! across a broken mesh, not a fit. A fit that fails a check still has its products (its files
 //! show what went wrong) but is not done: `knitfit fit` warns, naming the check, and exits 4.
@@ -18,6 +18,9 @@ pub const MAX_NEIGHBOUR_DENSITY_RATIO: f64 = 10.0;
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FitChecks {
+    /// How deep the deepest yarn point lies inside the skin after the exact contact pass,
+    /// metres (the report's `max_penetration_m`): 0 in a sound fit.
+    pub yarn_inside_skin_m: f64,
     /// Yarn pieces that still cross the skin after the penetration fix; `null` where the fix
     /// did not run.
     pub yarn_pieces_crossing: Option<usize>,
@@ -39,10 +42,17 @@ pub struct DensityJumps {
 }
 
 impl FitChecks {
-    /// The checks of a fit on `leg` with `density` per leg vertex (empty where not measured) and
-    /// the penetration fix's counters, where it ran.
-    pub fn of(leg: &Leg, density: &[f64], fix: Option<&PenetrationStats>) -> FitChecks {
+    /// The checks of a fit on `leg` whose deepest yarn point is `max_penetration_m` inside the
+    /// skin, with `density` per leg vertex (empty where not measured) and the penetration fix's
+    /// counters, where it ran.
+    pub fn of(
+        leg: &Leg,
+        max_penetration_m: f64,
+        density: &[f64],
+        fix: Option<&PenetrationStats>,
+    ) -> FitChecks {
         FitChecks {
+            yarn_inside_skin_m: max_penetration_m,
             yarn_pieces_crossing: fix.map(|f| f.still_crossing),
             density: (density.len() == leg.positions.len()).then(|| density_jumps(leg, density)),
         }
@@ -51,6 +61,12 @@ impl FitChecks {
     /// What failed, one phrase each; empty when the fit passed.
     pub fn failures(&self) -> Vec<String> {
         let mut failed = Vec::new();
+        if self.yarn_inside_skin_m > 0.0 {
+            failed.push(format!(
+                "yarn points lie up to {:.3} mm inside the skin",
+                1e3 * self.yarn_inside_skin_m
+            ));
+        }
         if let Some(n @ 1..) = self.yarn_pieces_crossing {
             failed.push(format!(
                 "{n} yarn piece{} still cross{} the skin after the penetration fix",
@@ -125,7 +141,7 @@ mod tests {
         let smooth: Vec<f64> = (leg.positions.iter())
             .map(|p| 100.0 + 750.0 * p.y)
             .collect();
-        let checks = FitChecks::of(&leg, &smooth, Some(&PenetrationStats::default()));
+        let checks = FitChecks::of(&leg, 0.0, &smooth, Some(&PenetrationStats::default()));
         assert!(checks.passed(), "{checks:?}");
         let d = checks.density.as_ref().unwrap();
         assert!(d.worst_ratio < 1.2, "{d:?}");
@@ -134,7 +150,7 @@ mod tests {
         let mut dented = smooth.clone();
         let v = leg.positions.len() / 2;
         dented[v] /= 100.0;
-        let checks = FitChecks::of(&leg, &dented, None);
+        let checks = FitChecks::of(&leg, 0.0, &dented, None);
         let d = checks.density.as_ref().unwrap();
         let around = (leg.triangles.iter())
             .filter(|t| t.contains(&(v as u32)))
@@ -162,8 +178,8 @@ mod tests {
         let edge: Vec<f64> = (leg.positions.iter())
             .map(|p| if p.y < 0.2 { 300.0 } else { 0.0 })
             .collect();
-        assert!(FitChecks::of(&leg, &edge, None).passed());
-        let unmeasured = FitChecks::of(&leg, &[], None);
+        assert!(FitChecks::of(&leg, 0.0, &edge, None).passed());
+        let unmeasured = FitChecks::of(&leg, 0.0, &[], None);
         assert_eq!(unmeasured.density, None);
         assert!(unmeasured.passed());
     }
@@ -174,11 +190,21 @@ mod tests {
             still_crossing: 3,
             ..PenetrationStats::default()
         };
-        let checks = FitChecks::of(&cylinder(), &[], Some(&fix));
+        let checks = FitChecks::of(&cylinder(), 0.0, &[], Some(&fix));
         assert_eq!(checks.yarn_pieces_crossing, Some(3));
         assert_eq!(
             checks.failures(),
             ["3 yarn pieces still cross the skin after the penetration fix"]
         );
+    }
+
+    #[test]
+    fn a_yarn_point_inside_the_skin_fails() {
+        let checks = FitChecks::of(&cylinder(), 3.5e-4, &[], None);
+        assert_eq!(
+            checks.failures(),
+            ["yarn points lie up to 0.350 mm inside the skin"]
+        );
+        assert!(FitChecks::of(&cylinder(), 0.0, &[], None).passed());
     }
 }

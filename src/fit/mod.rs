@@ -189,7 +189,12 @@ pub fn fit(
         .as_ref()
         .map(|wanted| products(&solved, &fields, &settings.fabric, forces, wanted, times));
     let fix = products.as_ref().and_then(|p| p.penetration_fix.as_ref());
-    let checks = FitChecks::of(&solved.leg, &fields.on_leg.stitch_density, fix);
+    let checks = FitChecks::of(
+        &solved.leg,
+        solved.max_penetration_m,
+        &fields.on_leg.stitch_density,
+        fix,
+    );
     Ok(Fitted {
         solved,
         fields,

@@ -10,8 +10,8 @@
 //! outward-wound surface once cleaned ([`super::clean`], [`super::orient`]), where the sign is
 //! exact. A piece open at a cut still reads right away from its opening. A triangle across the
 //! line where two pieces meet is split until its parts are a millimetre long, and keeps those
-//! outside: the skin then has a crack along that line a millimetre wide, not a gap a triangle
-//! wide that yarn falls through. The generalized winding
+//! outside, the last ones clipped where they enter the other piece: the skin ends on the other
+//! piece's, with no gap a triangle wide that yarn falls through and no part poking inside. The generalized winding
 //! number (Jacobson, Kavan & Sorkine-Hornung 2013) would also read pieces with holes; a mesh in
 //! one piece, the common case, needs neither and is returned whole.
 
@@ -163,19 +163,30 @@ pub fn outer_skin(
         .map(|m| m.as_ref().map(|m| m.local_aabb().loosened(BURIED_DEPTH_M)))
         .collect();
     // Buried: inside a piece other than its own.
-    let buried = |p: &Point3<f64>, own: u32| {
-        (meshes.iter().zip(&boxes).enumerate()).any(|(k, (mesh, aabb))| {
-            let (Some(mesh), Some(aabb)) = (mesh, aabb) else {
-                return false;
-            };
-            k as u32 != own && aabb.contains_local_point(p) && {
+    // How deep `p` lies inside the other pieces' union: positive inside (by its distance to the
+    // skin of the piece it is deepest in), negative outside (by its distance to the nearest).
+    let depth_in_others = |p: &Point3<f64>, own: u32| {
+        (meshes.iter().zip(&boxes).enumerate())
+            .filter(|(k, _)| *k as u32 != own)
+            .filter_map(|(_, (mesh, aabb))| {
+                let (mesh, aabb) = (mesh.as_ref()?, aabb.as_ref()?);
+                if !aabb.contains_local_point(p) {
+                    // Outside its box: at least as far out as the box (finite, for clipping).
+                    return Some(-aabb.distance_to_local_point(p, true));
+                }
                 let (projection, (triangle, location)) =
                     mesh.project_local_point_and_get_location(p, false);
-                (projection.point - p).norm() > BURIED_DEPTH_M
-                    && is_inside(mesh, p, &projection.point, triangle, location)
-            }
-        })
+                let distance = (projection.point - p).norm();
+                Some(
+                    match is_inside(mesh, p, &projection.point, triangle, location) {
+                        true => distance,
+                        false => -distance,
+                    },
+                )
+            })
+            .fold(f64::NEG_INFINITY, f64::max)
     };
+    let buried = |p: &Point3<f64>, own: u32| depth_in_others(p, own) > BURIED_DEPTH_M;
     // Each vertex's own answer, asked once.
     let vertex_piece = connected_pieces(positions.len(), triangles);
     let vertex_buried: Vec<bool> = (positions.iter().zip(&vertex_piece))
@@ -191,12 +202,7 @@ pub fn outer_skin(
         match (inside, centre_buried) {
             ([false, false, false], false) => skin.triangles.push(*t),
             ([true, true, true], true) => {}
-            _ => skin.split(
-                corners,
-                0,
-                &|c: &[Point3<f64>; 3]| buried(&centre(c), own),
-                &|p| buried(p, own),
-            ),
+            _ => skin.split(corners, 0, &|p| depth_in_others(p, own)),
         }
     }
     (skin.positions, skin.triangles)
@@ -230,36 +236,58 @@ impl SplitSkin {
     }
 
     /// Splits the triangle `c` across a meeting line in four and keeps, or splits again, each
-    /// part: whole where its corners and centre are all outside, dropped where all are buried.
-    fn split(
-        &mut self,
-        c: [Point3<f64>; 3],
-        depth: u32,
-        centre_buried: &dyn Fn(&[Point3<f64>; 3]) -> bool,
-        buried: &dyn Fn(&Point3<f64>) -> bool,
-    ) {
+    /// part: whole where its corners and centre are all outside (`depth` at most
+    /// [`BURIED_DEPTH_M`]), dropped where all are buried. The last parts are clipped where the
+    /// depth, taken as linear over each, is zero: no part pokes into another piece.
+    fn split(&mut self, c: [Point3<f64>; 3], splits: u32, depth: &dyn Fn(&Point3<f64>) -> f64) {
         let longest = (c[1] - c[0])
             .norm()
             .max((c[2] - c[1]).norm())
             .max((c[0] - c[2]).norm());
-        if depth == MEETING_SPLITS || longest <= MEETING_EDGE_M {
-            if !centre_buried(&c) {
-                let t = c.map(|p| self.vertex(p));
-                self.triangles.push(t);
-            }
+        if splits == MEETING_SPLITS || longest <= MEETING_EDGE_M {
+            self.clipped(c, c.map(|p| depth(&p)));
             return;
         }
         let mid = |a: &Point3<f64>, b: &Point3<f64>| Point3::from((a.coords + b.coords) / 2.0);
         let (ab, bc, ca) = (mid(&c[0], &c[1]), mid(&c[1], &c[2]), mid(&c[2], &c[0]));
         for part in [[c[0], ab, ca], [ab, c[1], bc], [ca, bc, c[2]], [ab, bc, ca]] {
-            let inside = part.map(|p| buried(&p));
-            match (inside, centre_buried(&part)) {
+            let centre = Point3::from((part[0].coords + part[1].coords + part[2].coords) / 3.0);
+            let inside = part.map(|p| depth(&p) > BURIED_DEPTH_M);
+            match (inside, depth(&centre) > BURIED_DEPTH_M) {
                 ([false, false, false], false) => {
                     let t = part.map(|p| self.vertex(p));
                     self.triangles.push(t);
                 }
                 ([true, true, true], true) => {}
-                _ => self.split(part, depth + 1, centre_buried, buried),
+                _ => self.split(part, splits + 1, depth),
+            }
+        }
+    }
+
+    /// Keeps the part of the triangle `c` where the depth, `d` at its corners and linear
+    /// between, is at most zero: a triangle or a quad (two triangles), wound as `c`.
+    fn clipped(&mut self, c: [Point3<f64>; 3], d: [f64; 3]) {
+        let mut kept: Vec<Point3<f64>> = Vec::with_capacity(4);
+        for k in 0..3 {
+            let (a, b) = (k, (k + 1) % 3);
+            if d[a] <= 0.0 {
+                kept.push(c[a]);
+            }
+            if (d[a] <= 0.0) != (d[b] <= 0.0) {
+                // The crossing from the lower-ordered end, so that the triangle across the edge
+                // finds the same point.
+                let (p, q, dp, dq) = match (c[a].x, c[a].y, c[a].z) < (c[b].x, c[b].y, c[b].z) {
+                    true => (c[a], c[b], d[a], d[b]),
+                    false => (c[b], c[a], d[b], d[a]),
+                };
+                kept.push(p + (q - p) * (dp / (dp - dq)));
+            }
+        }
+        let ids: Vec<u32> = kept.into_iter().map(|p| self.vertex(p)).collect();
+        for k in 1..ids.len().saturating_sub(1) {
+            let t = [ids[0], ids[k], ids[k + 1]];
+            if t[0] != t[1] && t[1] != t[2] && t[2] != t[0] {
+                self.triangles.push(t);
             }
         }
     }
