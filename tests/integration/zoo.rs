@@ -125,9 +125,9 @@ const FRAMES: [Frame; 6] = [
 fn known_failing(variant: &Variant) -> Option<&'static str> {
     match (variant.form, variant.mesh, variant.frame) {
         (Form::LeftLegPieces | Form::ProceduralPieces, ..) => Some(
-            "pieces 1–2 % wider than the one below leave millimetre ledges: yarn over a \
-             ledge crosses its corner, which the penetration fix cannot walk across the crack \
-             where the pieces meet (exit 4), or the fit stalls there (issue 45)",
+            "pieces 1–2 % wider than the one below leave millimetre ledges, where the \
+             penetration fix can leave a few yarn pieces across (exit 4); with lost faces the \
+             fit may stall or a piece's sections open (issue 45)",
         ),
         _ => None,
     }
