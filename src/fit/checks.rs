@@ -1,9 +1,10 @@
 //! What a finished fit must be, besides converged, before it is called done: no yarn point
 //! inside the skin, no yarn left through the skin by the penetration fix, and a stitch density
-//! that changes smoothly over the skin. A stocking's density changes a few times over from ankle to thigh, never tenfold
-//! between two neighbouring vertices: a jump like that is fabric folded through itself or torn
-//! across a broken mesh, not a fit. A fit that fails a check still has its products (its files
-//! show what went wrong) but is not done: `knitfit fit` warns, naming the check, and exits 4.
+//! that changes smoothly over the skin. A stocking's density changes a few times over from ankle
+//! to thigh, never tenfold between two neighbouring vertices: a jump like that is fabric folded
+//! through itself or torn across a broken mesh, not a fit. A fit that fails a check still has its
+//! products (its files show what went wrong) but is not done: `knitfit fit` warns, naming the
+//! check, and exits 4.
 
 use serde::{Deserialize, Serialize};
 

@@ -60,7 +60,8 @@ pub const HOLE_PERIMETER_M: f64 = 0.12;
 pub const HOLE_OF_PIECE: f64 = 0.1;
 
 /// A triangle whose doubled area (the cross product of two edges) is at most this times its
-/// longest edge squared has no area worth the name: its third corner lies within a millionth of an edge from the line of the other two.
+/// longest edge squared has no area worth the name: its third corner lies within a millionth of
+/// an edge from the line of the other two.
 pub const SLIVER: f64 = 1e-6;
 
 /// A triangle whose third corner lies within this times its largest coordinate (in absolute

@@ -176,8 +176,8 @@ impl Loop {
 }
 
 /// The loops of one plane's section: the plane through `origin` square to the unit vector
-/// `normal`; `piece` is each triangle's connected piece ([`super::solid::triangle_pieces`]). For a few planes
-/// of different directions; [`Slicer`] is faster for many parallel ones.
+/// `normal`; `piece` is each triangle's connected piece ([`super::solid::triangle_pieces`]).
+/// For a few planes of different directions; [`Slicer`] is faster for many parallel ones.
 pub fn section(
     positions: &[Point3<f64>],
     triangles: &[[u32; 3]],
