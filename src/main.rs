@@ -155,6 +155,17 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
         } => format!("{place}; {advice}"),
         _ => advice.to_string(),
     };
+    if let Some(pose) = report.details.pose.as_ref().filter(|p| !p.converged) {
+        eprintln!(
+            "knitfit: warning: the stocking, fitted in the rig's rest pose, had not settled in \
+             the pose the file shows after {} iterations (residual {:.1e}, force step {:.1e}, \
+             tolerance {:.0e}): \
+             the pose folds or stretches the leg further than the carried stocking settles in; \
+             its files are written (report.json details.pose)",
+            pose.iterations, pose.residual, pose.force_step, scene.solver.tolerance
+        );
+        return Ok(ExitCode::from(EXIT_NOT_CONVERGED));
+    }
     let failures = report.details.checks.failures();
     if m.converged && !failures.is_empty() {
         eprintln!(

@@ -130,6 +130,12 @@ pub struct Plan {
 }
 
 impl Plan {
+    /// Takes `stage` out of the plan: one the leg file rules out once it is read (`knitfit
+    /// plan` reads it; the fit's own plan keeps the stage, which then does not run).
+    pub fn without(&mut self, stage: Stage) {
+        self.stages.retain(|s| s.stage != stage);
+    }
+
     /// True when the plan has this stage.
     pub fn has(&self, stage: Stage) -> bool {
         self.stages.iter().any(|s| s.stage == stage)
@@ -365,6 +371,14 @@ impl Plan {
             Stage::CheckPenetration,
             "report.json: max_penetration_m against the exact triangles",
         );
+        // A given axis is in the pose's coordinates: such a leg is fitted as the file shows it.
+        if scene.leg.axis.is_none() {
+            plan.add(
+                Stage::Pose,
+                "where the leg file's skin poses the leg away from its rest pose: the stocking \
+                 is fitted in the rest pose, carried into the pose by the skin and relaxed there",
+            );
+        }
         let density_preview =
             scene.wants(Output::Preview) && scene.render.mode == RenderMode::Density;
         let leg_files = scene.wants(Output::Glb) || scene.wants(Output::Ply);

@@ -13,6 +13,7 @@ use serde::{de, Deserialize, Deserializer, Serialize};
 
 use crate::base::{GridSize, PerDirection};
 use crate::export::YarnsWritten;
+use crate::fit::pose::PoseStats;
 use crate::fit::FitChecks;
 use crate::knit::{Pattern, Stretch, TubeBottom, TubeHeel};
 use crate::leg::landmarks::Ring;
@@ -181,6 +182,10 @@ pub struct FitDetails {
     pub contact: ContactDetails,
     /// The penetration fix's counters; `null` when it did not run.
     pub penetration_fix: Option<PenetrationStats>,
+    /// Where the file's skin poses the leg away from its rest pose: the stocking was fitted in
+    /// the rest pose (the landmarks, axis and solver above are the rest pose's) and carried into
+    /// the pose; what that did. `null` otherwise.
+    pub pose: Option<PoseStats>,
     /// The preview's counters; `null` when no preview was rendered.
     pub preview: Option<PreviewStats>,
     /// The memory estimate checked before the leg was decoded, and the peak measured.
@@ -277,6 +282,33 @@ pub struct LandmarkDetails {
     pub thigh_top: LandmarkRing,
     /// `crotch` (where the legs join) or `cut` (where the mesh ends).
     pub thigh_top_kind: ThighTopKind,
+    /// The joints of this leg as the file's rig names them; `null` where the file has no skin
+    /// naming a leg's joints, or its joints do not lie in this leg's sections.
+    pub rig: Option<RigDetails>,
+}
+
+/// The rig's joints of the dressed leg ([`crate::leg::rig`]), and how far they are from the
+/// sections the geometry found.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RigDetails {
+    /// The joints' naming scheme: `mixamo`, `makehuman`, `rigify`, `unreal`, `vrm`, `smpl` or
+    /// `named`.
+    pub naming: String,
+    /// The side the rig names this leg.
+    pub side: Side,
+    /// The hip joint.
+    pub hip: LandmarkPoint,
+    /// The knee joint.
+    pub knee: LandmarkPoint,
+    /// The ankle joint.
+    pub ankle: LandmarkPoint,
+    /// The ball of the foot; `null` where the rig has no toe joint.
+    pub toe: Option<LandmarkPoint>,
+    /// Distance from the ankle section's centre to the ankle joint, metres.
+    pub ankle_from_section_m: f64,
+    /// Distance from the knee section's centre to the knee joint, metres.
+    pub knee_from_section_m: f64,
 }
 
 impl LandmarkDetails {
@@ -304,6 +336,16 @@ impl LandmarkDetails {
             knee: ring(&landmarks.knee),
             thigh_top: ring(&landmarks.thigh_top),
             thigh_top_kind: landmarks.thigh_top_kind,
+            rig: landmarks.rig.map(|r| RigDetails {
+                naming: r.naming.to_string(),
+                side: r.side,
+                hip: point(r.joints.hip),
+                knee: point(r.joints.knee),
+                ankle: point(r.joints.ankle),
+                toe: r.joints.toe.map(point),
+                ankle_from_section_m: r.ankle_m,
+                knee_from_section_m: r.knee_m,
+            }),
         }
     }
 
@@ -749,6 +791,7 @@ mod tests {
                 | Stage::Fit
                 | Stage::ExactContactPass
                 | Stage::CheckPenetration
+                | Stage::Pose
                 | Stage::LegAttributes
                 | Stage::LayStitches
                 | Stage::KnitLoops

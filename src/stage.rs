@@ -31,6 +31,8 @@ pub enum Stage {
     ExactContactPass,
     /// Measure the deepest yarn point inside the leg against the exact triangles.
     CheckPenetration,
+    /// A rigged leg fitted in its rest pose: carry the stocking into the pose the file shows.
+    Pose,
     /// Stitch density, stretch and coverage per leg vertex.
     LegAttributes,
     /// Build the knit at the real stitch count and lay it on the skin in the fitted grid.
@@ -60,7 +62,7 @@ pub enum Stage {
 impl Stage {
     /// Every stage that carries no value (a patch stage carries its stretch, an encode its
     /// file), in the order a plan lists them.
-    pub const UNPARAMETERISED: [Stage; 17] = [
+    pub const UNPARAMETERISED: [Stage; 18] = [
         Stage::LoadLeg,
         Stage::FindLandmarks,
         Stage::FindAxis,
@@ -69,6 +71,7 @@ impl Stage {
         Stage::Fit,
         Stage::ExactContactPass,
         Stage::CheckPenetration,
+        Stage::Pose,
         Stage::LegAttributes,
         Stage::LayStitches,
         Stage::KnitLoops,
@@ -93,6 +96,7 @@ impl fmt::Display for Stage {
             Stage::Fit => f.write_str("fit"),
             Stage::ExactContactPass => f.write_str("exact contact pass"),
             Stage::CheckPenetration => f.write_str("check penetration"),
+            Stage::Pose => f.write_str("pose"),
             Stage::LegAttributes => f.write_str("leg attributes"),
             Stage::LayStitches => f.write_str("lay stitches"),
             Stage::KnitLoops => f.write_str("knit loops"),

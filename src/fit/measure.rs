@@ -37,7 +37,8 @@ pub fn fields(fit: &SolvedFit, fabric: &Fabric, terms: &ForceTerms) -> Fields {
 /// of a stocking to the toe's path.
 pub fn slack_of(fit: &SolvedFit) -> SlackDetails {
     let placement = &fit.placement;
-    slack_details(&fit.knit, &slack(&fit.knit), &placement.centreline, |s| {
+    let along = fit.rest_knit.as_ref().unwrap_or(&fit.knit);
+    slack_details(along, &slack(&fit.knit), &placement.centreline, |s| {
         placement
             .path
             .as_ref()
@@ -55,7 +56,7 @@ pub fn stretch_by_part(fit: &SolvedFit) -> Vec<RegionStretch> {
     };
     let knit = &fit.knit;
     let regions = regions(
-        knit,
+        fit.rest_knit.as_ref().unwrap_or(knit),
         &placement.centreline,
         placement.path.as_ref(),
         landmarks,

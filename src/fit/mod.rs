@@ -34,6 +34,7 @@ pub mod checks;
 mod levels;
 pub mod measure;
 pub mod place;
+pub mod pose;
 pub mod products;
 pub mod size;
 pub mod solve;
@@ -126,6 +127,28 @@ pub struct Fitted {
     pub products: Option<Products>,
     /// The checks a finished fit must pass to be done, besides converging.
     pub checks: FitChecks,
+    /// Where the leg was fitted in its rig's rest pose: what carrying it into the pose did.
+    pub pose: Option<pose::PoseStats>,
+}
+
+/// The leg the stocking is fitted on: a rigged leg's rest pose where its skin poses it and no
+/// axis is given (a given axis is in the pose's coordinates), with the leg as posed and each
+/// rest vertex's matrix into the pose ([`pose`]); else `leg` itself.
+pub fn in_rest_pose(mut leg: Leg, place: &PlaceSettings) -> (Leg, Option<pose::Posed>) {
+    match (leg.rest.take(), &place.axis) {
+        (Some(rest), None) => {
+            let crate::leg::RestPose {
+                leg: rest_leg,
+                pose_from_rest,
+            } = *rest;
+            let posed = pose::Posed {
+                leg,
+                pose_from_rest,
+            };
+            (rest_leg, Some(posed))
+        }
+        _ => (leg, None),
+    }
 }
 
 /// Reads the leg file at `path`, refuses a fit too large for memory before the leg is decoded
@@ -162,6 +185,7 @@ pub fn fit(
     progress: &mut dyn Progress,
 ) -> Result<Fitted> {
     settings.validate().map_err(Error::Settings)?;
+    let (leg, posed) = in_rest_pose(leg, &settings.place);
     let placement = place(&leg, &settings.place, &settings.tube, times)?;
     let real_stitches = settings
         .products
@@ -176,7 +200,13 @@ pub fn fit(
         &settings.memory,
         real_stitches,
     )?;
-    let solved = solve(leg, placement, tube, &settings.solve, times, progress)?;
+    let mut solved = solve(leg, placement, tube, &settings.solve, times, progress)?;
+    let pose = match posed {
+        Some(posed) => Some(timed(times, Stage::Pose, || {
+            pose::carry(&mut solved, posed, &settings.solve)
+        })?),
+        None => None,
+    };
     let forces = &settings.solve.forces;
     let fields = match settings.measure {
         true => timed(times, Stage::LegAttributes, || {
@@ -200,5 +230,6 @@ pub fn fit(
         fields,
         products,
         checks,
+        pose,
     })
 }

@@ -76,11 +76,16 @@ pub fn place(
     let landmarks = match place.axis {
         Some(_) => None,
         None => Some(timed(times, Stage::FindLandmarks, || {
-            find_landmarks(&leg.positions, &leg.triangles, leg.up, place.side).map_err(|no| {
-                Error::Leg {
-                    path: leg.path.clone(),
-                    message: format!("cannot find the leg's landmarks: {}", advised(&no, leg)),
-                }
+            find_landmarks(
+                &leg.positions,
+                &leg.triangles,
+                leg.up,
+                place.side,
+                leg.rig.as_ref(),
+            )
+            .map_err(|no| Error::Leg {
+                path: leg.path.clone(),
+                message: format!("cannot find the leg's landmarks: {}", advised(&no, leg)),
             })
         })?),
     };

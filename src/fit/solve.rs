@@ -70,6 +70,10 @@ pub struct SolvedFit {
     pub offset: f64,
     /// The knit at rest on the leg, after the exact contact pass.
     pub knit: Knit,
+    /// Where the knit was fitted on a rigged leg's rest pose and carried into its pose
+    /// ([`super::pose`]): the knit as fitted, where the parts of the leg are told along the
+    /// rest pose's centreline and landmarks.
+    pub rest_knit: Option<Knit>,
     /// What the solver did.
     pub solver: SolverRun,
     /// Where the grid asked for had not settled when the solver ran out of steps, in words:
@@ -253,6 +257,7 @@ pub fn solve(
         real_count: tube.real_count,
         offset: settings.offset_m,
         knit,
+        rest_knit: None,
         solver: run,
         unsettled_at,
         counters,

@@ -40,10 +40,14 @@ use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::caps::open_cut_caps;
+use super::rig::{Rig, RigLeg};
 use super::slice::{piece_bit, Loop, Slicer};
 use super::Side;
 use crate::base::Stance;
 
+/// Furthest a rig's ankle joint may be from a leg's seed section, across up, for the rig to say
+/// which leg that is, metres.
+const RIG_ANKLE_OVER_SEED_M: f64 = 0.15;
 /// Height above the lowest point where the legs are first looked for, metres (above a foot's
 /// toes, at or below the ankle).
 pub const SEED_HEIGHT_M: f64 = 0.08;
@@ -147,6 +151,49 @@ pub struct Landmarks {
     /// Every section of the leg, from the ankle to the thigh top, one per [`SLICE_STEP_M`].
     #[serde(skip)]
     pub profile: Vec<Ring>,
+    /// The rig's joints of this leg, where the file's skin names them and they lie in it.
+    pub rig: Option<RigAgreement>,
+}
+
+/// The rig's leg that the dressed leg's sections go around, and how far its joints are from
+/// the sections found.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct RigAgreement {
+    /// The naming scheme of the rig ([`Rig::naming`]).
+    pub naming: &'static str,
+    /// The rig's side of this leg.
+    pub side: Side,
+    /// Its joints, world space.
+    pub joints: RigLeg,
+    /// Distance from the ankle section's centre to the ankle joint, metres.
+    pub ankle_m: f64,
+    /// Distance from the knee section's centre to the knee joint, metres.
+    pub knee_m: f64,
+}
+
+impl RigAgreement {
+    /// The rig's leg whose ankle and knee joints lie within the dressed leg's ankle and knee
+    /// sections (within their girth's radius of the centre, across up), nearest first; `None`
+    /// where neither of its legs does (a rig for another mesh, or in other units).
+    fn of(rig: &Rig, ankle: &Ring, knee: &Ring, up: &Vector3<f64>) -> Option<RigAgreement> {
+        let across = |r: &Ring, p: [f64; 3]| {
+            let d = Vector3::from(p) - Vector3::from(r.centre);
+            (d - up * d.dot(up)).norm()
+        };
+        let within = |r: &Ring, p: [f64; 3]| across(r, p) <= r.girth_m / std::f64::consts::TAU;
+        [Side::Left, Side::Right]
+            .into_iter()
+            .filter_map(|side| Some((side, *rig.leg(side)?)))
+            .filter(|(_, j)| within(ankle, j.ankle) && within(knee, j.knee))
+            .map(|(side, joints)| RigAgreement {
+                naming: rig.naming,
+                side,
+                joints,
+                ankle_m: (Point3::from(joints.ankle) - Point3::from(ankle.centre)).norm(),
+                knee_m: (Point3::from(joints.knee) - Point3::from(knee.centre)).norm(),
+            })
+            .min_by(|a, b| (a.ankle_m + a.knee_m).total_cmp(&(b.ankle_m + b.knee_m)))
+    }
 }
 
 impl Landmarks {
@@ -281,7 +328,7 @@ pub fn stance_of(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Stance {
     let Some(up) = anatomical_up(positions, triangles) else {
         return Stance::default();
     };
-    find_landmarks(positions, triangles, up, Side::Left)
+    find_landmarks(positions, triangles, up, Side::Left, None)
         .map_or_else(|_| Stance::pictured(up, Vector3::z()), |l| l.stance())
 }
 
@@ -324,6 +371,7 @@ pub fn find_landmarks(
     triangles: &[[u32; 3]],
     up: Vector3<f64>,
     side: Side,
+    rig: Option<&Rig>,
 ) -> Result<Landmarks, NoLandmarks> {
     // The sections follow the skin: a cap over the cut would make the leg seem to narrow to a
     // point at its top.
@@ -400,13 +448,26 @@ pub fn find_landmarks(
     let left = up.cross(&forward);
 
     let leftness = |r: &Ring| Vector3::from(r.centre).dot(&left);
-    let chosen =
-        match side {
+    let across = |r: &Ring, p: [f64; 3]| {
+        let d = Vector3::from(r.centre) - Vector3::from(p);
+        (d - up * d.dot(&up)).norm()
+    };
+    // The rig's leg on `side`, where its ankle stands over a seed: its names say which leg is
+    // the left, whatever way the feet point.
+    let by_rig = rig.and_then(|r| r.leg(side)).and_then(|leg| {
+        (0..seeds.len())
+            .map(|i| (i, across(&seeds[i], leg.ankle)))
+            .filter(|&(_, d)| d <= RIG_ANKLE_OVER_SEED_M)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(i, _)| i)
+    });
+    let chosen = by_rig
+        .or_else(|| match side {
             Side::Left => (0..seeds.len())
                 .max_by(|&a, &b| leftness(&seeds[a]).total_cmp(&leftness(&seeds[b]))),
             Side::Right => (0..seeds.len())
                 .min_by(|&a, &b| leftness(&seeds[a]).total_cmp(&leftness(&seeds[b]))),
-        }
+        })
         .unwrap_or(0);
     // Up from the seeds: the chosen leg and its nearest neighbour, until they join or end.
     let other = (0..seeds.len()).filter(|&i| i != chosen).min_by(|&a, &b| {
@@ -489,6 +550,7 @@ pub fn find_landmarks(
     let knee = narrowest(ankle.s + 0.35 * span, ankle.s + 0.7 * span)
         .unwrap_or(profile[profile.len() / 2]);
     profile.retain(|r| r.s >= ankle.s);
+    let rig = rig.and_then(|r| RigAgreement::of(r, &ankle, &knee, &up));
     Ok(Landmarks {
         up: up.into(),
         facing: facing.map(Into::into),
@@ -501,6 +563,7 @@ pub fn find_landmarks(
         thigh_top: top,
         thigh_top_kind,
         profile,
+        rig,
     })
 }
 
@@ -803,7 +866,8 @@ mod tests {
             Point3::new(0.1, 0.0, 0.0),
             Point3::new(0.0, 50.0, 0.1),
         ];
-        let err = find_landmarks(&positions, &[[0, 1, 2]], Vector3::y(), Side::Left).unwrap_err();
+        let err =
+            find_landmarks(&positions, &[[0, 1, 2]], Vector3::y(), Side::Left, None).unwrap_err();
         assert!(err.seen.contains("spans 50.0 m"), "{err}");
     }
 
@@ -814,7 +878,7 @@ mod tests {
         // left leg, and lower.
         let (positions, triangles) = legs_with_feet(0.0, -0.03);
         for (side, x, y) in [(Side::Left, 0.15, 0.0), (Side::Right, -0.15, -0.03)] {
-            let l = find_landmarks(&positions, &triangles, Vector3::y(), side).unwrap();
+            let l = find_landmarks(&positions, &triangles, Vector3::y(), side, None).unwrap();
             assert_eq!(l.legs_found, 2);
             assert!(l.foot.is_some(), "{side:?}");
             assert!((l.ankle.centre[0] - x).abs() < 1e-9, "{side:?}: {l:?}");
@@ -832,7 +896,7 @@ mod tests {
             let turn =
                 nalgebra::Rotation3::from_axis_angle(&Vector3::y_axis(), f64::to_radians(degrees));
             let turned: Vec<Point3<f64>> = positions.iter().map(|p| turn * p).collect();
-            let l = find_landmarks(&turned, &triangles, Vector3::y(), Side::Left).unwrap();
+            let l = find_landmarks(&turned, &triangles, Vector3::y(), Side::Left, None).unwrap();
             let forward = turn * Vector3::z();
             let facing = Vector3::from(l.facing.expect("both feet point forward"));
             // Within the boxes' toe tips' 11° (a corner of each box is its tip).
@@ -879,12 +943,12 @@ mod tests {
         // Both standing: they disagree by 60°, so the feet do not say where it faces, and it
         // is pictured along the file's axes.
         let (positions, triangles) = legs_with_feet(60.0, 0.0);
-        let l = find_landmarks(&positions, &triangles, Vector3::y(), Side::Left).unwrap();
+        let l = find_landmarks(&positions, &triangles, Vector3::y(), Side::Left, None).unwrap();
         assert_eq!(l.facing, None, "{l:?}");
         assert_eq!(l.stance(), Stance::default());
         // The turned foot lifted 5 cm: the standing one says where the character faces.
         let (positions, triangles) = legs_with_feet(60.0, 0.05);
-        let l = find_landmarks(&positions, &triangles, Vector3::y(), Side::Left).unwrap();
+        let l = find_landmarks(&positions, &triangles, Vector3::y(), Side::Left, None).unwrap();
         let facing = Vector3::from(l.facing.expect("one foot stands"));
         assert!(facing.dot(&Vector3::z()) > 0.97, "{facing}");
         assert!(

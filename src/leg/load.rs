@@ -10,7 +10,7 @@
 //! The mesh is checked: it must have triangles, finite coordinates, no compressed geometry, and
 //! a plausible height.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 
 use nalgebra::{Matrix4, Point3, Vector3};
@@ -19,6 +19,7 @@ use super::clean::{clean_mesh, Cleaned};
 use super::landmarks::anatomical_up;
 use super::orient::orient_outward;
 use super::ply::{self, PlyHeader};
+use super::rig::Rig;
 use crate::base::Material;
 use crate::error::{Error, Result};
 use crate::leg::{Units, UpAxis, UpChoice};
@@ -51,6 +52,12 @@ pub struct Leg {
     /// over (a glTF material without a base-colour texture: the leg is written without texture
     /// coordinates); `None` for a PLY file or an untextured-material-less glTF.
     pub material: Option<Material>,
+    /// The leg joints the file's skins name, world space; `None` where it has no skin, or no
+    /// skin naming a leg's hip, knee and ankle.
+    pub rig: Option<Rig>,
+    /// Where the file's skin poses the leg away from its rest pose: the leg at rest, where the
+    /// stocking is fitted before the skin carries it into the pose ([`crate::fit::pose`]).
+    pub rest: Option<Box<RestPose>>,
 }
 
 /// Shortest and tallest leg accepted, metres: outside this range the file is almost certainly
@@ -87,6 +94,8 @@ impl Leg {
             up: Vector3::y(),
             cleaned,
             material: None,
+            rig: None,
+            rest: None,
         }
     }
 
@@ -343,7 +352,8 @@ fn declared_gltf_triangles(gltf: &gltf::Gltf) -> usize {
 }
 
 /// Decodes the triangles of a leg file into world space, read in `units` with `choice` as its
-/// up axis, cleans and checks them.
+/// up axis, cleans and checks them. A skinned mesh is read as its joints pose it, and where
+/// that is not its rest pose, the rest pose is kept beside it ([`Leg::rest`]).
 pub fn decode_leg(file: LegFile, units: Units, choice: UpChoice) -> Result<Leg> {
     let LegFile { path, document } = file;
     let mesh = match document {
@@ -354,20 +364,121 @@ pub fn decode_leg(file: LegFile, units: Units, choice: UpChoice) -> Result<Leg> 
                 positions_file: mesh.positions,
                 triangles: mesh.triangles,
                 material: None,
+                skin: None,
             }
         }
     };
+    let mut leg = leg_in_world(
+        path.clone(),
+        &mesh.positions_file,
+        &mesh.triangles,
+        units,
+        choice,
+    )?;
+    leg.material = mesh.material;
+    check_height(&leg)?;
+    let Some(skin) = mesh.skin else {
+        return Ok(leg);
+    };
+    let joints_in = |leg: &Leg, rest: bool| -> Vec<(String, Point3<f64>)> {
+        let joints = skin.joints.iter();
+        joints
+            .map(|j| {
+                (
+                    j.name.clone(),
+                    leg.world_from_file(if rest { &j.rest } else { &j.posed }),
+                )
+            })
+            .collect()
+    };
+    leg.rig = Rig::from_joints(&joints_in(&leg, false));
+    let moved = (mesh.positions_file.iter().zip(&skin.rest))
+        .map(|(posed, rest)| (posed - rest).norm() * units.metres())
+        .fold(0.0, f64::max);
+    if moved <= POSED_M {
+        return Ok(leg);
+    }
+    // A rest pose the leg cannot be read in (a rig bound in other units than its pose shows)
+    // is left: the leg is fitted as shown.
+    let Ok(mut rest) = leg_in_world(path, &skin.rest, &mesh.triangles, units, choice) else {
+        return Ok(leg);
+    };
+    if check_height(&rest).is_err() {
+        return Ok(leg);
+    }
+    rest.rig = Rig::from_joints(&joints_in(&rest, true));
+    let pose_from_rest = per_vertex(&rest, &skin.rest, &skin.pose_from_rest);
+    leg.rest = Some(Box::new(RestPose {
+        leg: rest,
+        pose_from_rest,
+    }));
+    Ok(leg)
+}
+
+/// A skinned leg whose vertices move further than this from the rest pose to the pose shown is
+/// posed, metres.
+pub const POSED_M: f64 = 0.001;
+
+/// A rigged leg's rest pose ([`Leg::rest`]): the mesh as stored, before its skin moves it.
+#[derive(Clone, Debug)]
+pub struct RestPose {
+    /// The leg in its rest pose: cleaned and turned as the posed leg is, with its own up.
+    pub leg: Leg,
+    /// For each of its vertices, the matrix from the rest pose to the pose shown, in the
+    /// file's coordinates and units (its skinning matrices blended by its weights).
+    pub pose_from_rest: Vec<Matrix4<f64>>,
+}
+
+/// Each vertex of `leg`'s matrix among `matrices`, one per file vertex `file_positions`: found by
+/// the vertex's place (cleaning keeps the file's coordinates), or for a vertex cleaning added
+/// (the centre of a filled hole), the nearest file vertex's.
+fn per_vertex(
+    leg: &Leg,
+    file_positions: &[Point3<f64>],
+    matrices: &[Matrix4<f64>],
+) -> Vec<Matrix4<f64>> {
+    let key = |p: &Point3<f64>| -> [u64; 3] { p.coords.map(f64::to_bits).into() };
+    let world: Vec<Point3<f64>> = file_positions
+        .iter()
+        .map(|p| leg.world_from_file(p))
+        .collect();
+    let mut index: HashMap<[u64; 3], usize> = HashMap::with_capacity(world.len());
+    for (i, p) in world.iter().enumerate() {
+        index.entry(key(p)).or_insert(i);
+    }
+    leg.positions
+        .iter()
+        .map(|p| {
+            let i = index.get(&key(p)).copied().unwrap_or_else(|| {
+                (0..world.len())
+                    .min_by(|&a, &b| (world[a] - p).norm().total_cmp(&(world[b] - p).norm()))
+                    .unwrap_or(0)
+            });
+            matrices.get(i).copied().unwrap_or_else(Matrix4::identity)
+        })
+        .collect()
+}
+
+/// The leg made of `positions_file` and `triangles`: scaled to metres, cleaned, turned so that
+/// its up axis (given, or found from the anatomy) is +Y, and wound outwards. No material, rig
+/// or rest pose.
+fn leg_in_world(
+    path: PathBuf,
+    positions_file: &[Point3<f64>],
+    triangles: &[[u32; 3]],
+    units: Units,
+    choice: UpChoice,
+) -> Result<Leg> {
     let fail = |message: String| Error::Leg {
         path: path.clone(),
         message,
     };
-    let scaled: Vec<Point3<f64>> = mesh
-        .positions_file
+    let scaled: Vec<Point3<f64>> = positions_file
         .iter()
         .map(|p| Point3::from(p.coords * units.metres()))
         .collect();
-    check_coordinates(&scaled, &mesh.triangles, units).map_err(fail)?;
-    let (scaled, mut triangles, cleaned) = clean_mesh(&scaled, &mesh.triangles);
+    check_coordinates(&scaled, triangles, units).map_err(fail)?;
+    let (scaled, mut triangles, cleaned) = clean_mesh(&scaled, triangles);
     if triangles.is_empty() {
         return Err(fail("has no triangles with area".into()));
     }
@@ -387,7 +498,7 @@ pub fn decode_leg(file: LegFile, units: Units, choice: UpChoice) -> Result<Leg> 
     };
     let positions: Vec<Point3<f64>> = scaled.iter().map(|p| turn(up_axis, p)).collect();
     let reoriented_triangles = orient_outward(&positions, &mut triangles);
-    let leg = Leg {
+    Ok(Leg {
         path,
         positions,
         triangles,
@@ -397,10 +508,10 @@ pub fn decode_leg(file: LegFile, units: Units, choice: UpChoice) -> Result<Leg> 
         up_axis_found: choice == UpChoice::Auto,
         up,
         cleaned,
-        material: mesh.material,
-    };
-    check_height(&leg)?;
-    Ok(leg)
+        material: None,
+        rig: None,
+        rest: None,
+    })
 }
 
 /// A leg file's triangles as the file gives them, before the conversion to world space.
@@ -411,6 +522,18 @@ struct FileMesh {
     triangles: Vec<[u32; 3]>,
     /// See [`Leg::material`].
     material: Option<Material>,
+    /// Where a mesh is skinned: its rest pose and joints.
+    skin: Option<FileSkin>,
+}
+
+/// A skinned file's rest pose and joints (file coordinates and units).
+struct FileSkin {
+    /// Each vertex at rest (as stored, off a skin: as placed).
+    rest: Vec<Point3<f64>>,
+    /// Each vertex's matrix from rest to the pose shown.
+    pose_from_rest: Vec<Matrix4<f64>>,
+    /// The skins' joints.
+    joints: Vec<Joint>,
 }
 
 /// The triangles under `gltf`'s default scene, node transforms applied.
@@ -446,6 +569,11 @@ fn decode_gltf(path: &Path, gltf: gltf::Gltf) -> Result<FileMesh> {
         positions_file: mesh.positions,
         triangles: mesh.triangles,
         material,
+        skin: mesh.skinned.then(|| FileSkin {
+            rest: mesh.rest,
+            pose_from_rest: mesh.pose_from_rest,
+            joints: mesh.joints.into_values().collect(),
+        }),
     })
 }
 
@@ -585,54 +713,330 @@ struct MeshCollector {
     other_primitives: usize,
     /// Triangles per glTF material index.
     triangles_by_material: BTreeMap<usize, usize>,
+    /// Every skin's joints by node index: name, and place in the file's coordinates as posed
+    /// and in the rest pose.
+    joints: BTreeMap<usize, Joint>,
+    /// Each vertex in the rest pose (a skinned mesh's stored position; any other's as placed),
+    /// file coordinates.
+    rest: Vec<Point3<f64>>,
+    /// Each vertex's matrix from the rest pose to the pose shown (identity off a skin).
+    pose_from_rest: Vec<Matrix4<f64>>,
+    /// True when a skinned mesh was read.
+    skinned: bool,
+}
+
+/// A skin's joint: its name, and its place in the file's coordinates as posed and at rest (its
+/// inverse bind matrix's inverse).
+#[derive(Clone, Debug)]
+struct Joint {
+    name: String,
+    posed: Point3<f64>,
+    rest: Point3<f64>,
+}
+
+/// How a mesh's vertices are placed in the file: by its node's transform, or posed by a skin.
+enum Placed {
+    Rigid(Matrix4<f64>),
+    Skinned(Skinning),
+}
+
+/// A skin as posed: each joint's matrix from the bind pose to the file's coordinates, as glTF
+/// defines it (the joint node's transform in the file times its inverse bind matrix). A
+/// skinned mesh's own node transform is not applied (glTF 2.0 §3.7.3.1).
+struct Skinning {
+    matrices: Vec<Matrix4<f64>>,
+    /// The bind pose (the mesh as stored) placed in the file: the transform of the node above
+    /// the skeleton's root joint.
+    file_from_bind: Matrix4<f64>,
+    bind_from_file: Matrix4<f64>,
+}
+
+/// Every node's transform in the file's coordinates and its parent, by node index (`None` for a
+/// node outside the scene, or a root).
+struct PlacedNodes {
+    file_from_node: Vec<Option<Matrix4<f64>>>,
+    parent: Vec<Option<usize>>,
+}
+
+impl Placed {
+    /// The transform of each of a primitive's `count` vertices: linear blend skinning (the
+    /// vertex's weights, sets 0 and 1, over its joints' matrices, weights scaled to sum to 1),
+    /// or the node's transform for every vertex.
+    fn vertex_transforms<'a, 's, F>(
+        &self,
+        prim: &gltf::Primitive,
+        reader: &gltf::mesh::Reader<'a, 's, F>,
+        count: usize,
+    ) -> std::result::Result<Vec<Matrix4<f64>>, String>
+    where
+        F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
+    {
+        let skinning = match self {
+            Placed::Rigid(m) => return Ok(vec![*m; count]),
+            Placed::Skinned(skinning) => skinning,
+        };
+        let mut sums = vec![Matrix4::zeros(); count];
+        let mut weight_sums = vec![0.0f64; count];
+        let mut sets = 0;
+        for set in 0..2 {
+            check_skin_accessor_types(prim, set)?;
+            let (Some(joints), Some(weights)) = (reader.read_joints(set), reader.read_weights(set))
+            else {
+                continue;
+            };
+            sets += 1;
+            let joints: Vec<[u16; 4]> = joints.into_u16().collect();
+            let weights: Vec<[f32; 4]> = weights.into_f32().collect();
+            if joints.len() != count || weights.len() != count {
+                return Err(format!(
+                    "JOINTS_{set} and WEIGHTS_{set} have {} and {} entries for {count} vertices",
+                    joints.len(),
+                    weights.len()
+                ));
+            }
+            for (v, (js, ws)) in joints.iter().zip(&weights).enumerate() {
+                for (&j, &w) in js.iter().zip(ws) {
+                    if !(w.is_finite() && w >= 0.0) {
+                        return Err(format!("vertex {v} has the joint weight {w}"));
+                    }
+                    if w == 0.0 {
+                        continue;
+                    }
+                    let matrix = skinning.matrices.get(j as usize).ok_or_else(|| {
+                        format!(
+                            "vertex {v} names joint {j} of a skin with {}",
+                            skinning.matrices.len()
+                        )
+                    })?;
+                    sums[v] += matrix * f64::from(w);
+                    weight_sums[v] += f64::from(w);
+                }
+            }
+        }
+        if sets == 0 {
+            return Err("is skinned but has no JOINTS_0 and WEIGHTS_0".into());
+        }
+        if let Some(v) = weight_sums.iter().position(|&w| w <= 0.0) {
+            return Err(format!(
+                "vertex {v} of a skinned mesh has no joint weight (viewers draw it at the origin)"
+            ));
+        }
+        Ok(sums
+            .into_iter()
+            .zip(weight_sums)
+            .map(|(m, w)| m / w)
+            .collect())
+    }
+}
+
+/// The nodes of `scene`, depth first in document order, each with its transform in the file's
+/// coordinates. Walked with a stack of its own, not recursion, and each node taken once: a
+/// hierarchy with a cycle (which glTF forbids, and a damaged file can have) is refused instead
+/// of overflowing the stack.
+fn nodes_in_scene<'a>(
+    scene: &gltf::Scene<'a>,
+    node_count: usize,
+) -> std::result::Result<Vec<SceneNode<'a>>, String> {
+    let mut seen = vec![false; node_count];
+    let mut nodes = Vec::new();
+    let mut stack: Vec<(gltf::Node, Matrix4<f64>, Option<usize>)> = scene
+        .nodes()
+        .map(|root| (root, Matrix4::identity(), None))
+        .collect();
+    stack.reverse();
+    while let Some((node, file_from_parent, parent)) = stack.pop() {
+        if std::mem::replace(&mut seen[node.index()], true) {
+            return Err(format!(
+                "node {} is reached twice: its node hierarchy has a cycle or a node with two \
+                 parents, which glTF does not allow",
+                node.index()
+            ));
+        }
+        let local = Matrix4::from(node.transform().matrix()).cast::<f64>();
+        let file_from_node = file_from_parent * local;
+        let first_child = stack.len();
+        let index = node.index();
+        stack.extend(
+            node.children()
+                .map(|child| (child, file_from_node, Some(index))),
+        );
+        stack[first_child..].reverse();
+        nodes.push(SceneNode {
+            node,
+            file_from_node,
+            parent,
+        });
+    }
+    Ok(nodes)
+}
+
+/// A node of the scene, with its transform in the file's coordinates and its parent's index.
+struct SceneNode<'a> {
+    node: gltf::Node<'a>,
+    file_from_node: Matrix4<f64>,
+    parent: Option<usize>,
+}
+
+/// Refuses joint indices that are not unsigned 8- or 16-bit VEC4 and weights that are not
+/// float or normalized unsigned VEC4, as glTF requires: the reader panics on other types.
+fn check_skin_accessor_types(prim: &gltf::Primitive, set: u32) -> std::result::Result<(), String> {
+    use gltf::accessor::{DataType, Dimensions};
+    if let Some(a) = prim.get(&gltf::Semantic::Joints(set)) {
+        if !matches!(a.data_type(), DataType::U8 | DataType::U16)
+            || a.dimensions() != Dimensions::Vec4
+        {
+            return Err(format!(
+                "its JOINTS_{set} (accessor {}) is {:?} {:?}, not unsigned byte or short VEC4",
+                a.index(),
+                a.data_type(),
+                a.dimensions()
+            ));
+        }
+    }
+    if let Some(a) = prim.get(&gltf::Semantic::Weights(set)) {
+        let allowed = match a.data_type() {
+            DataType::F32 => true,
+            DataType::U8 | DataType::U16 => a.normalized(),
+            _ => false,
+        };
+        if !allowed || a.dimensions() != Dimensions::Vec4 {
+            return Err(format!(
+                "its WEIGHTS_{set} (accessor {}) is {:?} {:?}, not float or normalized VEC4",
+                a.index(),
+                a.data_type(),
+                a.dimensions()
+            ));
+        }
+    }
+    Ok(())
 }
 
 impl MeshCollector {
     /// Every node of `scene`, depth first in document order, with its mesh's triangles in the
-    /// file's coordinates. Walked with a stack of its own, not recursion, and each node taken
-    /// once: a hierarchy with a cycle (which glTF forbids, and a damaged file can have) is
-    /// refused instead of overflowing the stack.
+    /// file's coordinates: a plain mesh placed by its node's transform, a skinned one posed by
+    /// its joints ([`Skinning`]), as viewers show it.
     fn scene(
         &mut self,
         scene: &gltf::Scene,
         node_count: usize,
         buffers: &[gltf::buffer::Data],
     ) -> std::result::Result<(), String> {
-        let mut seen = vec![false; node_count];
-        let mut stack: Vec<(gltf::Node, Matrix4<f64>)> = scene
-            .nodes()
-            .map(|root| (root, Matrix4::identity()))
-            .collect();
-        stack.reverse();
-        while let Some((node, file_from_parent)) = stack.pop() {
-            if std::mem::replace(&mut seen[node.index()], true) {
-                return Err(format!(
-                    "node {} is reached twice: its node hierarchy has a cycle or a node with two \
-                     parents, which glTF does not allow",
-                    node.index()
-                ));
+        let nodes = nodes_in_scene(scene, node_count)?;
+        let mut placed_nodes = PlacedNodes {
+            file_from_node: vec![None; node_count],
+            parent: vec![None; node_count],
+        };
+        for n in &nodes {
+            placed_nodes.file_from_node[n.node.index()] = Some(n.file_from_node);
+            placed_nodes.parent[n.node.index()] = n.parent;
+        }
+        for SceneNode {
+            node,
+            file_from_node,
+            ..
+        } in &nodes
+        {
+            let Some(mesh) = node.mesh() else { continue };
+            self.skinned |= node.skin().is_some();
+            let placed = match node.skin() {
+                None => Placed::Rigid(*file_from_node),
+                Some(skin) => Placed::Skinned(
+                    self.skinning(&skin, &placed_nodes, buffers)
+                        .map_err(|e| format!("skin {}: {e}", skin.index()))?,
+                ),
+            };
+            for prim in mesh.primitives() {
+                self.primitive(&prim, &placed, buffers).map_err(|e| {
+                    format!("mesh {} primitive {}: {e}", mesh.index(), prim.index())
+                })?;
             }
-            let local = Matrix4::from(node.transform().matrix()).cast::<f64>();
-            let file_from_node = file_from_parent * local;
-            if let Some(mesh) = node.mesh() {
-                for prim in mesh.primitives() {
-                    self.primitive(&prim, &file_from_node, buffers)
-                        .map_err(|e| {
-                            format!("mesh {} primitive {}: {e}", mesh.index(), prim.index())
-                        })?;
-                }
-            }
-            let first_child = stack.len();
-            stack.extend(node.children().map(|child| (child, file_from_node)));
-            stack[first_child..].reverse();
         }
         Ok(())
+    }
+
+    /// Each joint's skinning matrix (its node's transform in the file times its inverse bind
+    /// matrix), and the joints' names and places kept for [`super::rig`].
+    fn skinning(
+        &mut self,
+        skin: &gltf::Skin,
+        nodes: &PlacedNodes,
+        buffers: &[gltf::buffer::Data],
+    ) -> std::result::Result<Skinning, String> {
+        let joints: Vec<gltf::Node> = skin.joints().collect();
+        let file_from_nodes = &nodes.file_from_node;
+        // The rest pose in the file is the bind pose placed as the skeleton is: by the node
+        // above its root joint (an armature turned to Z up, or scaled to centimetres, carries the
+        // bind pose with it), where that node is no joint.
+        let is_joint = |i: usize| joints.iter().any(|j| j.index() == i);
+        let file_from_bind = joints
+            .iter()
+            .find_map(|j| nodes.parent[j.index()].filter(|&p| !is_joint(p)))
+            .and_then(|p| file_from_nodes[p])
+            .unwrap_or_else(Matrix4::identity);
+        let bind_from_file = file_from_bind
+            .try_inverse()
+            .ok_or("the node above its skeleton has a transform that cannot be undone")?;
+        let inverse_binds: Vec<Matrix4<f64>> = match skin.inverse_bind_matrices() {
+            None => vec![Matrix4::identity(); joints.len()],
+            Some(a) => {
+                use gltf::accessor::{DataType, Dimensions};
+                if (a.data_type(), a.dimensions()) != (DataType::F32, Dimensions::Mat4) {
+                    return Err(format!(
+                        "its inverse bind matrices (accessor {}) are {:?} {:?}, not float MAT4",
+                        a.index(),
+                        a.data_type(),
+                        a.dimensions()
+                    ));
+                }
+                let reader = skin.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+                reader
+                    .read_inverse_bind_matrices()
+                    .ok_or("its inverse bind matrices cannot be read")?
+                    .map(|m| Matrix4::from(m).cast::<f64>())
+                    .collect()
+            }
+        };
+        if inverse_binds.len() < joints.len() {
+            return Err(format!(
+                "it has {} joints but {} inverse bind matrices",
+                joints.len(),
+                inverse_binds.len()
+            ));
+        }
+        let mut matrices = Vec::with_capacity(joints.len());
+        for (joint, inverse_bind) in joints.iter().zip(&inverse_binds) {
+            let file_from_joint = file_from_nodes[joint.index()]
+                .ok_or_else(|| format!("its joint node {} is not in the scene", joint.index()))?;
+            let matrix = file_from_joint * inverse_bind;
+            if !matrix.iter().all(|v| v.is_finite()) {
+                return Err(format!(
+                    "joint node {} has a non-finite transform or inverse bind matrix",
+                    joint.index()
+                ));
+            }
+            matrices.push(matrix);
+            let name = joint
+                .name()
+                .map_or_else(|| format!("node {}", joint.index()), str::to_string);
+            let posed = file_from_joint.transform_point(&Point3::origin());
+            let rest = inverse_bind.try_inverse().map_or(posed, |bind| {
+                (file_from_bind * bind).transform_point(&Point3::origin())
+            });
+            self.joints
+                .entry(joint.index())
+                .or_insert(Joint { name, posed, rest });
+        }
+        Ok(Skinning {
+            matrices,
+            file_from_bind,
+            bind_from_file,
+        })
     }
 
     fn primitive(
         &mut self,
         prim: &gltf::Primitive,
-        file_from_node: &Matrix4<f64>,
+        placed: &Placed,
         buffers: &[gltf::buffer::Data],
     ) -> std::result::Result<(), String> {
         use gltf::mesh::Mode;
@@ -663,20 +1067,36 @@ impl MeshCollector {
         if let Some(bad) = indices.iter().find(|&&i| i >= n) {
             return Err(format!("index {bad} is past its {n} vertices"));
         }
-        // A mirroring transform (negative determinant) flips the winding; undo it.
-        let flip = file_from_node.fixed_view::<3, 3>(0, 0).determinant() < 0.0;
+        let file_from_vertex = placed.vertex_transforms(prim, &reader, positions.len())?;
+        // A mirroring transform (negative determinant) flips the winding; undo it. A skinned
+        // mesh's joints are rotations, each vertex's blend of them with it.
+        let flip = match placed {
+            Placed::Rigid(m) => m.fixed_view::<3, 3>(0, 0).determinant() < 0.0,
+            Placed::Skinned(_) => false,
+        };
         // Fits: checked with `n` above.
         let first = self.positions.len() as u32;
-        for p in &positions {
+        for (p, file_from_vertex) in positions.iter().zip(file_from_vertex) {
             if !p.iter().all(|c| c.is_finite()) {
                 return Err(format!("has a non-finite vertex coordinate {p:?}"));
             }
             let p = Point3::new(p[0] as f64, p[1] as f64, p[2] as f64);
-            let q = file_from_node.transform_point(&p);
+            let q = file_from_vertex.transform_point(&p);
             if !q.iter().all(|c| c.is_finite()) {
                 return Err("its node transform gives non-finite coordinates".into());
             }
             self.positions.push(q);
+            match placed {
+                Placed::Rigid(_) => {
+                    self.rest.push(q);
+                    self.pose_from_rest.push(Matrix4::identity());
+                }
+                Placed::Skinned(skinning) => {
+                    self.rest.push(skinning.file_from_bind.transform_point(&p));
+                    self.pose_from_rest
+                        .push(file_from_vertex * skinning.bind_from_file);
+                }
+            }
         }
         let before = self.triangles.len();
         let mut push = |a: u32, b: u32, c: u32| {

@@ -64,7 +64,8 @@ pub fn run_fit(
         residual: solved.solver.residual(),
         max_move: solved.solver.max_move(),
         force_step: solved.solver.force_step(),
-        converged: solved.solver.converged(),
+        // A posed leg's stocking is done when it settled in the pose too.
+        converged: solved.solver.converged() && fitted.pose.as_ref().is_none_or(|p| p.converged),
         max_penetration_m: Some(solved.max_penetration_m),
         leg_triangles: Some(solved.leg.triangles.len()),
     };
@@ -172,6 +173,7 @@ fn details(
             counters: fit.counters,
         },
         penetration_fix: products.and_then(|p| p.penetration_fix),
+        pose: fitted.pose.clone(),
         preview,
         memory: MemoryDetails {
             check: memory,

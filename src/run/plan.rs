@@ -18,6 +18,7 @@ use crate::plan::{LeftOut, Plan, PlannedStage};
 use crate::report::{stocking_extent, LandmarkDetails, LandmarkRing};
 use crate::scene::{Effect, LoadedScene};
 use crate::sim::ForceTerms;
+use crate::stage::Stage;
 
 /// What `knitfit plan` shows.
 #[derive(Clone, Debug)]
@@ -65,6 +66,8 @@ pub struct Placed {
     pub axis_file: [[f64; 3]; 2],
     /// For a stocking to the toe, the length of its path along the leg and foot, metres.
     pub to_the_toe_m: Option<f64>,
+    /// True where the leg is placed in its rig's rest pose ([`fit::in_rest_pose`]).
+    pub in_rest_pose: bool,
 }
 
 /// The plan of `knitfit fit` for `loaded`, writing into `out_dir`.
@@ -73,7 +76,7 @@ pub struct Placed {
 /// unless the fit would be refused for memory first, the fit's refusals of the decoded leg as
 /// well (implausible height, no landmarks, an axis the leg does not go around).
 pub fn plan_fit(loaded: &LoadedScene, out_dir: &Path) -> Result<PlanOutcome> {
-    let plan = Plan::fit(&loaded.scene);
+    let mut plan = Plan::fit(&loaded.scene);
     let settings = plan.fit_settings(loaded);
     let leg_path = loaded.leg_path();
     let file = read_leg_file(&leg_path)?;
@@ -87,10 +90,16 @@ pub fn plan_fit(loaded: &LoadedScene, out_dir: &Path) -> Result<PlanOutcome> {
         Placement::NotDecoded
     } else {
         let leg = decode_leg(file, settings.load.units, settings.load.up)?;
+        // A posed rigged leg is placed in its rest pose, as the fit places it.
+        let (leg, posed) = fit::in_rest_pose(leg, &settings.place);
         // The fit's own stage, untimed.
         let placed = fit::place(&leg, &settings.place, tube, &mut ())?;
         let mut shown = Placed::new(&leg, placed.landmarks.as_ref(), placed.axis);
         shown.to_the_toe_m = placed.path.as_ref().map(|p| p.length());
+        shown.in_rest_pose = posed.is_some();
+        if posed.is_none() {
+            plan.without(Stage::Pose);
+        }
         Placement::Placed(Box::new(shown))
     };
     Ok(PlanOutcome {
@@ -115,6 +124,7 @@ impl Placed {
             axis_file: [file(axis.bottom()), file(axis.top())],
             axis,
             to_the_toe_m: None,
+            in_rest_pose: false,
         }
     }
 }
@@ -141,7 +151,8 @@ fn files(plan: &Plan, out_dir: &Path) -> Vec<PathBuf> {
 
 impl PlanOutcome {
     /// The plan as JSON, for scripts: `command`, `scene`, `leg` (`file`, `declared_triangles`,
-    /// and as decoded `up_axis` and `up_axis_found`; null for a patch), `effects`, `forces`,
+    /// and as decoded `up_axis`, `up_axis_found` and `in_rest_pose`, true where a rigged leg
+    /// is placed in its rest pose; null for a patch), `effects`, `forces`,
     /// `stages` and `left_out` (`name`, `why`), `files`, `memory` (`estimate` by part with
     /// `total_bytes`, `limit`, `allow_large`, `fits`; null for a patch), `landmarks` (as
     /// `details.leg.landmarks` of `report.json`; null where the axis is given), `axis` (as
@@ -162,6 +173,7 @@ impl PlanOutcome {
                 declared_triangles: *triangles,
                 up_axis: placed.map(|p| p.up_axis),
                 up_axis_found: placed.map(|p| p.up_axis_found),
+                in_rest_pose: placed.map(|p| p.in_rest_pose),
             }),
             effects: &p.effects,
             forces: &p.forces,
@@ -270,6 +282,14 @@ impl Placement {
             ),
         );
         let a = &placed.axis;
+        if placed.in_rest_pose {
+            out += &row(
+                "pose",
+                "the file's skin poses the leg: the landmarks and axis below are its rest pose's, \
+                 where the stocking is fitted before the skin carries it into the pose"
+                    .into(),
+            );
+        }
         if let Some(l) = &placed.landmarks {
             out += &landmark_rows(l, row);
         } else {
@@ -333,6 +353,21 @@ fn landmark_rows(l: &LandmarkDetails, row: impl Fn(&str, String) -> String) -> S
         ThighTopKind::Cut => "the cut",
     };
     out += &row("thigh top", format!("{kind}, {}", ring(&l.thigh_top)));
+    if let Some(r) = &l.rig {
+        out += &row(
+            "rig",
+            format!(
+                "{} joints of the {} leg: knee {}, ankle {}, {:.3} m and {:.3} m from the \
+                 sections found",
+                r.naming,
+                r.side.name(),
+                m(r.knee.m),
+                m(r.ankle.m),
+                r.knee_from_section_m,
+                r.ankle_from_section_m
+            ),
+        );
+    }
     out
 }
 
@@ -374,6 +409,7 @@ struct LegJson {
     declared_triangles: usize,
     up_axis: Option<UpAxis>,
     up_axis_found: Option<bool>,
+    in_rest_pose: Option<bool>,
 }
 
 #[derive(Serialize)]

@@ -62,6 +62,7 @@ impl StockingOnLeg<'_> {
                 &self.leg.triangles,
                 self.leg.up,
                 self.side,
+                self.leg.rig.as_ref(),
             )
             .ok()
             .map(Cow::Owned),

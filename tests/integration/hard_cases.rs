@@ -316,9 +316,14 @@ const WIDE_STOCKING_M: f64 = 0.4;
 /// and the stocking still rests on the calf.
 fn wide_stocking_m(leg: &Leg) -> f64 {
     use knitfit::knit::{tube::tube_axis, TubeBottom, TubeTop};
-    let landmarks =
-        knitfit::leg::find_landmarks(&leg.positions, &leg.triangles, leg.up, Default::default())
-            .unwrap();
+    let landmarks = knitfit::leg::find_landmarks(
+        &leg.positions,
+        &leg.triangles,
+        leg.up,
+        Default::default(),
+        None,
+    )
+    .unwrap();
     let axis = tube_axis(&landmarks, TubeBottom::Ankle, TubeTop::default()).unwrap();
     let top = Vector3::from(axis.top).dot(&Vector3::from(landmarks.up));
     0.85 * landmarks.ring_at(top).girth_m

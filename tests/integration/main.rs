@@ -22,6 +22,7 @@ mod properties;
 mod real_stitches;
 mod render;
 mod report;
+mod rig;
 mod skin;
 mod solvers;
 mod support;

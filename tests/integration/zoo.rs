@@ -201,7 +201,8 @@ struct Source {
 fn source(path: PathBuf) -> Source {
     let leg = knitfit::leg::load_leg(&path, Units::Metres, UpChoice::Auto).unwrap();
     let landmarks =
-        knitfit::leg::find_landmarks(&leg.positions, &leg.triangles, leg.up, Side::Left).unwrap();
+        knitfit::leg::find_landmarks(&leg.positions, &leg.triangles, leg.up, Side::Left, None)
+            .unwrap();
     Source {
         meshes: read_glb_meshes(&path),
         truth: LandmarkDetails::of(&landmarks, &leg),

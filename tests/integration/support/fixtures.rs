@@ -88,6 +88,8 @@ fn leg(name: &str, positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Leg {
         cleaned: Default::default(),
         reoriented_triangles: 0,
         material: None,
+        rig: None,
+        rest: None,
     }
 }
 
@@ -214,7 +216,8 @@ pub fn landmark_axis(leg: &Leg) -> knitfit::leg::Axis {
     use knitfit::knit::tube::tube_axis;
     use knitfit::knit::{TubeBottom, TubeTop};
     use knitfit::leg::{find_landmarks, Side};
-    let landmarks = find_landmarks(&leg.positions, &leg.triangles, leg.up, Side::Left).unwrap();
+    let landmarks =
+        find_landmarks(&leg.positions, &leg.triangles, leg.up, Side::Left, None).unwrap();
     tube_axis(&landmarks, TubeBottom::Ankle, TubeTop::default()).unwrap()
 }
 
@@ -322,7 +325,18 @@ pub fn write_raw_meshes(dir: &Path, name: &str, meshes: &[RawMesh]) -> PathBuf {
 
 /// Rewrites the procedural sample leg's JSON with `edit`, writing `name` (`.glb`) into `dir`.
 pub fn edited_sample(dir: &Path, name: &str, edit: impl FnOnce(&mut gltf_json::Root)) -> PathBuf {
-    let bytes = std::fs::read(procedural_leg()).unwrap();
+    edited_glb(&procedural_leg(), dir, name, edit)
+}
+
+/// Rewrites the JSON of the GLB file `source` with `edit`, its binary chunk kept, writing `name`
+/// into `dir`.
+pub fn edited_glb(
+    source: &Path,
+    dir: &Path,
+    name: &str,
+    edit: impl FnOnce(&mut gltf_json::Root),
+) -> PathBuf {
+    let bytes = std::fs::read(source).unwrap();
     let mut gltf = gltf::Gltf::from_slice(&bytes).unwrap();
     let mut root = gltf.document.clone().into_json();
     edit(&mut root);

@@ -10,9 +10,9 @@ pub mod variants;
 
 pub use files::{base64, exact_json, float, point, read_ply, rust_files};
 pub use fixtures::{
-    edited_sample, grid_surface, leg_as_ply, load_sample, procedural_leg, read_glb_meshes,
-    revolved, sample, sample_legs, solve_on, write_mesh, write_meshes, write_raw_meshes,
-    write_tube_leg, RawMesh, FEET,
+    edited_glb, edited_sample, grid_surface, leg_as_ply, load_sample, procedural_leg,
+    read_glb_meshes, revolved, sample, sample_legs, solve_on, write_mesh, write_meshes,
+    write_raw_meshes, write_tube_leg, RawMesh, FEET,
 };
 pub use process::{
     files_in, fit, knitfit, knitfit_env, knitfit_within, read_fit_report, read_patch_report,
