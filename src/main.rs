@@ -155,7 +155,16 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
         } => format!("{place}; {advice}"),
         _ => advice.to_string(),
     };
-    if let Some(pose) = report.details.pose.as_ref().filter(|p| !p.converged) {
+    // The pose's relaxation is said where the rest pose's fit settled: else that is the news.
+    let rest_unsettled = matches!(
+        &report.details.solver,
+        SolverDetails::Multilevel {
+            unsettled_at: Some(_),
+            ..
+        }
+    );
+    let pose_unsettled = report.details.pose.as_ref().filter(|p| !p.converged);
+    if let Some(pose) = pose_unsettled.filter(|_| !rest_unsettled) {
         eprintln!(
             "knitfit: warning: the stocking, fitted in the rig's rest pose, had not settled in \
              the pose the file shows after {} iterations (residual {:.1e}, force step {:.1e}, \

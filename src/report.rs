@@ -183,8 +183,9 @@ pub struct FitDetails {
     /// The penetration fix's counters; `null` when it did not run.
     pub penetration_fix: Option<PenetrationStats>,
     /// Where the file's skin poses the leg away from its rest pose: the stocking was fitted in
-    /// the rest pose (the landmarks, axis and solver above are the rest pose's) and carried into
-    /// the pose; what that did. `null` otherwise.
+    /// the rest pose (`leg.landmarks`, `axis`, `tube` and `solver` are the rest pose's; the leg's
+    /// `bounds_m`, `cleaned`, the fields, the checks and `metrics.max_penetration_m` the pose's)
+    /// and carried into the pose; what that did. `null` otherwise.
     pub pose: Option<PoseStats>,
     /// The preview's counters; `null` when no preview was rendered.
     pub preview: Option<PreviewStats>,

@@ -7,6 +7,9 @@ cd "$(dirname "$0")/.."
 KNITFIT_LONG=1 cargo test --release --locked -- zoo::the_whole_zoo_fits_every_leg_it_should \
   --include-ignored --nocapture
 status=$?
+KNITFIT_LONG=1 cargo test --release --locked -- rig::the_posed_zoo_fits_every_pose_the_skin_bends_cleanly \
+  --include-ignored --nocapture
+posed=$?
 {
   echo "# The leg zoo"
   echo
@@ -16,5 +19,14 @@ status=$?
   echo "[TESTING.md](TESTING.md#the-leg-zoo)."
   echo
   cat target/zoo/all.md
+  echo
+  echo "## Posed characters"
+  echo
+  echo "The rigged MakeHuman woman (\`samples/rigged/\`) posed by her joint nodes, exported with her"
+  echo "skin (rigged) or as the posed mesh alone (baked), her armature as exported, turned to Z up,"
+  echo "scaled to centimetres (read with \`--units cm\`) or turned 120° about up"
+  echo "(\`tests/integration/rig.rs\`, [decision 0077](decisions/0077-rigged-legs-are-fitted-at-rest-and-carried-into-the-pose.md))."
+  echo
+  cat target/zoo/posed.md
 } >docs/ZOO.md
-exit "$status"
+[ "$status" -eq 0 ] && [ "$posed" -eq 0 ]

@@ -37,7 +37,7 @@ pub fn fields(fit: &SolvedFit, fabric: &Fabric, terms: &ForceTerms) -> Fields {
 /// of a stocking to the toe's path.
 pub fn slack_of(fit: &SolvedFit) -> SlackDetails {
     let placement = &fit.placement;
-    let along = fit.rest_knit.as_ref().unwrap_or(&fit.knit);
+    let along = fit.knit_as_placed();
     slack_details(along, &slack(&fit.knit), &placement.centreline, |s| {
         placement
             .path
@@ -56,7 +56,7 @@ pub fn stretch_by_part(fit: &SolvedFit) -> Vec<RegionStretch> {
     };
     let knit = &fit.knit;
     let regions = regions(
-        fit.rest_knit.as_ref().unwrap_or(knit),
+        fit.knit_as_placed(),
         &placement.centreline,
         placement.path.as_ref(),
         landmarks,

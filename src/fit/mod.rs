@@ -140,10 +140,12 @@ pub fn in_rest_pose(mut leg: Leg, place: &PlaceSettings) -> (Leg, Option<pose::P
             let crate::leg::RestPose {
                 leg: rest_leg,
                 pose_from_rest,
+                skin_moved_m,
             } = *rest;
             let posed = pose::Posed {
                 leg,
                 pose_from_rest,
+                skin_moved_m,
             };
             (rest_leg, Some(posed))
         }

@@ -17,11 +17,13 @@
 use nalgebra::{Matrix4, Point3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use std::collections::HashMap;
 
+use super::solve::{skin_contact, RestFit};
 use super::{SolveSettings, SolvedFit};
 use crate::error::Result;
 use crate::knit::tube::end_rings;
+use crate::leg::curvature::barycentric;
+use crate::leg::load::matrices_at;
 use crate::leg::solid::outer_skin;
 use crate::leg::{Collider, Leg};
 use crate::sim::accelerated::relax_accelerated;
@@ -38,6 +40,8 @@ pub struct Posed {
     pub leg: Leg,
     /// Per vertex of the rest pose's leg.
     pub pose_from_rest: Vec<Matrix4<f64>>,
+    /// Furthest a skin vertex moves from the rest pose to the pose, metres.
+    pub skin_moved_m: f64,
 }
 
 /// What carrying the stocking into the pose did (`report.json`'s `details.pose`).
@@ -62,41 +66,26 @@ pub struct PoseStats {
 }
 
 /// Carries `solved`, fitted on the rest pose's leg, into `posed` (module docs), each rest
-/// vertex moved by its matrix: its knit, leg, collider and penetration
-/// become the pose's (the toes' box carried as the yarn is), the knit as fitted is kept in
-/// [`SolvedFit::rest_knit`].
+/// vertex moved by its matrix: its knit, leg, collider, toes' box (carried as the yarn is) and
+/// penetration become the pose's; the leg and knit as fitted are kept in [`SolvedFit::rest`].
 pub fn carry(solved: &mut SolvedFit, posed: Posed, settings: &SolveSettings) -> Result<PoseStats> {
     let Posed {
         leg: posed,
         pose_from_rest,
+        skin_moved_m,
     } = posed;
     let method = settings.contact;
     let rest_leg = &solved.leg;
-    let on_rest = Collider::new(rest_leg, method)?;
-    // The collider's vertices are the rest leg's (welded already); its numbering may differ.
-    let index: HashMap<[u64; 3], usize> = rest_leg
-        .positions
-        .iter()
-        .enumerate()
-        .map(|(i, p)| (p.coords.map(f64::to_bits).into(), i))
-        .collect();
-    let matrix_of: Vec<Matrix4<f64>> = on_rest
-        .vertices()
-        .iter()
-        .map(|p| {
-            let key: [u64; 3] = p.coords.map(f64::to_bits).into();
-            index
-                .get(&key)
-                .map_or_else(Matrix4::identity, |&i| pose_from_rest[i])
-        })
-        .collect();
+    // The skin the fit rested on: the rest leg's outer skin, whose vertices are the leg's but
+    // where pieces meet (split there: those take the nearest vertex's matrix).
+    let on_rest = &solved.collider;
+    let matrix_of = matrices_at(on_rest.vertices(), &rest_leg.positions, &pose_from_rest);
     // A point on the rest pose, as the skin it rests on carries it into the pose.
     let carried = |x: &Point3<f64>| {
         let near = on_rest.closest(x);
         let corners = on_rest.triangles()[near.triangle as usize];
-        let [a, b, c] = corners.map(|i| on_rest.vertices()[i as usize]);
-        let w = barycentric(&near.point, &a, &b, &c);
-        let m = (corners.iter().zip(w)).fold(Matrix4::zeros(), |sum, (&i, w)| {
+        let weights = barycentric(&near.point, corners.map(|i| on_rest.vertices()[i as usize]));
+        let m = (corners.iter().zip(weights)).fold(Matrix4::zeros(), |sum, (&i, w)| {
             sum + matrix_of[i as usize] * w
         });
         posed.world_from_file(&m.transform_point(&rest_leg.file_from_world(x)))
@@ -108,9 +97,9 @@ pub fn carry(solved: &mut SolvedFit, posed: Posed, settings: &SolveSettings) -> 
     // The top ring is held along the stocking's axis as the fit held it: that axis as the thigh
     // turns.
     let top = solved.placement.axis.top();
-    let lock_axis = (carried(&top) - carried(&(top - solved.placement.lock_axis() * 0.05)))
+    let lock_axis = (carried(&top) - carried(&(top - solved.lock_axis * 0.05)))
         .try_normalize(1e-12)
-        .unwrap_or_else(|| solved.placement.lock_axis());
+        .unwrap_or(solved.lock_axis);
     let (positions, triangles) = outer_skin(&posed.positions, &posed.triangles);
     let skin = Leg {
         positions,
@@ -147,7 +136,7 @@ pub fn carry(solved: &mut SolvedFit, posed: Posed, settings: &SolveSettings) -> 
             }
         })
         .collect();
-    solved.rest_knit = Some(solved.knit.clone());
+    let rest_knit = solved.knit.clone();
     for (x, (y, _)) in solved.knit.particles.x.iter_mut().zip(&out) {
         *x = y.coords;
     }
@@ -172,48 +161,23 @@ pub fn carry(solved: &mut SolvedFit, posed: Posed, settings: &SolveSettings) -> 
         0,
     )?;
     contact.finish_on(&collider, &mut knit.particles.x, &knit.particles.inv_mass);
-    let skin_moved_m = rest_leg
-        .positions
-        .iter()
-        .zip(&pose_from_rest)
-        .map(|(p, m)| {
-            let file = rest_leg.file_from_world(p);
-            (posed.world_from_file(&m.transform_point(&file)) - p).norm()
-        })
-        .fold(0.0, f64::max);
     let stats = PoseStats {
         skin_moved_m,
+        points_moved_out: out.iter().filter(|(_, d)| *d > 0.0).count(),
+        max_moved_out_m: out.iter().map(|(_, d)| *d).fold(0.0, f64::max),
         iterations: relaxed.iterations,
         residual: relaxed.residual,
         force_step: relaxed.force_step,
         converged: relaxed.converged,
-        points_moved_out: out.iter().filter(|(_, d)| *d > 0.0).count(),
-        max_moved_out_m: out.iter().map(|(_, d)| *d).fold(0.0, f64::max),
     };
-    solved.max_penetration_m = solved
-        .knit
-        .particles
-        .x
-        .par_iter()
-        .map(|p| (-collider.closest(&Point3::from(*p)).signed_distance).max(0.0))
-        .reduce(|| 0.0, f64::max);
-    solved.leg = posed;
+    solved.max_penetration_m = skin_contact(&solved.knit, &collider).0;
+    let rest_leg = std::mem::replace(&mut solved.leg, posed);
+    solved.rest = Some(RestFit {
+        leg: rest_leg,
+        knit: rest_knit,
+    });
     solved.collider = collider;
     solved.toe_box = toe_box;
+    solved.lock_axis = lock_axis;
     Ok(stats)
-}
-
-/// Barycentric weights of `p` (on the triangle's plane) in triangle `a b c`; a degenerate
-/// triangle gives its first corner.
-fn barycentric(p: &Point3<f64>, a: &Point3<f64>, b: &Point3<f64>, c: &Point3<f64>) -> [f64; 3] {
-    let (v0, v1, v2) = (b - a, c - a, p - a);
-    let (d00, d01, d11) = (v0.dot(&v0), v0.dot(&v1), v1.dot(&v1));
-    let (d20, d21) = (v2.dot(&v0), v2.dot(&v1));
-    let denom = d00 * d11 - d01 * d01;
-    if denom.abs() <= f64::EPSILON * d00 * d11 {
-        return [1.0, 0.0, 0.0];
-    }
-    let v = (d11 * d20 - d01 * d21) / denom;
-    let w = (d00 * d21 - d01 * d20) / denom;
-    [1.0 - v - w, v, w]
 }

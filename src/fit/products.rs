@@ -182,7 +182,7 @@ fn real_stitches(fit: &SolvedFit) -> (Knit, LaidStitches) {
         &mut real,
         &fit.collider,
         fit.offset,
-        placement.lock_axis(),
+        fit.lock_axis,
     );
     (real, laid)
 }

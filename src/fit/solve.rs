@@ -8,7 +8,7 @@
 //! ([`crate::sim::stall`]); a fit that runs out of steps is kept, and says where it had not
 //! settled.
 
-use nalgebra::Point3;
+use nalgebra::{Point3, Vector3};
 
 use crate::base::GridSize;
 use crate::error::{Error, Result};
@@ -71,9 +71,11 @@ pub struct SolvedFit {
     /// The knit at rest on the leg, after the exact contact pass.
     pub knit: Knit,
     /// Where the knit was fitted on a rigged leg's rest pose and carried into its pose
-    /// ([`super::pose`]): the knit as fitted, where the parts of the leg are told along the
-    /// rest pose's centreline and landmarks.
-    pub rest_knit: Option<Knit>,
+    /// ([`super::pose`]): the leg and knit as fitted, which `placement` (landmarks, axis,
+    /// centreline) describes.
+    pub rest: Option<RestFit>,
+    /// The direction the top ring is held along: the placement's, or carried into the pose.
+    pub lock_axis: Vector3<f64>,
     /// What the solver did.
     pub solver: SolverRun,
     /// Where the grid asked for had not settled when the solver ran out of steps, in words:
@@ -93,7 +95,26 @@ pub struct SolvedFit {
     pub memory: Option<MemoryCheck>,
 }
 
+/// A fit made on a rigged leg's rest pose before it was carried into the pose.
+pub struct RestFit {
+    /// The leg in its rest pose.
+    pub leg: Leg,
+    /// The knit at rest on it.
+    pub knit: Knit,
+}
+
 impl SolvedFit {
+    /// The leg the placement was made on: the rest pose's where the fit was carried into a
+    /// pose, else the leg.
+    pub fn placed_on(&self) -> &Leg {
+        self.rest.as_ref().map_or(&self.leg, |r| &r.leg)
+    }
+
+    /// The knit as fitted where the placement was made (see [`SolvedFit::placed_on`]).
+    pub fn knit_as_placed(&self) -> &Knit {
+        self.rest.as_ref().map_or(&self.knit, |r| &r.knit)
+    }
+
     /// The surface the fitted fabric rests on: the skin, with the toes boxed where it has toes.
     pub fn rested_on(&self) -> &Collider {
         self.toe_box.as_ref().unwrap_or(&self.collider)
@@ -247,6 +268,7 @@ pub fn solve(
         spec.relaxed_circumference_m,
         settings.yarn_stiffness.support_ratio(),
     )?;
+    let lock_axis = placement.lock_axis();
     Ok(SolvedFit {
         leg,
         placement,
@@ -257,7 +279,8 @@ pub fn solve(
         real_count: tube.real_count,
         offset: settings.offset_m,
         knit,
-        rest_knit: None,
+        rest: None,
+        lock_axis,
         solver: run,
         unsettled_at,
         counters,
@@ -277,7 +300,7 @@ const TOUCHING_M: f64 = 0.002;
 
 /// From exact closest-point queries: the deepest yarn point inside the leg, metres (0 when none
 /// is), and the fraction of points within [`TOUCHING_M`] of the skin.
-fn skin_contact(knit: &Knit, collider: &Collider) -> (f64, f64) {
+pub(super) fn skin_contact(knit: &Knit, collider: &Collider) -> (f64, f64) {
     use rayon::prelude::*;
     let (deepest, touching) = knit
         .particles

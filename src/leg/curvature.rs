@@ -145,7 +145,7 @@ fn median_edge(positions: &[Vec3], triangles: &[[u32; 3]]) -> f64 {
 
 /// The barycentric weights of `p` (on or near the triangle) in `corners`, clamped to the
 /// triangle; equal weights for a degenerate one.
-fn barycentric(p: &Point3<f64>, [a, b, c]: [Point3<f64>; 3]) -> [f64; 3] {
+pub(crate) fn barycentric(p: &Point3<f64>, [a, b, c]: [Point3<f64>; 3]) -> [f64; 3] {
     let (ab, ac, ap) = (b - a, c - a, p - a);
     let (d00, d01, d11) = (ab.dot(&ab), ab.dot(&ac), ac.dot(&ac));
     let (d20, d21) = (ap.dot(&ab), ap.dot(&ac));

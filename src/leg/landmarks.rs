@@ -19,6 +19,10 @@
 //!   is taken from the lowest foot alone; with no foot the character faces +Z, as glTF
 //!   characters do. The pictures' views are taken from it ([`Landmarks::stance`]). A kneeling
 //!   figure, its toes pointing back, is taken to face backwards.
+//!   Where the file's rig names the legs ([`super::rig`]), its leg on the side asked for is the
+//!   one whose section stands under its ankle joint. A lone standing leg more than
+//!   [`LIFTED_LEG_OFF_CENTRE_M`] to the other side of the body's centre is that side's: the leg
+//!   asked for is lifted, and is refused as such rather than the other dressed.
 //! - **Ankle**: the smallest girth between the foot and a third of the way up; **knee**: the
 //!   smallest between 35 % and 70 % of the way from ankle to thigh top; **toe**: the foot's
 //!   vertex furthest from the ankle's centre line; a foot is there when that reaches more than
@@ -45,6 +49,14 @@ use super::slice::{piece_bit, Loop, Slicer};
 use super::Side;
 use crate::base::Stance;
 
+/// A lone standing leg this far to one side of the body's centre is that side's leg, metres: a
+/// leg alone is centred on itself, a body standing on one leg is about a hip's half-width off.
+const LIFTED_LEG_OFF_CENTRE_M: f64 = 0.05;
+/// Narrowest and widest a standing leg's section just above its sole can be, metres: a child's
+/// ankle is about 0.14 m around, an adult's foot under 0.35 m there; an ear is 0.09 m, a head 8
+/// cm below its crown 0.45 m or more.
+const MIN_STANDING_GIRTH_M: f64 = 0.12;
+const MAX_STANDING_GIRTH_M: f64 = 0.4;
 /// Furthest a rig's ankle joint may be from a leg's seed section, across up, for the rig to say
 /// which leg that is, metres.
 const RIG_ANKLE_OVER_SEED_M: f64 = 0.15;
@@ -469,6 +481,32 @@ pub fn find_landmarks(
                 .min_by(|&a, &b| leftness(&seeds[a]).total_cmp(&leftness(&seeds[b]))),
         })
         .unwrap_or(0);
+    // One leg standing where a body has two: the other is lifted (a stride, a sit, a kneel).
+    // Its side is told against the body's centre; dressing it for the other would be a
+    // stocking on the wrong leg.
+    if seeds.len() == 1 && by_rig.is_none() {
+        let off_centre = leftness(&seeds[0]) - area_centroid(positions, triangles).dot(&left);
+        let standing = if off_centre > 0.0 {
+            Side::Left
+        } else {
+            Side::Right
+        };
+        if standing != side && off_centre.abs() > LIFTED_LEG_OFF_CENTRE_M {
+            return Err(format!(
+                "the only leg standing at the lowest point is the character's {} ({:.2} m from \
+                 the body's centre): its {} leg does not reach down (lifted in a stride, a sit \
+                 or a kneel), and a leg posed away from standing is read only with its rig: \
+                 export the character with its skin, fit it standing, dress the {} leg \
+                 (--side {}), or give the part to dress with --axis",
+                standing.name(),
+                off_centre.abs(),
+                side.name(),
+                standing.name(),
+                standing.name()
+            )
+            .into());
+        }
+    }
     // Up from the seeds: the chosen leg and its nearest neighbour, until they join or end.
     let other = (0..seeds.len()).filter(|&i| i != chosen).min_by(|&a, &b| {
         let d = |i: usize| {
@@ -518,6 +556,38 @@ pub fn find_landmarks(
         .ok_or("the leg has no closed cross-section")?;
     let leg_height = top.s - sole_s;
     if leg_height < 0.15 {
+        // Beside a leg on its foot that rises a leg's length, a short one is lifted or bent out
+        // of the sections' plane, not upside down.
+        let rise = |i: usize| {
+            let up = follow(
+                &slicer,
+                &[seeds[i]],
+                heights(seed_s, hi, SLICE_STEP_M).skip(1),
+                false,
+            );
+            up.rings[0].last().map_or(0.0, |r| r.s - seed_s)
+        };
+        // Only a leg standing on a foot counts, its lowest section an ankle's or a foot's: read
+        // upside down, a head rises as far into the torso, and so does an ear beside it.
+        let other_rise = (0..seeds.len())
+            .filter(|&i| {
+                i != chosen
+                    && feet[i].is_some()
+                    && (MIN_STANDING_GIRTH_M..=MAX_STANDING_GIRTH_M).contains(&seeds[i].girth_m)
+            })
+            .map(rise)
+            .fold(0.0, f64::max);
+        if other_rise > 0.3 {
+            return Err(format!(
+                "the {} leg's sections stop {leg_height:.3} m above its lowest point, while the \
+                 other leg's rise {other_rise:.2} m: it is lifted or bent out of standing (a \
+                 stride, a sit), and a leg posed away from standing is read only with its rig: \
+                 export the character with its skin, fit it standing, or give the part to dress \
+                 with --axis",
+                side.name()
+            )
+            .into());
+        }
         return Err(NoLandmarks {
             seen: format!(
                 "the leg found is only {leg_height:.3} m from its lowest point to the top of its \
@@ -565,6 +635,22 @@ pub fn find_landmarks(
         profile,
         rig,
     })
+}
+
+/// The centre of the surface `triangles`, each weighed by its area.
+fn area_centroid(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Vector3<f64> {
+    let (mut sum, mut area) = (Vector3::zeros(), 0.0);
+    for t in triangles {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        let w = (b - a).cross(&(c - a)).norm();
+        sum += (a.coords + b.coords + c.coords) * (w / 3.0);
+        area += w;
+    }
+    if area > 0.0 {
+        sum / area
+    } else {
+        Vector3::zeros()
+    }
 }
 
 /// The feet with a direction, each with the height of its leg's lowest section (`soles[i]`).

@@ -2,7 +2,10 @@
 //! (`.ply`, read by [`super::ply`]), the format chosen by the file's extension.
 //!
 //! From glTF, every triangle primitive under the default scene's nodes is taken, with node
-//! transforms applied; from PLY, every face, triangulated in its own plane. Either way the mesh
+//! transforms applied; a skinned mesh is posed by its joints instead (linear blend skinning,
+//! glTF 2.0 §3.7.3), as viewers show it, and where that moves it from its rest pose, the rest
+//! pose is kept beside it ([`RestPose`], for [`crate::fit::pose`]) with the joints' names and
+//! places for [`super::rig`]. From PLY, every face, triangulated in its own plane. Either way the mesh
 //! is then handled here, in one place: scaled to metres, cleaned ([`super::clean`]: repeated
 //! vertices and faces, slivers, debris), and turned so that the file's up axis is +Y (glTF's
 //! own convention, so a well-formed glTF file needs no turning; PLY has none). With
@@ -411,6 +414,7 @@ pub fn decode_leg(file: LegFile, units: Units, choice: UpChoice) -> Result<Leg> 
     leg.rest = Some(Box::new(RestPose {
         leg: rest,
         pose_from_rest,
+        skin_moved_m: moved,
     }));
     Ok(leg)
 }
@@ -427,31 +431,47 @@ pub struct RestPose {
     /// For each of its vertices, the matrix from the rest pose to the pose shown, in the
     /// file's coordinates and units (its skinning matrices blended by its weights).
     pub pose_from_rest: Vec<Matrix4<f64>>,
+    /// Furthest a vertex moves from the rest pose to the pose shown, metres.
+    pub skin_moved_m: f64,
 }
 
-/// Each vertex of `leg`'s matrix among `matrices`, one per file vertex `file_positions`: found by
-/// the vertex's place (cleaning keeps the file's coordinates), or for a vertex cleaning added
-/// (the centre of a filled hole), the nearest file vertex's.
+/// Each vertex of `leg`'s matrix among `matrices`, one per file vertex `file_positions`
+/// (cleaning keeps the file's coordinates, and adds only the centres of filled holes).
 fn per_vertex(
     leg: &Leg,
     file_positions: &[Point3<f64>],
     matrices: &[Matrix4<f64>],
 ) -> Vec<Matrix4<f64>> {
-    let key = |p: &Point3<f64>| -> [u64; 3] { p.coords.map(f64::to_bits).into() };
     let world: Vec<Point3<f64>> = file_positions
         .iter()
         .map(|p| leg.world_from_file(p))
         .collect();
-    let mut index: HashMap<[u64; 3], usize> = HashMap::with_capacity(world.len());
-    for (i, p) in world.iter().enumerate() {
+    matrices_at(&leg.positions, &world, matrices)
+}
+
+/// The matrix of each of `points` among `matrices`, one per vertex of `positions`: the vertex
+/// at the point's very place, or where none is (a vertex added by cleaning or by splitting
+/// pieces where they meet), the nearest.
+pub(crate) fn matrices_at(
+    points: &[Point3<f64>],
+    positions: &[Point3<f64>],
+    matrices: &[Matrix4<f64>],
+) -> Vec<Matrix4<f64>> {
+    let key = |p: &Point3<f64>| -> [u64; 3] { p.coords.map(f64::to_bits).into() };
+    let mut index: HashMap<[u64; 3], usize> = HashMap::with_capacity(positions.len());
+    for (i, p) in positions.iter().enumerate() {
         index.entry(key(p)).or_insert(i);
     }
-    leg.positions
+    points
         .iter()
         .map(|p| {
             let i = index.get(&key(p)).copied().unwrap_or_else(|| {
-                (0..world.len())
-                    .min_by(|&a, &b| (world[a] - p).norm().total_cmp(&(world[b] - p).norm()))
+                (0..positions.len())
+                    .min_by(|&a, &b| {
+                        (positions[a] - p)
+                            .norm()
+                            .total_cmp(&(positions[b] - p).norm())
+                    })
                     .unwrap_or(0)
             });
             matrices.get(i).copied().unwrap_or_else(Matrix4::identity)
@@ -536,7 +556,7 @@ struct FileSkin {
     joints: Vec<Joint>,
 }
 
-/// The triangles under `gltf`'s default scene, node transforms applied.
+/// The triangles under `gltf`'s default scene, node transforms applied and skins posing theirs.
 fn decode_gltf(path: &Path, gltf: gltf::Gltf) -> Result<FileMesh> {
     let fail = |message: String| Error::Leg {
         path: path.to_path_buf(),
@@ -621,6 +641,7 @@ pub(crate) fn check_accessor_types(prim: &gltf::Primitive) -> std::result::Resul
                 a.dimensions()
             ));
         }
+        check_stride(&a, "its POSITION")?;
     }
     if let Some(a) = prim.indices() {
         let unsigned = matches!(a.data_type(), DataType::U8 | DataType::U16 | DataType::U32);
@@ -648,7 +669,8 @@ fn check_coordinates(
         .iter()
         .flatten()
         .map(|&i| (i, &scaled[i as usize]))
-        .find(|(_, p)| p.iter().any(|c| c.abs() > MAX_COORDINATE_M));
+        // NaN is beyond every bound: `c.abs() > MAX` alone would let it through.
+        .find(|(_, p)| p.iter().any(|c| c.is_nan() || c.abs() > MAX_COORDINATE_M));
     match far {
         None => Ok(()),
         Some((i, p)) => Err(format!(
@@ -751,6 +773,9 @@ struct Skinning {
     bind_from_file: Matrix4<f64>,
 }
 
+/// A skinned primitive's skin and each of its vertices' matrix from the bind pose to the file.
+type SkinnedVertices<'a> = (&'a Skinning, Vec<Matrix4<f64>>);
+
 /// Every node's transform in the file's coordinates and its parent, by node index (`None` for a
 /// node outside the scene, or a root).
 struct PlacedNodes {
@@ -759,20 +784,20 @@ struct PlacedNodes {
 }
 
 impl Placed {
-    /// The transform of each of a primitive's `count` vertices: linear blend skinning (the
-    /// vertex's weights, sets 0 and 1, over its joints' matrices, weights scaled to sum to 1),
-    /// or the node's transform for every vertex.
+    /// The transform of each of a skinned primitive's `count` vertices: linear blend skinning
+    /// (the vertex's weights, sets 0 and 1, over its joints' matrices, weights scaled to sum to
+    /// 1); `None` for a rigid mesh, placed by its node's transform alone.
     fn vertex_transforms<'a, 's, F>(
         &self,
         prim: &gltf::Primitive,
         reader: &gltf::mesh::Reader<'a, 's, F>,
         count: usize,
-    ) -> std::result::Result<Vec<Matrix4<f64>>, String>
+    ) -> std::result::Result<Option<SkinnedVertices<'_>>, String>
     where
         F: Clone + Fn(gltf::Buffer<'a>) -> Option<&'s [u8]>,
     {
         let skinning = match self {
-            Placed::Rigid(m) => return Ok(vec![*m; count]),
+            Placed::Rigid(_) => return Ok(None),
             Placed::Skinned(skinning) => skinning,
         };
         let mut sums = vec![Matrix4::zeros(); count];
@@ -821,11 +846,8 @@ impl Placed {
                 "vertex {v} of a skinned mesh has no joint weight (viewers draw it at the origin)"
             ));
         }
-        Ok(sums
-            .into_iter()
-            .zip(weight_sums)
-            .map(|(m, w)| m / w)
-            .collect())
+        let matrices = sums.into_iter().zip(weight_sums).map(|(m, w)| m / w);
+        Ok(Some((skinning, matrices.collect())))
     }
 }
 
@@ -870,6 +892,58 @@ fn nodes_in_scene<'a>(
     Ok(nodes)
 }
 
+/// Where a skin's bind pose (the mesh as stored) lies in the file: glTF leaves it to the
+/// exporter whether the inverse bind matrices undo the node above the skeleton's root joint (an
+/// armature turned to Z up, or scaled to centimetres) or only the joints below it. Of the two,
+/// the one that puts the joints' bind places (`placed`: each joint's transform in the file and
+/// its bind matrix) nearest where the file places them now: a pose turns limbs about their
+/// joints, not the whole skeleton through a right angle or a hundredfold.
+fn file_from_bind(
+    joints: &[gltf::Node],
+    nodes: &PlacedNodes,
+    placed: &[(Matrix4<f64>, Matrix4<f64>)],
+) -> Matrix4<f64> {
+    let is_joint = |i: usize| joints.iter().any(|j| j.index() == i);
+    // The root joint: the first whose parent is no joint (or which has none).
+    let above_root = joints
+        .iter()
+        .find(|j| !nodes.parent[j.index()].is_some_and(is_joint))
+        .and_then(|j| nodes.parent[j.index()])
+        .and_then(|p| nodes.file_from_node[p]);
+    let Some(above_root) = above_root else {
+        return Matrix4::identity();
+    };
+    let origin = Point3::origin();
+    let apart = |file_from_bind: &Matrix4<f64>| -> f64 {
+        (placed.iter())
+            .map(|(now, bind)| {
+                let then = (file_from_bind * bind).transform_point(&origin);
+                (now.transform_point(&origin) - then).norm()
+            })
+            .sum()
+    };
+    if apart(&above_root) < apart(&Matrix4::identity()) {
+        above_root
+    } else {
+        Matrix4::identity()
+    }
+}
+
+/// Refuses an accessor whose buffer view's stride is shorter than one of its elements: gltf's
+/// reader asserts it is not (a panic), and the validator lets strides down to 4 bytes through.
+fn check_stride(a: &gltf::Accessor, what: &str) -> std::result::Result<(), String> {
+    let stride = a.view().and_then(|v| v.stride());
+    if stride.is_some_and(|s| s < a.size()) {
+        return Err(format!(
+            "{what} (accessor {}): its elements are {} bytes apart but {} bytes long",
+            a.index(),
+            stride.unwrap_or(a.size()),
+            a.size()
+        ));
+    }
+    Ok(())
+}
+
 /// A node of the scene, with its transform in the file's coordinates and its parent's index.
 struct SceneNode<'a> {
     node: gltf::Node<'a>,
@@ -892,6 +966,7 @@ fn check_skin_accessor_types(prim: &gltf::Primitive, set: u32) -> std::result::R
                 a.dimensions()
             ));
         }
+        check_stride(&a, &format!("its JOINTS_{set}"))?;
     }
     if let Some(a) = prim.get(&gltf::Semantic::Weights(set)) {
         let allowed = match a.data_type() {
@@ -907,6 +982,7 @@ fn check_skin_accessor_types(prim: &gltf::Primitive, set: u32) -> std::result::R
                 a.dimensions()
             ));
         }
+        check_stride(&a, &format!("its WEIGHTS_{set}"))?;
     }
     Ok(())
 }
@@ -964,18 +1040,6 @@ impl MeshCollector {
     ) -> std::result::Result<Skinning, String> {
         let joints: Vec<gltf::Node> = skin.joints().collect();
         let file_from_nodes = &nodes.file_from_node;
-        // The rest pose in the file is the bind pose placed as the skeleton is: by the node
-        // above its root joint (an armature turned to Z up, or scaled to centimetres, carries the
-        // bind pose with it), where that node is no joint.
-        let is_joint = |i: usize| joints.iter().any(|j| j.index() == i);
-        let file_from_bind = joints
-            .iter()
-            .find_map(|j| nodes.parent[j.index()].filter(|&p| !is_joint(p)))
-            .and_then(|p| file_from_nodes[p])
-            .unwrap_or_else(Matrix4::identity);
-        let bind_from_file = file_from_bind
-            .try_inverse()
-            .ok_or("the node above its skeleton has a transform that cannot be undone")?;
         let inverse_binds: Vec<Matrix4<f64>> = match skin.inverse_bind_matrices() {
             None => vec![Matrix4::identity(); joints.len()],
             Some(a) => {
@@ -986,6 +1050,14 @@ impl MeshCollector {
                         a.index(),
                         a.data_type(),
                         a.dimensions()
+                    ));
+                }
+                check_stride(&a, "its inverse bind matrices")?;
+                if a.count() < joints.len() {
+                    return Err(format!(
+                        "it has {} joints but {} inverse bind matrices",
+                        joints.len(),
+                        a.count()
                     ));
                 }
                 let reader = skin.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
@@ -1004,24 +1076,33 @@ impl MeshCollector {
             ));
         }
         let mut matrices = Vec::with_capacity(joints.len());
+        let mut placed = Vec::with_capacity(joints.len());
         for (joint, inverse_bind) in joints.iter().zip(&inverse_binds) {
             let file_from_joint = file_from_nodes[joint.index()]
                 .ok_or_else(|| format!("its joint node {} is not in the scene", joint.index()))?;
             let matrix = file_from_joint * inverse_bind;
-            if !matrix.iter().all(|v| v.is_finite()) {
+            let bind = inverse_bind.try_inverse();
+            if !matrix.iter().all(|v| v.is_finite()) || bind.is_none() {
                 return Err(format!(
-                    "joint node {} has a non-finite transform or inverse bind matrix",
+                    "joint node {} has a non-finite transform or an inverse bind matrix that \
+                     cannot be undone",
                     joint.index()
                 ));
             }
             matrices.push(matrix);
+            placed.push((file_from_joint, bind.unwrap_or_else(Matrix4::identity)));
+        }
+        let file_from_bind = file_from_bind(&joints, nodes, &placed);
+        let bind_from_file = file_from_bind
+            .try_inverse()
+            .ok_or("the node above its skeleton has a transform that cannot be undone")?;
+        for (joint, (file_from_joint, bind)) in joints.iter().zip(&placed) {
             let name = joint
                 .name()
                 .map_or_else(|| format!("node {}", joint.index()), str::to_string);
-            let posed = file_from_joint.transform_point(&Point3::origin());
-            let rest = inverse_bind.try_inverse().map_or(posed, |bind| {
-                (file_from_bind * bind).transform_point(&Point3::origin())
-            });
+            let origin = Point3::origin();
+            let posed = file_from_joint.transform_point(&origin);
+            let rest = (file_from_bind * bind).transform_point(&origin);
             self.joints
                 .entry(joint.index())
                 .or_insert(Joint { name, posed, rest });
@@ -1067,35 +1148,45 @@ impl MeshCollector {
         if let Some(bad) = indices.iter().find(|&&i| i >= n) {
             return Err(format!("index {bad} is past its {n} vertices"));
         }
-        let file_from_vertex = placed.vertex_transforms(prim, &reader, positions.len())?;
+        let skinned = placed.vertex_transforms(prim, &reader, positions.len())?;
         // A mirroring transform (negative determinant) flips the winding; undo it. A skinned
-        // mesh's joints are rotations, each vertex's blend of them with it.
-        let flip = match placed {
-            Placed::Rigid(m) => m.fixed_view::<3, 3>(0, 0).determinant() < 0.0,
-            Placed::Skinned(_) => false,
+        // vertex's is its joints' blend, which `orient_outward` rewinds where it mirrors.
+        let rigid = match placed {
+            Placed::Rigid(m) => *m,
+            Placed::Skinned(_) => Matrix4::identity(),
         };
+        let flip = skinned.is_none() && rigid.fixed_view::<3, 3>(0, 0).determinant() < 0.0;
+        // The rest pose is kept only once a skin is met: the vertices before it are at rest.
+        if skinned.is_some() && self.rest.len() < self.positions.len() {
+            self.rest.clone_from(&self.positions);
+            self.pose_from_rest = vec![Matrix4::identity(); self.positions.len()];
+        }
+        let keep_rest = !self.rest.is_empty();
         // Fits: checked with `n` above.
         let first = self.positions.len() as u32;
-        for (p, file_from_vertex) in positions.iter().zip(file_from_vertex) {
+        for (k, p) in positions.iter().enumerate() {
             if !p.iter().all(|c| c.is_finite()) {
                 return Err(format!("has a non-finite vertex coordinate {p:?}"));
             }
             let p = Point3::new(p[0] as f64, p[1] as f64, p[2] as f64);
-            let q = file_from_vertex.transform_point(&p);
-            if !q.iter().all(|c| c.is_finite()) {
-                return Err("its node transform gives non-finite coordinates".into());
+            let (q, rest, pose_from_rest) = match &skinned {
+                Some((skinning, m)) => (
+                    m[k].transform_point(&p),
+                    skinning.file_from_bind.transform_point(&p),
+                    m[k] * skinning.bind_from_file,
+                ),
+                None => {
+                    let q = rigid.transform_point(&p);
+                    (q, q, Matrix4::identity())
+                }
+            };
+            if !q.iter().chain(rest.iter()).all(|c| c.is_finite()) {
+                return Err("its node transform or skin gives non-finite coordinates".into());
             }
             self.positions.push(q);
-            match placed {
-                Placed::Rigid(_) => {
-                    self.rest.push(q);
-                    self.pose_from_rest.push(Matrix4::identity());
-                }
-                Placed::Skinned(skinning) => {
-                    self.rest.push(skinning.file_from_bind.transform_point(&p));
-                    self.pose_from_rest
-                        .push(file_from_vertex * skinning.bind_from_file);
-                }
+            if keep_rest {
+                self.rest.push(rest);
+                self.pose_from_rest.push(pose_from_rest);
             }
         }
         let before = self.triangles.len();

@@ -11,9 +11,9 @@
 //! ankle, and the toes' the ball of the foot. Twist, roll and helper bones (`.001`, `twist`,
 //! `ORG-`, `MCH-`) are not joints of the leg.
 //!
-//! Contract: a side's joints are kept only when its hip, knee and ankle are all named and lie in
-//! order down the leg (hip to knee and knee to ankle each at least [`MIN_BONE_M`]); a file with
-//! no such side has no rig. The geometry checks them and is the fallback
+//! Contract: a side's joints are kept only when its hip, knee and ankle are all named and hip to
+//! knee and knee to ankle are each at least [`MIN_BONE_M`]; a file with no such side has no
+//! rig. The geometry checks them and is the fallback
 //! ([`super::landmarks`]): a rig only says which leg is which and where its joints are.
 
 use nalgebra::Point3;

@@ -124,7 +124,8 @@ fn details(
                 min: min.coords.into(),
                 max: max.coords.into(),
             },
-            landmarks: (placement.landmarks.as_ref()).map(|l| LandmarkDetails::of(l, leg)),
+            landmarks: (placement.landmarks.as_ref())
+                .map(|l| LandmarkDetails::of(l, fit.placed_on())),
         },
         axis: placement.axis,
         tube: TubeDetails {

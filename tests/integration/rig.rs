@@ -395,6 +395,12 @@ fn quaternion(axis: usize, degrees: f32) -> gltf_json::scene::UnitQuaternion {
 fn posed_variant(pose: Pose, rigging: Rigging, frame: RigFrame) -> (String, bool) {
     let dir = tempfile::tempdir().unwrap();
     let (file, units) = posed_file(dir.path(), pose, rigging, frame);
+    // `KNITFIT_ZOO_KEEP=DIR` keeps each variant's file, as the zoo does.
+    if let Some(keep) = std::env::var_os("KNITFIT_ZOO_KEEP") {
+        let name = format!("{pose:?}-{rigging:?}-{frame:?}.glb");
+        std::fs::create_dir_all(&keep).unwrap();
+        std::fs::copy(&file, Path::new(&keep).join(name)).unwrap();
+    }
     // The posed ball of the foot, where the skin's joints put it (world space).
     let rigged_leg = load_leg(
         &dir.path().join("rigged.glb"),
@@ -494,4 +500,30 @@ fn the_posed_zoo_fits_every_pose_the_skin_bends_cleanly() {
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(out.join("posed.md"), rows.join("\n") + "\n").unwrap();
     assert!(failed.is_empty(), "{}", failed.join("\n"));
+}
+
+#[test]
+fn a_posed_leg_without_its_rig_is_refused_saying_so_not_dressed_on_the_other_leg() {
+    // Baked (no skin): a knee bent 90° lifts the left foot off the ground, and a deep stride
+    // bends the leg out of the horizontal sections. Before, the first was fitted on the right
+    // leg, exit 0, and the second refused as "up may be the wrong way".
+    for (pose, says, never) in [
+        (Pose::KneeBent90, "the only leg standing", "up may be"),
+        (
+            Pose::MidStrideDeep,
+            "lifted or bent out of standing",
+            "up may be",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let (file, _) = posed_file(dir.path(), pose, Rigging::Baked, RigFrame::AsExported);
+        let out = knitfit(dir.path(), &["plan", "--leg", file.to_str().unwrap()]);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{pose:?}: {err}");
+        assert!(
+            err.contains(says) && !err.contains(never),
+            "{pose:?}: {err}"
+        );
+        assert!(err.contains("rig"), "{pose:?}: {err}");
+    }
 }
