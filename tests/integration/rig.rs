@@ -209,7 +209,23 @@ fn a_damaged_skin_is_refused_naming_what_is_wrong() {
             .unwrap();
         root.skins[0].inverse_bind_matrices = Some(positions);
     });
-    for (path, says) in [(one_joint, "names joint"), (vec3_binds, "not float MAT4")] {
+    // Float weights 16 bytes long read 4 bytes apart: gltf's reader asserts on it (a panic).
+    let short_stride = edited_glb(&source, dir.path(), "short_stride.glb", |root| {
+        let weights = root.meshes[0].primitives[0]
+            .attributes
+            .get(&gltf_json::validation::Checked::Valid(
+                gltf_json::mesh::Semantic::Weights(0),
+            ))
+            .copied()
+            .unwrap();
+        let view = root.accessors[weights.value()].buffer_view.unwrap();
+        root.buffer_views[view.value()].byte_stride = Some(gltf_json::buffer::Stride(4));
+    });
+    for (path, says) in [
+        (one_joint, "names joint"),
+        (vec3_binds, "not float MAT4"),
+        (short_stride, "bytes apart but"),
+    ] {
         let out = knitfit(dir.path(), &["plan", "--leg", path.to_str().unwrap()]);
         let err = stderr(&out);
         assert_eq!(out.status.code(), Some(2), "{err}");
