@@ -51,7 +51,7 @@ use crate::base::Stance;
 
 /// A lone standing leg this far to one side of the body's centre is that side's leg, metres: a
 /// leg alone is centred on itself, a body standing on one leg is about a hip's half-width off.
-const LIFTED_LEG_OFF_CENTRE_M: f64 = 0.05;
+pub const LIFTED_LEG_OFF_CENTRE_M: f64 = 0.05;
 /// Narrowest and widest a standing leg's section just above its sole can be, metres: a child's
 /// ankle is about 0.14 m around, an adult's foot under 0.35 m there; an ear is 0.09 m, a head 8
 /// cm below its crown 0.45 m or more.
