@@ -86,7 +86,9 @@ fn a_rigged_leg_posed_mid_stride_gets_its_stocking_in_the_pose_in_any_frame() {
     });
     for (leg, units, scale) in [(walk, "m", 1.0), (in_cm, "cm", 0.01)] {
         let scene = scene_for(&leg, json!({ "units": units }), json!({}));
-        let (dir, out) = run_scene(&scene, "100x100", &[]);
+        // How the leg is read and carried, not how far the solver settles (`solvers.rs`): the
+        // zoo's CI grid and tolerance.
+        let (dir, out) = run_scene(&scene, "100x100", &["--tolerance", "3e-3"]);
         assert!(out.status.success(), "{units}: {}", stderr(&out));
         let report = read_fit_report(&dir.path().join("out"));
         let pose = report.details.pose.as_ref().expect("the pose stage ran");
@@ -175,7 +177,8 @@ fn a_knee_bent_further_than_the_skin_folds_cleanly_is_said_not_passed_as_done() 
             ]));
         },
     );
-    let (run, out) = run_scene(&scene_for(&deep, json!({}), json!({})), "100x100", &[]);
+    let scene = scene_for(&deep, json!({}), json!({}));
+    let (run, out) = run_scene(&scene, "100x100", &["--tolerance", "3e-3"]);
     let code = out.status.code();
     assert!(
         matches!(code, Some(3 | 4)),
