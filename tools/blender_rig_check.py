@@ -1,12 +1,12 @@
-"""Import samples/makehuman_rigged*.glb into Blender (bpy as a Python module) and pose the left knee.
+"""Import samples/rigged/makehuman_rigged*.glb into Blender (bpy as a Python module) and pose the left knee.
 
 Setup: the venv of tools/blender_check.py (``python3.11 -m venv tools/.venv-blender &&
 tools/.venv-blender/bin/pip install -r tools/blender_requirements.txt``, bpy==4.5.15).
 
 Run (from the repository root)::
 
-    tools/.venv-blender/bin/python tools/blender_rig_check.py [samples/makehuman_rigged.glb]
-                                                             [samples/makehuman_rigged_walk.glb]
+    tools/.venv-blender/bin/python tools/blender_rig_check.py [samples/rigged/makehuman_rigged.glb]
+                                                             [samples/rigged/makehuman_rigged_walk.glb]
 
 Checks, each from an empty Blender file and ``bpy.ops.import_scene.gltf`` with its defaults:
 the rest file makes one armature with the 52 "mixamorig:" bones and a mesh "body" with one
@@ -102,8 +102,8 @@ def read_skin(path):
 
 
 def main():
-    rest_path = Path(sys.argv[1] if len(sys.argv) > 1 else "samples/makehuman_rigged.glb")
-    walk_path = Path(sys.argv[2] if len(sys.argv) > 2 else "samples/makehuman_rigged_walk.glb")
+    rest_path = Path(sys.argv[1] if len(sys.argv) > 1 else "samples/rigged/makehuman_rigged.glb")
+    walk_path = Path(sys.argv[2] if len(sys.argv) > 2 else "samples/rigged/makehuman_rigged_walk.glb")
     stored, joints, weights, names, _ = read_skin(rest_path)
 
     arms, body = load(rest_path)
