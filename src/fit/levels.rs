@@ -69,8 +69,7 @@ impl Levels for TubeLevels<'_> {
         if let Some(done) = self.contact.take() {
             self.retired.add(&done.counters());
         }
-        let rest_spacing = self.spec.relaxed_circumference_m / knit.wales as f64;
-        let query_radius = (10.0 * rest_spacing).max(0.005);
+        let query_radius = contact_query_radius(&self.spec, knit);
         self.contact.insert(LegContact::new(
             self.collider,
             self.offset,
@@ -107,4 +106,11 @@ impl Levels for TubeLevels<'_> {
         )
         .map(|_| ())
     }
+}
+
+/// How far contact's exact queries look from a point of `knit` (a tube of `spec`), metres: ten
+/// rest spacings around the tube, at least 5 mm (larger is safe, slower).
+pub(super) fn contact_query_radius(spec: &TubeSpec, knit: &Knit) -> f64 {
+    let rest_spacing = spec.relaxed_circumference_m / knit.wales as f64;
+    (10.0 * rest_spacing).max(0.005)
 }

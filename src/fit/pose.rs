@@ -18,6 +18,7 @@ use nalgebra::{Matrix4, Point3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use super::levels::contact_query_radius;
 use super::solve::{skin_contact, RestFit};
 use super::{SolveSettings, SolvedFit};
 use crate::error::Result;
@@ -142,11 +143,10 @@ pub fn carry(solved: &mut SolvedFit, posed: Posed, settings: &SolveSettings) -> 
     }
     // Relaxed again on the posed leg, from where the skin carried it, as the fit's last level.
     let knit = &mut solved.knit;
-    let rest_spacing = solved.spec.relaxed_circumference_m / knit.wales as f64;
     let mut contact = LegContact::new(
         rested_on,
         offset,
-        (10.0 * rest_spacing).max(0.005),
+        contact_query_radius(&solved.spec, knit),
         lock_axis,
         end_rings(knit),
     );

@@ -1025,6 +1025,52 @@ mod tests {
     }
 
     #[test]
+    fn the_rig_says_which_leg_is_the_left_over_where_the_feet_point() {
+        // The feet point +Z, so the geometry takes +X for the left; a rig whose left leg
+        // stands at −X (a character exported facing −Z with its feet turned back, a mirrored
+        // export) is the word on it.
+        let (positions, triangles) = legs_with_feet(0.0, 0.0);
+        let leg = |x: f64| RigLeg {
+            hip: [x, 0.8, 0.0],
+            knee: [x, 0.45, 0.0],
+            ankle: [x, 0.08, 0.0],
+            toe: None,
+        };
+        let rig = Rig {
+            naming: "named",
+            left: Some(leg(-0.15)),
+            right: Some(leg(0.15)),
+        };
+        for (side, x) in [(Side::Left, -0.15), (Side::Right, 0.15)] {
+            let l = find_landmarks(&positions, &triangles, Vector3::y(), side, Some(&rig)).unwrap();
+            assert!((l.ankle.centre[0] - x).abs() < 1e-9, "{side:?}: {l:?}");
+            let agreement = l.rig.expect("the rig's ankle and knee lie in this leg");
+            assert_eq!(agreement.side, side);
+        }
+        let l = find_landmarks(&positions, &triangles, Vector3::y(), Side::Left, None).unwrap();
+        assert!(
+            l.ankle.centre[0] > 0.0,
+            "without the rig, the feet say: {l:?}"
+        );
+    }
+
+    #[test]
+    fn a_lone_standing_leg_is_not_dressed_for_the_side_that_is_lifted() {
+        // The right leg (−X) lifted 30 cm, above where legs are looked for: only the left
+        // stands, 0.15 m to the left of the body's centre.
+        let (positions, triangles) = legs_with_feet(0.0, 0.3);
+        let l = find_landmarks(&positions, &triangles, Vector3::y(), Side::Left, None).unwrap();
+        assert!(l.ankle.centre[0] > 0.0, "{l:?}");
+        let err =
+            find_landmarks(&positions, &triangles, Vector3::y(), Side::Right, None).unwrap_err();
+        assert!(
+            err.seen.contains("the only leg standing") && err.seen.contains("--side left"),
+            "{err}"
+        );
+        assert!(!err.up_in_doubt);
+    }
+
+    #[test]
     fn feet_that_disagree_do_not_turn_the_character_and_a_lifted_one_is_not_asked() {
         // Both standing: they disagree by 60°, so the feet do not say where it faces, and it
         // is pictured along the file's axes.

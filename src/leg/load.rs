@@ -401,8 +401,8 @@ pub fn decode_leg(file: LegFile, units: Units, choice: UpChoice) -> Result<Leg> 
     if moved <= POSED_M {
         return Ok(leg);
     }
-    // A rest pose the leg cannot be read in (a rig bound in other units than its pose shows)
-    // is left: the leg is fitted as shown.
+    // A rest pose that is no plausible leg (no closed section to find up by, a height outside
+    // the plausible range) is left: the leg is fitted as shown.
     let Ok(mut rest) = leg_in_world(path, &skin.rest, &mesh.triangles, units, choice) else {
         return Ok(leg);
     };
