@@ -166,12 +166,19 @@ fn fit(args: FitArgs, quiet: bool) -> Result<ExitCode, Error> {
     let pose_unsettled = report.details.pose.as_ref().filter(|p| !p.converged);
     if let Some(pose) = pose_unsettled.filter(|_| !rest_unsettled) {
         eprintln!(
-            "knitfit: warning: the stocking, fitted in the rig's rest pose, had not settled in \
-             the pose the file shows after {} iterations (residual {:.1e}, force step {:.1e}, \
+            "knitfit: warning: the stocking, fitted in the leg's rest pose ({}), had not \
+             settled in the pose the file shows after {} iterations (residual {:.1e}, force step {:.1e}, \
              tolerance {:.0e}): \
              the pose folds or stretches the leg further than the carried stocking settles in; \
              its files are written (report.json details.pose)",
-            pose.iterations, pose.residual, pose.force_step, scene.solver.tolerance
+            match pose.bend {
+                Some(_) => "straightened at the joints its sections show",
+                None => "its rig's",
+            },
+            pose.iterations,
+            pose.residual,
+            pose.force_step,
+            scene.solver.tolerance
         );
         return Ok(ExitCode::from(EXIT_NOT_CONVERGED));
     }

@@ -375,8 +375,9 @@ impl Plan {
         if scene.leg.axis.is_none() {
             plan.add(
                 Stage::Pose,
-                "where the leg file's skin poses the leg away from its rest pose: the stocking \
-                 is fitted in the rest pose, carried into the pose by the skin and relaxed there",
+                "where the leg is posed, by the file's skin or bent where its sections show the \
+                 joints: the stocking is fitted in the rest pose (the rig's, or the leg \
+                 straightened), carried into the pose and relaxed there",
             );
         }
         let density_preview =

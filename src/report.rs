@@ -182,8 +182,8 @@ pub struct FitDetails {
     pub contact: ContactDetails,
     /// The penetration fix's counters; `null` when it did not run.
     pub penetration_fix: Option<PenetrationStats>,
-    /// Where the file's skin poses the leg away from its rest pose: the stocking was fitted in
-    /// the rest pose (`leg.landmarks`, `axis`, `tube` and `solver` are the rest pose's; the leg's
+    /// Where the leg is posed (by the file's skin, or bent where its sections show the joints:
+    /// `bend`): the stocking was fitted in the rest pose (`leg.landmarks`, `axis`, `tube` and `solver` are the rest pose's; the leg's
     /// `bounds_m`, `cleaned`, the fields, the checks and `metrics.max_penetration_m` the pose's)
     /// and carried into the pose; what that did. `null` otherwise.
     pub pose: Option<PoseStats>,

@@ -129,30 +129,38 @@ pub struct Fitted {
     pub products: Option<Products>,
     /// The checks a finished fit must pass to be done, besides converging.
     pub checks: FitChecks,
-    /// Where the leg was fitted in its rig's rest pose: what carrying it into the pose did.
+    /// Where the leg was fitted in a rest pose: what carrying it into the pose did.
     pub pose: Option<pose::PoseStats>,
 }
 
-/// The leg the stocking is fitted on: a rigged leg's rest pose where its skin poses it and no
-/// axis is given (a given axis is in the pose's coordinates), with the leg as posed and each
-/// rest vertex's matrix into the pose ([`pose`]); else `leg` itself.
+/// The leg the stocking is fitted on where no axis is given (a given axis is in the pose's
+/// coordinates): a rigged leg's rest pose where its skin poses it, else the leg straightened
+/// where it bends ([`crate::leg::unbend`]), with the leg as posed and each rest vertex's matrix
+/// into the pose ([`pose`]); else `leg` itself.
 pub fn in_rest_pose(mut leg: Leg, place: &PlaceSettings) -> (Leg, Option<pose::Posed>) {
-    match (leg.rest.take(), &place.axis) {
-        (Some(rest), None) => {
-            let crate::leg::RestPose {
-                leg: rest_leg,
-                pose_from_rest,
-                skin_moved_m,
-            } = *rest;
-            let posed = pose::Posed {
-                leg,
-                pose_from_rest,
-                skin_moved_m,
-            };
-            (rest_leg, Some(posed))
-        }
-        _ => (leg, None),
+    if place.axis.is_some() {
+        return (leg, None);
     }
+    let (rest, bend) = match leg.rest.take() {
+        Some(rest) => (*rest, None),
+        // No rig: the geometry's own joints, where the leg bends.
+        None => match crate::leg::unbend::straightened(&leg, place.side) {
+            Some((rest, bend)) => (rest, Some(bend)),
+            None => return (leg, None),
+        },
+    };
+    let crate::leg::RestPose {
+        leg: rest_leg,
+        pose_from_rest,
+        skin_moved_m,
+    } = rest;
+    let posed = pose::Posed {
+        leg,
+        pose_from_rest,
+        skin_moved_m,
+        bend,
+    };
+    (rest_leg, Some(posed))
 }
 
 /// Reads the leg file at `path`, refuses a fit too large for memory before the leg is decoded

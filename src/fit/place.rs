@@ -172,8 +172,10 @@ fn choose_axis(
         // ankle to thigh, and leaves a leg that bends between them.
         let why = match axis.source {
             AxisSource::Landmarks => "the leg bends between its ankle and its thigh more than a \
-                 straight stocking allows (a bent knee, a stride): fit it standing straight, or \
-                 give the part to dress with --axis (knitfit plan prints the landmarks)"
+                 straight stocking allows, and its sections do not show the joints to straighten \
+                 it at (a pointed foot, a knee bent past its sections): export the character \
+                 with its skin, fit it standing straight, or give the part to dress with --axis \
+                 (knitfit plan prints the landmarks)"
                 .to_string(),
             _ => format!(
                 "it misses the leg, or runs between two legs; check its coordinates (file \

@@ -1,8 +1,10 @@
-//! A rigged leg in a pose: the stocking is fitted on the leg in its rig's rest pose and carried
-//! to the pose the file shows by the skin's own motion (stage [`crate::stage::Stage::Pose`]).
+//! A posed leg: the stocking is fitted on the leg in a rest pose and carried to the pose the
+//! file shows by the skin's own motion (stage [`crate::stage::Stage::Pose`]).
 //!
-//! Method: the rest pose is the mesh as stored, before its skin moves it (glTF's bind pose),
-//! standing as rigs are built; landmarks, path and fit work there as on any standing leg. Each
+//! Method: the rest pose is a rigged leg's mesh as stored, before its skin moves it (glTF's
+//! bind pose), standing as rigs are built; or, without a rig, the leg straightened at the joints
+//! its sections show ([`crate::leg::unbend`]), whose per-vertex matrices carry it back as a
+//! skin's would. Landmarks, path and fit work there as on any standing leg. Each
 //! yarn point then follows the skin point it rests on: the nearest point of the rest leg's
 //! skin, a triangle and its barycentric weights, whose vertices' skinning matrices, blended by
 //! those weights, move the point as they move the skin (linear blend skinning, as a game
@@ -26,6 +28,7 @@ use crate::knit::tube::end_rings;
 use crate::leg::curvature::barycentric;
 use crate::leg::load::matrices_at;
 use crate::leg::solid::outer_skin;
+use crate::leg::unbend::Bend;
 use crate::leg::{Collider, Leg};
 use crate::sim::accelerated::relax_accelerated;
 use crate::sim::contact::LegContact;
@@ -43,6 +46,8 @@ pub struct Posed {
     pub pose_from_rest: Vec<Matrix4<f64>>,
     /// Furthest a skin vertex moves from the rest pose to the pose, metres.
     pub skin_moved_m: f64,
+    /// Where the rest pose was made from the leg's own joints (no rig): how it bends.
+    pub bend: Option<Bend>,
 }
 
 /// What carrying the stocking into the pose did (`report.json`'s `details.pose`).
@@ -51,6 +56,10 @@ pub struct Posed {
 pub struct PoseStats {
     /// Furthest any skin vertex moves from the rest pose to the pose, metres.
     pub skin_moved_m: f64,
+    /// Where the file has no rig and the leg bends: the joints its sections show and the bends
+    /// straightened for the fit ([`crate::leg::unbend`]); `null` for a rig's pose.
+    #[serde(default)]
+    pub bend: Option<Bend>,
     /// Yarn points the pose left closer to the skin than the contact offset, moved out.
     pub points_moved_out: usize,
     /// Furthest a point was moved out, metres.
@@ -74,6 +83,7 @@ pub fn carry(solved: &mut SolvedFit, posed: Posed, settings: &SolveSettings) -> 
         leg: posed,
         pose_from_rest,
         skin_moved_m,
+        bend,
     } = posed;
     let method = settings.contact;
     let rest_leg = &solved.leg;
@@ -163,6 +173,7 @@ pub fn carry(solved: &mut SolvedFit, posed: Posed, settings: &SolveSettings) -> 
     contact.finish_on(&collider, &mut knit.particles.x, &knit.particles.inv_mass);
     let stats = PoseStats {
         skin_moved_m,
+        bend,
         points_moved_out: out.iter().filter(|(_, d)| *d > 0.0).count(),
         max_moved_out_m: out.iter().map(|(_, d)| *d).fold(0.0, f64::max),
         iterations: relaxed.iterations,

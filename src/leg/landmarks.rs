@@ -55,7 +55,7 @@ pub const LIFTED_LEG_OFF_CENTRE_M: f64 = 0.05;
 /// Narrowest and widest a standing leg's section just above its sole can be, metres: a child's
 /// ankle is about 0.14 m around, an adult's foot under 0.35 m there; an ear is 0.09 m, a head 8
 /// cm below its crown 0.45 m or more.
-const MIN_STANDING_GIRTH_M: f64 = 0.12;
+pub const MIN_STANDING_GIRTH_M: f64 = 0.12;
 const MAX_STANDING_GIRTH_M: f64 = 0.4;
 /// Furthest a rig's ankle joint may be from a leg's seed section, across up, for the rig to say
 /// which leg that is, metres.
@@ -495,7 +495,7 @@ pub fn find_landmarks(
             return Err(format!(
                 "the only leg standing at the lowest point is the character's {} ({:.2} m from \
                  the body's centre): its {} leg does not reach down (lifted in a stride, a sit \
-                 or a kneel), and a leg posed away from standing is read only with its rig: \
+                 or a kneel), and a leg whose foot does not stand is read only with its rig: \
                  export the character with its skin, fit it standing, dress the {} leg \
                  (--side {}), or give the part to dress with --axis",
                 standing.name(),
@@ -581,9 +581,9 @@ pub fn find_landmarks(
             return Err(format!(
                 "the {} leg's sections stop {leg_height:.3} m above its lowest point, while the \
                  other leg's rise {other_rise:.2} m: it is lifted or bent out of standing (a \
-                 stride, a sit), and a leg posed away from standing is read only with its rig: \
-                 export the character with its skin, fit it standing, or give the part to dress \
-                 with --axis",
+                 stride, a sit), and a leg whose sections do not rise from its foot is read \
+                 only with its rig: export the character with its skin, fit it standing, or give \
+                 the part to dress with --axis",
                 side.name()
             )
             .into());

@@ -16,6 +16,7 @@ pub mod slice;
 pub mod solid;
 #[cfg(test)]
 mod test_meshes;
+pub mod unbend;
 pub mod weld;
 
 pub use axis::{leaves_mesh, Axis, AxisSource};

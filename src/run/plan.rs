@@ -12,6 +12,7 @@ use serde::Serialize;
 
 use crate::error::Result;
 use crate::fit;
+use crate::leg::unbend::Bend;
 use crate::leg::{decode_leg, read_leg_file, Axis, Landmarks, Leg, ThighTopKind, Units, UpAxis};
 use crate::limits::{MemoryCheck, MemoryEstimate, MemoryLimit};
 use crate::plan::{LeftOut, Plan, PlannedStage};
@@ -66,8 +67,11 @@ pub struct Placed {
     pub axis_file: [[f64; 3]; 2],
     /// For a stocking to the toe, the length of its path along the leg and foot, metres.
     pub to_the_toe_m: Option<f64>,
-    /// True where the leg is placed in its rig's rest pose ([`fit::in_rest_pose`]).
+    /// True where the leg is placed in a rest pose ([`fit::in_rest_pose`]): its rig's, or
+    /// straightened at the joints its sections show.
     pub in_rest_pose: bool,
+    /// Where the rest pose is the leg straightened (no rig): how it bends.
+    pub straightened: Option<Bend>,
 }
 
 /// The plan of `knitfit fit` for `loaded`, writing into `out_dir`.
@@ -97,6 +101,7 @@ pub fn plan_fit(loaded: &LoadedScene, out_dir: &Path) -> Result<PlanOutcome> {
         let mut shown = Placed::new(&leg, placed.landmarks.as_ref(), placed.axis);
         shown.to_the_toe_m = placed.path.as_ref().map(|p| p.length());
         shown.in_rest_pose = posed.is_some();
+        shown.straightened = posed.as_ref().and_then(|p| p.bend);
         if posed.is_none() {
             plan.without(Stage::Pose);
         }
@@ -125,6 +130,7 @@ impl Placed {
             axis,
             to_the_toe_m: None,
             in_rest_pose: false,
+            straightened: None,
         }
     }
 }
@@ -151,8 +157,10 @@ fn files(plan: &Plan, out_dir: &Path) -> Vec<PathBuf> {
 
 impl PlanOutcome {
     /// The plan as JSON, for scripts: `command`, `scene`, `leg` (`file`, `declared_triangles`,
-    /// and as decoded `up_axis`, `up_axis_found` and `in_rest_pose`, true where a rigged leg
-    /// is placed in its rest pose; null for a patch), `effects`, `forces`,
+    /// and as decoded `up_axis`, `up_axis_found`, `in_rest_pose`, true where a posed leg is
+    /// placed in a rest pose, and `straightened`, where that rest pose is the leg straightened
+    /// without a rig, its bend as `details.pose.bend` gives it; null for a patch), `effects`,
+    /// `forces`,
     /// `stages` and `left_out` (`name`, `why`), `files`, `memory` (`estimate` by part with
     /// `total_bytes`, `limit`, `allow_large`, `fits`; null for a patch), `landmarks` (as
     /// `details.leg.landmarks` of `report.json`; null where the axis is given), `axis` (as
@@ -174,6 +182,7 @@ impl PlanOutcome {
                 up_axis: placed.map(|p| p.up_axis),
                 up_axis_found: placed.map(|p| p.up_axis_found),
                 in_rest_pose: placed.map(|p| p.in_rest_pose),
+                straightened: placed.and_then(|p| p.straightened),
             }),
             effects: &p.effects,
             forces: &p.forces,
@@ -282,13 +291,26 @@ impl Placement {
             ),
         );
         let a = &placed.axis;
-        if placed.in_rest_pose {
-            out += &row(
+        match (placed.in_rest_pose, &placed.straightened) {
+            (true, Some(bend)) => {
+                out += &row(
+                    "pose",
+                    format!(
+                    "the leg bends (knee {:.0}°, thigh {:.0}° off up) and the file has no rig: \
+                     the landmarks and axis below are the leg's straightened at the joints its \
+                     sections show, where the stocking is fitted before it is carried into the \
+                     pose",
+                    bend.knee_deg, bend.thigh_deg
+                ),
+                )
+            }
+            (true, None) => out += &row(
                 "pose",
                 "the file's skin poses the leg: the landmarks and axis below are its rest pose's, \
                  where the stocking is fitted before the skin carries it into the pose"
                     .into(),
-            );
+            ),
+            _ => {}
         }
         if let Some(l) = &placed.landmarks {
             out += &landmark_rows(l, row);
@@ -410,6 +432,7 @@ struct LegJson {
     up_axis: Option<UpAxis>,
     up_axis_found: Option<bool>,
     in_rest_pose: Option<bool>,
+    straightened: Option<Bend>,
 }
 
 #[derive(Serialize)]

@@ -1,0 +1,349 @@
+//! A leg posed without its rig (a baked pose: a stride, a bent knee) read through its own joints:
+//! the geometry's rest pose, standing straight, where the stocking is fitted before it is
+//! carried into the pose as a rigged leg's is ([`crate::fit::pose`]).
+//!
+//! Method: the landmarks' sections, taken along up, still go around a leg that leans or bends
+//! moderately, and their centres trace its centreline. The knee is the centre furthest from the
+//! line from the ankle to the top of the thigh (the apex of the bend); the thigh runs from it to
+//! the top of the thigh, the shin from the ankle to it. Two bones are made of them: the thigh
+//! turns about the top of the thigh to stand along up, the shin about the knee to continue it
+//! (each the least turn between the two directions). Each vertex of the leg, the part of the
+//! mesh below the top of the thigh reached from the ankle without crossing it, is moved by its
+//! bones' turns blended as linear blend skinning blends them, weighted by smoothsteps across a
+//! band at each joint; the rest of the body stays. The matrix from the rest so made back to the
+//! pose is each vertex's blend inverted, so carrying the rest mesh by it gives the file's mesh
+//! exactly.
+//!
+//! Contract: `None` where the leg is standing straight enough (the axis from the ankle to the top
+//! of the thigh stays inside it and bends less than [`BENT_DEG`]), where its landmarks are not
+//! found as posed, or where they are not found on the straightened leg either: the fit then
+//! reads the leg as it is and says what it saw. A foot pointed at the ankle is not turned back.
+
+use std::collections::VecDeque;
+
+use nalgebra::{Matrix4, Point3, Rotation3, Translation3, Unit, Vector3};
+use serde::Serialize;
+
+use super::landmarks::{find_landmarks, Landmarks, MIN_STANDING_GIRTH_M};
+use super::{leaves_mesh, Axis, AxisSource, Leg, RestPose, Side};
+
+/// A leg whose thigh leans off up, or whose knee bends, more than this, degrees, is fitted
+/// straightened: a straight stocking pulled onto it would bunch on one side.
+pub const BENT_DEG: f64 = 20.0;
+/// The shin's share of the leg from the ankle to the top of the thigh where a knee can be: an
+/// adult's is about half. A bend's apex outside it is not a knee (a pointed foot's sections).
+const KNEE_SHARE: std::ops::RangeInclusive<f64> = 0.3..=0.7;
+/// How far the straightened leg's length from its ankle to the top of its thigh may differ from
+/// the posed one's along its bones, as a fraction.
+const SAME_LENGTH: f64 = 0.1;
+/// Half the band across the knee over which a vertex's weight goes from the thigh to the shin,
+/// as a fraction of the knee's radius.
+const KNEE_BAND: f64 = 1.0;
+/// The band below the top of the thigh over which the leg's weight goes from the body's to the
+/// thigh's, metres.
+const HIP_BAND_M: f64 = 0.08;
+
+/// How the geometry's joints straightened a leg (`report.json`'s `details.pose.bend`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Bend {
+    /// The knee's bend: the angle between the shin and the thigh's line, degrees.
+    pub knee_deg: f64,
+    /// The thigh's lean off up, degrees.
+    pub thigh_deg: f64,
+    /// The joints as posed, world space: the ankle's, the knee's and the thigh top's section
+    /// centres.
+    pub ankle: [f64; 3],
+    pub knee: [f64; 3],
+    pub thigh_top: [f64; 3],
+}
+
+/// The leg on `side` straightened to stand along up (module docs), with the matrices back to
+/// the pose; `None` where it stands straight enough or cannot be read.
+pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
+    let up = leg.up;
+    let landmarks = find_landmarks(&leg.positions, &leg.triangles, up, side, None).ok()?;
+    let bend = bend_of(&landmarks, &up)?;
+    let straight = Axis {
+        bottom: bend.ankle,
+        top: bend.thigh_top,
+        source: AxisSource::Landmarks,
+    };
+    if leaves_mesh(leg, &straight).is_none() && bend.knee_deg.max(bend.thigh_deg) < BENT_DEG {
+        return None;
+    }
+    let (ankle, knee, top) = (
+        Point3::from(bend.ankle),
+        Point3::from(bend.knee),
+        Point3::from(bend.thigh_top),
+    );
+    let (thigh, shin) = ((top - knee).normalize(), (knee - ankle).normalize());
+    // Rest from pose: the thigh turned about its top to stand along up, then the shin about
+    // the (turned) knee to continue the thigh.
+    let thigh_turn = about(&top, &least_turn(&thigh, &up));
+    let knee_then = thigh_turn.transform_point(&knee);
+    let shin_then = thigh_turn.transform_vector(&shin);
+    let shin_turn = about(&knee_then, &least_turn(&shin_then, &up)) * thigh_turn;
+    // The leg: below the top of the thigh (square to it) and reached from the ankle there.
+    let below_top: Vec<f64> = (leg.positions.iter())
+        .map(|p| (top - p).dot(&thigh))
+        .collect();
+    let member = reached_from(leg, &ankle, |i| below_top[i] > 0.0)?;
+    let knee_radius = landmarks.knee.girth_m / std::f64::consts::TAU;
+    let knee_band = KNEE_BAND * knee_radius;
+    // Square to the bisector of the thigh's and shin's lines: the plane between the two bones.
+    let across_knee = (-thigh - shin).try_normalize(1e-9).unwrap_or(-up);
+    let rest_from_pose: Vec<Matrix4<f64>> = (leg.positions.iter().enumerate())
+        .map(|(i, p)| {
+            if !member[i] {
+                return Matrix4::identity();
+            }
+            let on_leg = smoothstep(below_top[i] / HIP_BAND_M);
+            let on_shin =
+                smoothstep(((p - knee).dot(&across_knee) + knee_band) / (2.0 * knee_band));
+            let leg_matrix = thigh_turn * (1.0 - on_shin) + shin_turn * on_shin;
+            Matrix4::identity() * (1.0 - on_leg) + leg_matrix * on_leg
+        })
+        .collect();
+    let world = linear_of(leg);
+    let file = world.try_inverse()?;
+    let mut rest_leg = leg.clone();
+    rest_leg.rig = None;
+    rest_leg.rest = None;
+    let mut pose_from_rest = Vec::with_capacity(leg.positions.len());
+    let mut moved = 0.0f64;
+    for (p, m) in rest_leg.positions.iter_mut().zip(&rest_from_pose) {
+        let back = m.try_inverse()?;
+        let rest = m.transform_point(p);
+        moved = moved.max((rest - *p).norm());
+        *p = rest;
+        pose_from_rest.push(file * back * world);
+    }
+    // Straightened, the leg must read as a standing one, around its straight axis; else the
+    // fit reads it as posed, and says what it saw.
+    let standing = find_landmarks(&rest_leg.positions, &rest_leg.triangles, up, side, None).ok()?;
+    let standing_bend = bend_of(&standing, &up)?;
+    let standing_axis = Axis {
+        bottom: standing_bend.ankle,
+        top: standing_bend.thigh_top,
+        source: AxisSource::Landmarks,
+    };
+    if leaves_mesh(&rest_leg, &standing_axis).is_some() {
+        return None;
+    }
+    // The same leg, as long straightened as it was along its bones: else the joints were not
+    // the leg's (an ankle read in a pointed foot).
+    let along_bones =
+        (Point3::from(bend.knee) - ankle).norm() + (top - Point3::from(bend.knee)).norm();
+    let standing_length = standing_axis.length();
+    if (standing_length - along_bones).abs() > SAME_LENGTH * along_bones {
+        return None;
+    }
+    Some((
+        RestPose {
+            leg: rest_leg,
+            pose_from_rest,
+            skin_moved_m: moved,
+        },
+        bend,
+    ))
+}
+
+/// The joints and bends of the leg as its landmarks' section centres trace it; `None` where
+/// the profile is too short to have a knee between its ends.
+fn bend_of(landmarks: &Landmarks, up: &Vector3<f64>) -> Option<Bend> {
+    // An ankle thinner than any standing leg's is a section through the toes (a pointed foot):
+    // not a joint to turn about.
+    if landmarks.ankle.girth_m < MIN_STANDING_GIRTH_M {
+        return None;
+    }
+    let (ankle, top) = (
+        Point3::from(landmarks.ankle.centre),
+        Point3::from(landmarks.thigh_top.centre),
+    );
+    let centres: Vec<Point3<f64>> = (landmarks.profile.iter())
+        .map(|r| Point3::from(r.centre))
+        .collect();
+    // The knee: the section centre that best splits the centres into a shin's line and a
+    // thigh's (least squares over both), among those where a knee can be.
+    let shin_share = |knee: &Point3<f64>| {
+        let (shin, thigh) = ((knee - ankle).norm(), (top - knee).norm());
+        shin / (shin + thigh)
+    };
+    let misfit = |knee: &Point3<f64>| -> f64 {
+        (centres.iter())
+            .map(|c| distance_to_segment(c, &ankle, knee).min(distance_to_segment(c, knee, &top)))
+            .map(|d| d * d)
+            .sum()
+    };
+    let knee = (centres.iter())
+        .filter(|k| KNEE_SHARE.contains(&shin_share(k)))
+        .min_by(|a, b| misfit(a).total_cmp(&misfit(b)))
+        .copied()?;
+    let (thigh, shin) = (
+        (top - knee).try_normalize(1e-9)?,
+        (knee - ankle).try_normalize(1e-9)?,
+    );
+    Some(Bend {
+        knee_deg: thigh.angle(&shin).to_degrees(),
+        thigh_deg: thigh.angle(up).to_degrees(),
+        ankle: ankle.coords.into(),
+        knee: knee.coords.into(),
+        thigh_top: top.coords.into(),
+    })
+}
+
+/// Distance from `p` to the segment from `a` to `b`.
+fn distance_to_segment(p: &Point3<f64>, a: &Point3<f64>, b: &Point3<f64>) -> f64 {
+    let ab = b - a;
+    let t = ((p - a).dot(&ab) / ab.norm_squared().max(1e-18)).clamp(0.0, 1.0);
+    (p - (a + ab * t)).norm()
+}
+
+/// The least rotation taking the unit vector `from` to `to`.
+fn least_turn(from: &Vector3<f64>, to: &Vector3<f64>) -> Rotation3<f64> {
+    Rotation3::rotation_between(from, to).unwrap_or_else(|| {
+        // Opposite: half a turn about any axis square to them.
+        let axis = from.cross(&Vector3::x()).try_normalize(1e-6);
+        let axis = axis.unwrap_or_else(|| from.cross(&Vector3::y()).normalize());
+        Rotation3::from_axis_angle(&Unit::new_normalize(axis), std::f64::consts::PI)
+    })
+}
+
+/// The turn `r` about the point `pivot`, as a matrix.
+fn about(pivot: &Point3<f64>, r: &Rotation3<f64>) -> Matrix4<f64> {
+    Translation3::from(pivot.coords).to_homogeneous()
+        * r.to_homogeneous()
+        * Translation3::from(-pivot.coords).to_homogeneous()
+}
+
+/// `leg`'s map from file coordinates to world space (units and the quarter turns to Y up), as
+/// a matrix.
+fn linear_of(leg: &Leg) -> Matrix4<f64> {
+    let mut m = Matrix4::identity();
+    for k in 0..3 {
+        let mut e = Point3::origin();
+        e[k] = 1.0;
+        m.fixed_view_mut::<3, 1>(0, k)
+            .copy_from(&leg.world_from_file(&e).coords);
+    }
+    m
+}
+
+/// Per vertex, whether it is reached from the vertex nearest `from` along the edges of
+/// triangles whose corners are all `inside`; `None` where no vertex is inside.
+fn reached_from(
+    leg: &Leg,
+    from: &Point3<f64>,
+    inside: impl Fn(usize) -> bool,
+) -> Option<Vec<bool>> {
+    let n = leg.positions.len();
+    let start = (0..n).filter(|&i| inside(i)).min_by(|&a, &b| {
+        (leg.positions[a] - from)
+            .norm()
+            .total_cmp(&(leg.positions[b] - from).norm())
+    })?;
+    let mut next: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for t in &leg.triangles {
+        if t.iter().all(|&i| inside(i as usize)) {
+            for k in 0..3 {
+                next[t[k] as usize].push(t[(k + 1) % 3]);
+                next[t[(k + 1) % 3] as usize].push(t[k]);
+            }
+        }
+    }
+    let mut reached = vec![false; n];
+    reached[start] = true;
+    let mut queue = VecDeque::from([start]);
+    while let Some(i) = queue.pop_front() {
+        for &j in &next[i] {
+            if !reached[j as usize] {
+                reached[j as usize] = true;
+                queue.push_back(j as usize);
+            }
+        }
+    }
+    Some(reached)
+}
+
+/// 0 below 0, 1 above 1, and the cubic smoothstep between.
+fn smoothstep(x: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::leg::{load_leg, Units, UpChoice};
+
+    /// The sample leg with its foot in a stride: its knee bent by `degrees` about the axis square
+    /// to up and to its foot, blended over 4 cm as skinning blends it, and the whole leg turned
+    /// back by half that about the top of its thigh (the hip flexed), so that its foot stands.
+    fn bent_sample(degrees: f64) -> Leg {
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/samples/makehuman_leg_foot.glb"
+        );
+        let mut leg = load_leg(std::path::Path::new(path), Units::Metres, UpChoice::Auto).unwrap();
+        let standing =
+            find_landmarks(&leg.positions, &leg.triangles, leg.up, Side::Left, None).unwrap();
+        let knee = Point3::from(standing.knee.centre);
+        let top = Point3::from(standing.thigh_top.centre);
+        let foot = Vector3::from(standing.foot.unwrap().direction);
+        let hinge = Unit::new_normalize(leg.up.cross(&foot));
+        let bent = about(
+            &knee,
+            &Rotation3::from_axis_angle(&hinge, degrees.to_radians()),
+        );
+        let flexed = about(
+            &top,
+            &Rotation3::from_axis_angle(&hinge, -degrees.to_radians() / 2.0),
+        );
+        let up = leg.up;
+        for p in &mut leg.positions {
+            let below = smoothstep(((knee - *p).dot(&up) + 0.02) / 0.04);
+            let at_knee = p.coords * (1.0 - below) + bent.transform_point(p).coords * below;
+            *p = flexed.transform_point(&Point3::from(at_knee));
+        }
+        leg
+    }
+
+    #[test]
+    fn a_bent_knee_is_found_from_the_sections_and_straightened_back_to_the_pose() {
+        let leg = bent_sample(50.0);
+        let (rest, bend) = straightened(&leg, Side::Left).expect("a knee bent 50° is read");
+        // Horizontal sections of leaning bones read the bend short (37.6° and 13.9° here); what
+        // matters is that straightening it leaves a leg that stands.
+        assert!((bend.knee_deg - 50.0).abs() < 15.0, "{bend:?}");
+        assert!((bend.thigh_deg - 25.0).abs() < 12.0, "{bend:?}");
+        // The rest pose carried by its matrices is the file's pose, exactly.
+        for ((r, m), p) in rest
+            .leg
+            .positions
+            .iter()
+            .zip(&rest.pose_from_rest)
+            .zip(&leg.positions)
+        {
+            let back = leg.world_from_file(&m.transform_point(&rest.leg.file_from_world(r)));
+            assert!((back - p).norm() < 1e-9, "{back} against {p}");
+        }
+        // Straightened, it stands: its knee bends less than the threshold.
+        let standing = find_landmarks(
+            &rest.leg.positions,
+            &rest.leg.triangles,
+            leg.up,
+            Side::Left,
+            None,
+        )
+        .unwrap();
+        let again = bend_of(&standing, &leg.up).unwrap();
+        assert!(again.knee_deg < BENT_DEG, "{again:?}");
+    }
+
+    #[test]
+    fn a_leg_standing_straight_is_left_as_it_is() {
+        assert!(straightened(&bent_sample(0.0), Side::Left).is_none());
+        assert!(straightened(&bent_sample(10.0), Side::Left).is_none());
+    }
+}
