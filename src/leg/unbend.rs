@@ -7,8 +7,9 @@
 //! line from the ankle to the top of the thigh (the apex of the bend); the thigh runs from it to
 //! the top of the thigh, the shin from the ankle to it. Two bones are made of them: the thigh
 //! turns about the top of the thigh to stand along up, the shin about the knee to continue it
-//! (each the least turn between the two directions). Each vertex of the leg, the part of the
-//! mesh below the top of the thigh reached from the ankle without crossing it, is moved by its
+//! (each the least turn between the two directions). Each vertex of the leg (below the top of the
+//! thigh: the piece at the ankle and the pieces along the limb that touch it, a mannequin's
+//! foot, shin, knee ball and thigh; not the other leg) is moved by its
 //! bones' turns blended as linear blend skinning blends them, weighted by smoothsteps across a
 //! band at each joint; the rest of the body stays. The matrix from the rest so made back to the
 //! pose is each vertex's blend inverted, so carrying the rest mesh by it gives the file's mesh
@@ -19,12 +20,11 @@
 //! found as posed, or where they are not found on the straightened leg either: the fit then
 //! reads the leg as it is and says what it saw. A foot pointed at the ankle is not turned back.
 
-use std::collections::VecDeque;
-
 use nalgebra::{Matrix4, Point3, Rotation3, Translation3, Unit, Vector3};
 use serde::Serialize;
 
 use super::landmarks::{find_landmarks, Landmarks, MIN_STANDING_GIRTH_M};
+use super::solid::{touching_groups, triangle_pieces};
 use super::{leaves_mesh, Axis, AxisSource, Leg, RestPose, Side};
 
 /// A leg whose thigh leans off up, or whose knee bends, more than this, degrees, is fitted
@@ -88,7 +88,9 @@ pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
     let below_top: Vec<f64> = (leg.positions.iter())
         .map(|p| (top - p).dot(&thigh))
         .collect();
-    let member = reached_from(leg, &ankle, |i| below_top[i] > 0.0)?;
+    let limb = [Point3::from(landmarks.sole), ankle, knee, top];
+    let reach = landmarks.thigh_top.girth_m / std::f64::consts::TAU;
+    let member = leg_vertices(leg, &limb, reach, |i| below_top[i] > 0.0)?;
     let knee_radius = landmarks.knee.girth_m / std::f64::consts::TAU;
     let knee_band = KNEE_BAND * knee_radius;
     // Square to the bisector of the thigh's and shin's lines: the plane between the two bones.
@@ -230,40 +232,69 @@ fn linear_of(leg: &Leg) -> Matrix4<f64> {
     m
 }
 
-/// Per vertex, whether it is reached from the vertex nearest `from` along the edges of
-/// triangles whose corners are all `inside`; `None` where no vertex is inside.
-fn reached_from(
+/// Per vertex, whether it is the leg's: on a triangle whose corners are all `inside` (below
+/// the top of the thigh), in the piece nearest the ankle (`limb[1]`), or in a piece that touches
+/// or passes into it, transitively, whose centre lies within `reach` of the `limb` (sole, ankle,
+/// knee, thigh top): a mannequin's foot, shin, knee ball and thigh, not the other leg or a hand
+/// that touches it. `None` where no triangle is inside.
+fn leg_vertices(
     leg: &Leg,
-    from: &Point3<f64>,
+    limb: &[Point3<f64>; 4],
+    reach: f64,
     inside: impl Fn(usize) -> bool,
 ) -> Option<Vec<bool>> {
-    let n = leg.positions.len();
-    let start = (0..n).filter(|&i| inside(i)).min_by(|&a, &b| {
-        (leg.positions[a] - from)
-            .norm()
-            .total_cmp(&(leg.positions[b] - from).norm())
-    })?;
-    let mut next: Vec<Vec<u32>> = vec![Vec::new(); n];
-    for t in &leg.triangles {
-        if t.iter().all(|&i| inside(i as usize)) {
-            for k in 0..3 {
-                next[t[k] as usize].push(t[(k + 1) % 3]);
-                next[t[(k + 1) % 3] as usize].push(t[k]);
+    let below: Vec<[u32; 3]> = (leg.triangles.iter())
+        .filter(|t| t.iter().all(|&i| inside(i as usize)))
+        .copied()
+        .collect();
+    let piece = triangle_pieces(&leg.positions, &below);
+    let ankle = &limb[1];
+    let start = (below.iter().zip(&piece))
+        .min_by(|(a, _), (b, _)| {
+            let near = |t: &[u32; 3]| {
+                (t.iter())
+                    .map(|&i| (leg.positions[i as usize] - ankle).norm())
+                    .fold(f64::INFINITY, f64::min)
+            };
+            near(a).total_cmp(&near(b))
+        })
+        .map(|(_, &p)| p)?;
+    let count = piece.iter().copied().max().map_or(0, |p| p as usize + 1);
+    let mut centre = vec![(Vector3::zeros(), 0.0); count];
+    for (t, &p) in below.iter().zip(&piece) {
+        for &i in t {
+            centre[p as usize].0 += leg.positions[i as usize].coords;
+            centre[p as usize].1 += 1.0;
+        }
+    }
+    let along_limb = |c: &Point3<f64>| {
+        (limb.windows(2))
+            .map(|w| distance_to_segment(c, &w[0], &w[1]))
+            .fold(f64::INFINITY, f64::min)
+    };
+    let on_limb: Vec<bool> = (centre.iter().enumerate())
+        .map(|(p, (sum, n))| p as u32 == start || along_limb(&Point3::from(sum / *n)) <= reach)
+        .collect();
+    // Pieces that touch, among those along the limb.
+    let kept: Vec<[u32; 3]> = (below.iter().zip(&piece))
+        .filter(|(_, &p)| on_limb[p as usize])
+        .map(|(t, _)| *t)
+        .collect();
+    let kept_piece: Vec<u32> = (piece.iter())
+        .filter(|&&p| on_limb[p as usize])
+        .copied()
+        .collect();
+    let group = touching_groups(&leg.positions, &kept, &kept_piece);
+    let start_group = group[start as usize];
+    let mut member = vec![false; leg.positions.len()];
+    for (t, &p) in kept.iter().zip(&kept_piece) {
+        if group[p as usize] == start_group {
+            for &i in t {
+                member[i as usize] = true;
             }
         }
     }
-    let mut reached = vec![false; n];
-    reached[start] = true;
-    let mut queue = VecDeque::from([start]);
-    while let Some(i) = queue.pop_front() {
-        for &j in &next[i] {
-            if !reached[j as usize] {
-                reached[j as usize] = true;
-                queue.push_back(j as usize);
-            }
-        }
-    }
-    Some(reached)
+    Some(member)
 }
 
 /// 0 below 0, 1 above 1, and the cubic smoothstep between.
@@ -339,6 +370,57 @@ mod tests {
         .unwrap();
         let again = bend_of(&standing, &leg.up).unwrap();
         assert!(again.knee_deg < BENT_DEG, "{again:?}");
+    }
+
+    #[test]
+    fn a_leg_in_pieces_moves_whole_and_the_other_leg_and_a_hand_touching_it_stay() {
+        use crate::leg::test_meshes::add_box;
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        // A mannequin's leg along Y: foot, shin and thigh boxes passing into one another.
+        add_box(
+            &mut positions,
+            &mut triangles,
+            [-0.05, 0.0, -0.05],
+            [0.05, 0.1, 0.15],
+        );
+        add_box(
+            &mut positions,
+            &mut triangles,
+            [-0.04, 0.08, -0.04],
+            [0.04, 0.5, 0.04],
+        );
+        add_box(
+            &mut positions,
+            &mut triangles,
+            [-0.06, 0.48, -0.06],
+            [0.06, 0.9, 0.06],
+        );
+        // The other leg, apart; a hand touching the thigh from the side, off the limb.
+        add_box(
+            &mut positions,
+            &mut triangles,
+            [0.2, 0.0, -0.05],
+            [0.3, 0.9, 0.05],
+        );
+        add_box(
+            &mut positions,
+            &mut triangles,
+            [0.06, 0.6, -0.02],
+            [0.16, 0.7, 0.02],
+        );
+        let mut leg = bent_sample(0.0);
+        (leg.positions, leg.triangles) = (positions, triangles);
+        let limb = [
+            [0.0, 0.0, 0.0],
+            [0.0, 0.1, 0.0],
+            [0.0, 0.5, 0.0],
+            [0.0, 0.9, 0.0],
+        ]
+        .map(Point3::from);
+        let member = leg_vertices(&leg, &limb, 0.08, |_| true).unwrap();
+        let pieces: Vec<bool> = member.chunks(8).map(|c| c.iter().all(|&m| m)).collect();
+        assert_eq!(pieces, [true, true, true, false, false]);
+        assert!(member.chunks(8).all(|c| c.iter().all(|&m| m == c[0])));
     }
 
     #[test]
