@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The whole leg zoo (tests/integration/zoo.rs, docs/TESTING.md): every variant fitted by the
+# The whole leg zoo (tests/integration/zoo.rs, docs/TESTING.md), the posed characters and the
+# strides without a rig: every variant fitted by the
 # release binary, then its table copied into docs/ZOO.md. Fails, after writing the table, when a
 # variant that should fit does not.
 set -uo pipefail
@@ -10,6 +11,8 @@ status=$?
 KNITFIT_LONG=1 cargo test --release --locked -- rig::the_posed_zoo_fits_every_pose_the_skin_bends_cleanly \
   --include-ignored --nocapture
 posed=$?
+KNITFIT_LONG=1 cargo test --release --locked -- zoo::the_stride_zoo_table --include-ignored --nocapture
+strides=$?
 {
   echo "# The leg zoo"
   echo
@@ -28,5 +31,15 @@ posed=$?
   echo "(\`tests/integration/rig.rs\`, [decision 0077](decisions/0077-rigged-legs-are-fitted-at-rest-and-carried-into-the-pose.md))."
   echo
   cat target/zoo/posed.md
+  echo
+  echo "## Strides without a rig"
+  echo
+  echo "Each left leg of the zoo (cut open, closed, slanted, in pieces; the procedural leg closed,"
+  echo "open, in pieces) posed as a stride with no rig, its knee bent back and its hip flexed"
+  echo "forward by the degrees named (a piece turned whole, a mesh across the knee blended over"
+  echo "4 cm), fitted at the defaults (\`zoo::the_stride_zoo_table\`; the bend read is"
+  echo "\`details.pose.bend\`, [decision 0077](decisions/0077-rigged-legs-are-fitted-at-rest-and-carried-into-the-pose.md))."
+  echo
+  cat target/zoo/strides.md
 } >docs/ZOO.md
-[ "$status" -eq 0 ] && [ "$posed" -eq 0 ]
+[ "$status" -eq 0 ] && [ "$posed" -eq 0 ] && [ "$strides" -eq 0 ]

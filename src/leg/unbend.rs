@@ -23,7 +23,7 @@
 use nalgebra::{Matrix4, Point3, Rotation3, Translation3, Unit, Vector3};
 use serde::Serialize;
 
-use super::landmarks::{find_landmarks, Landmarks, MIN_STANDING_GIRTH_M};
+use super::landmarks::{anatomical_up, find_landmarks, Landmarks, MIN_STANDING_GIRTH_M};
 use super::solid::{touching_groups, triangle_pieces};
 use super::{leaves_mesh, Axis, AxisSource, Leg, RestPose, Side};
 
@@ -78,12 +78,17 @@ pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
         Point3::from(bend.thigh_top),
     );
     let (thigh, shin) = ((top - knee).normalize(), (knee - ankle).normalize());
-    // Rest from pose: the thigh turned about its top to stand along up, then the shin about
+    // Rest from pose: the thigh turned about its top to stand along up (a lone leg's left), then the shin about
     // the (turned) knee to continue the thigh.
-    let thigh_turn = about(&top, &least_turn(&thigh, &up));
+    // A lone leg's up is found from its own shape, which a bend tilts: its thigh is left as it
+    // is and only the knee straightened, and the straight leg's up found again. A body's up is
+    // its whole figure's: the thigh is turned to stand along it.
+    let lone = landmarks.legs_found == 1 && leg.up_axis_found;
+    let thigh_to = if lone { thigh } else { up };
+    let thigh_turn = about(&top, &least_turn(&thigh, &thigh_to));
     let knee_then = thigh_turn.transform_point(&knee);
     let shin_then = thigh_turn.transform_vector(&shin);
-    let shin_turn = about(&knee_then, &least_turn(&shin_then, &up)) * thigh_turn;
+    let shin_turn = about(&knee_then, &least_turn(&shin_then, &thigh_to)) * thigh_turn;
     // The leg: below the top of the thigh (square to it) and reached from the ankle there.
     let below_top: Vec<f64> = (leg.positions.iter())
         .map(|p| (top - p).dot(&thigh))
@@ -121,6 +126,10 @@ pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
         *p = rest;
         pose_from_rest.push(file * back * world);
     }
+    if lone {
+        rest_leg.up = anatomical_up(&rest_leg.positions, &rest_leg.triangles).unwrap_or(up);
+    }
+    let up = rest_leg.up;
     // Straightened, the leg must read as a standing one, around its straight axis; else the
     // fit reads it as posed, and says what it saw.
     let standing = find_landmarks(&rest_leg.positions, &rest_leg.triangles, up, side, None).ok()?;
@@ -368,7 +377,7 @@ mod tests {
             None,
         )
         .unwrap();
-        let again = bend_of(&standing, &leg.up).unwrap();
+        let again = bend_of(&standing, &rest.leg.up).unwrap();
         assert!(again.knee_deg < BENT_DEG, "{again:?}");
     }
 

@@ -495,6 +495,8 @@ fn posed_variant(pose: Pose, rigging: Rigging, frame: RigFrame) -> (String, bool
     let report_path = run.path().join("out/report.json");
     if !report_path.exists() {
         let why = stderr(&out).lines().last().unwrap_or_default().to_string();
+        // The file by its name: the table is the same from run to run.
+        let why = why.replace(&format!("{}/", dir.path().display()), "");
         return (
             format!("| {name} | exit {code:?}: {why} | | | | {seconds:.1} |"),
             false,
