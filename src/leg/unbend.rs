@@ -385,38 +385,17 @@ mod tests {
     fn a_leg_in_pieces_moves_whole_and_the_other_leg_and_a_hand_touching_it_stay() {
         use crate::leg::test_meshes::add_box;
         let (mut positions, mut triangles) = (Vec::new(), Vec::new());
-        // A mannequin's leg along Y: foot, shin and thigh boxes passing into one another.
-        add_box(
-            &mut positions,
-            &mut triangles,
-            [-0.05, 0.0, -0.05],
-            [0.05, 0.1, 0.15],
-        );
-        add_box(
-            &mut positions,
-            &mut triangles,
-            [-0.04, 0.08, -0.04],
-            [0.04, 0.5, 0.04],
-        );
-        add_box(
-            &mut positions,
-            &mut triangles,
-            [-0.06, 0.48, -0.06],
-            [0.06, 0.9, 0.06],
-        );
-        // The other leg, apart; a hand touching the thigh from the side, off the limb.
-        add_box(
-            &mut positions,
-            &mut triangles,
-            [0.2, 0.0, -0.05],
-            [0.3, 0.9, 0.05],
-        );
-        add_box(
-            &mut positions,
-            &mut triangles,
-            [0.06, 0.6, -0.02],
-            [0.16, 0.7, 0.02],
-        );
+        // A mannequin's leg along Y: foot, shin and thigh boxes passing into one another; the
+        // other leg, apart; a hand touching the thigh from the side, off the limb.
+        for (lo, hi) in [
+            ([-0.05, 0.0, -0.05], [0.05, 0.1, 0.15]),
+            ([-0.04, 0.08, -0.04], [0.04, 0.5, 0.04]),
+            ([-0.06, 0.48, -0.06], [0.06, 0.9, 0.06]),
+            ([0.2, 0.0, -0.05], [0.3, 0.9, 0.05]),
+            ([0.06, 0.6, -0.02], [0.16, 0.7, 0.02]),
+        ] {
+            add_box(&mut positions, &mut triangles, lo, hi);
+        }
         let mut leg = bent_sample(0.0);
         (leg.positions, leg.triangles) = (positions, triangles);
         let limb = [

@@ -1029,10 +1029,11 @@ fn a_stocking_far_smaller_than_the_ankle_is_refused_on_the_coarse_grid() {
 }
 
 #[test]
-fn a_leg_bent_at_the_knee_is_refused_saying_it_bends_not_to_check_an_axis_never_given() {
+fn a_leg_bent_at_the_knee_is_straightened_never_told_to_check_an_axis_never_given() {
     // The procedural leg with its thigh swung 70° forward about the knee, blended over 6 cm: the
-    // straight axis from ankle to thigh leaves it. The user gave no axis, so the way out is not
-    // to check one.
+    // straight axis from ankle to thigh leaves it. It was refused saying it bends; now its
+    // sections show the knee, and it is straightened there and fitted (decision 0077). The
+    // user gave no axis, so no message sends them to check one.
     let dir = tempfile::tempdir().unwrap();
     let leg = procedural();
     let knee_y = 0.43;
@@ -1046,23 +1047,19 @@ fn a_leg_bent_at_the_knee_is_refused_saying_it_bends_not_to_check_an_axis_never_
         .collect();
     let path = write_mesh(dir.path(), "bent.glb", &bent, leg.triangles.clone());
     let scene = scene_for(&path, json!({}), json!({}));
-    let (run, out) = run_scene(&scene, "24x24", &[]);
-    check_refused(
-        "bent at the knee",
-        run.path(),
-        &out,
-        2,
-        &[
-            "bent.glb",
-            "bends between its ankle and its thigh",
-            "--axis",
-        ],
-    );
+    let (run, out) = run_scene(&scene, "60x60", &[]);
     assert!(
         !stderr(&out).contains("check its coordinates"),
         "{}",
         stderr(&out)
     );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let report = read_fit_report(&run.path().join("out"));
+    let bend = (report.details.pose.as_ref())
+        .and_then(|p| p.bend)
+        .expect("straightened");
+    assert!((bend.knee_deg - 70.0).abs() < 15.0, "{bend:?}");
+    assert_eq!(report.metrics.max_penetration_m, Some(0.0));
 }
 
 #[test]
