@@ -18,7 +18,9 @@
 //! the toe; unless [`known_failing`] names it and says why. Each fitted variant is also held to
 //! the same leg made another way, where that fitted (metamorphic checks: its frame against Y-up
 //! metres, remeshed against as exported, closed at the cut against open): landmarks within 1 cm
-//! of each other, every region's stitch density within 3 %.
+//! of each other, every region's stitch density within 3 %. The body mirrored left to right
+//! is held to the same in its own CI test, and legs posed as strides without a rig are
+//! tabulated by [`the_stride_zoo_table`].
 //!
 //! The whole zoo (every crossing, 300 variants) is the long profile:
 //! `KNITFIT_LONG=1 cargo test --release zoo -- --include-ignored --nocapture`; it writes its table
@@ -1016,4 +1018,75 @@ fn the_stride_zoo_table() {
     std::fs::create_dir_all(&out).unwrap();
     std::fs::write(out.join("strides.md"), rows.join("\n") + "\n").unwrap();
     assert!(silent.is_empty(), "exit 0 on a bad fit: {silent:?}");
+}
+
+#[test]
+fn the_body_mirrored_left_to_right_dresses_its_right_leg_as_the_left_was() {
+    // Issue 45's mirrored metamorphic check: the MakeHuman body mirrored across its middle
+    // (x → −x, each triangle rewound), its right leg dressed (the mirror of the left), against
+    // the body as exported, its left leg dressed: landmarks within 1 cm once mirrored back, and
+    // every region's stitch density within 3 %.
+    let b = body();
+    let mirrored: Vec<RawMesh> = (b.meshes.iter())
+        .map(|m| RawMesh {
+            positions: m
+                .positions
+                .iter()
+                .map(|p| Point3::new(-p.x, p.y, p.z))
+                .collect(),
+            triangles: m.triangles.iter().map(|t| [t[0], t[2], t[1]]).collect(),
+            ..m.clone()
+        })
+        .collect();
+    let fit = |meshes: &[RawMesh], side: &str| {
+        let dir = tempfile::tempdir().unwrap();
+        let leg = write_raw_meshes(dir.path(), "leg.glb", meshes);
+        let leg = leg.to_str().unwrap();
+        let args = [
+            "fit",
+            "--leg",
+            leg,
+            "--side",
+            side,
+            "--outputs",
+            "ply",
+            "-q",
+        ];
+        let coarse = ["--resolution", "100x100", "--tolerance", "3e-3"];
+        let out = knitfit(dir.path(), &[&args[..], &coarse[..]].concat());
+        assert_eq!(out.status.code(), Some(0), "{side}: {}", stderr(&out));
+        crate::support::read_fit_report(&dir.path().join("out"))
+    };
+    let (left, right) = (fit(&b.meshes, "left"), fit(&mirrored, "right"));
+    let (l, r) = (
+        left.details.leg.landmarks.as_ref().unwrap(),
+        right.details.leg.landmarks.as_ref().unwrap(),
+    );
+    let back = |p: [f64; 3]| Point3::new(-p[0], p[1], p[2]);
+    let pairs = [
+        (l.ankle.centre.m, r.ankle.centre.m),
+        (l.knee.centre.m, r.knee.centre.m),
+        (l.toe_tip.as_ref().unwrap().m, r.toe_tip.as_ref().unwrap().m),
+    ];
+    let mut furthest = 0.0f64;
+    for (a, b) in pairs {
+        let off = (Point3::from(a) - back(b)).norm();
+        assert!(
+            off <= SAME_LANDMARKS_M,
+            "{a:?} against {b:?} mirrored: {off} m"
+        );
+        furthest = furthest.max(off);
+    }
+    let (x, y) = (
+        &left.details.stretch_by_region,
+        &right.details.stretch_by_region,
+    );
+    assert!(!x.is_empty() && x.iter().map(|a| a.region).eq(y.iter().map(|b| b.region)));
+    let mut most = 0.0f64;
+    for (a, b) in x.iter().zip(y) {
+        let differs = (b.area / a.area - 1.0).abs();
+        assert!(differs <= SAME_DENSITY, "{:?}: {differs}", a.region);
+        most = most.max(differs);
+    }
+    println!("mirrored: landmarks {furthest:.2e} m apart, region densities within {most:.2e}");
 }
