@@ -3,22 +3,26 @@
 //! carried into the pose as a rigged leg's is ([`crate::fit::pose`]).
 //!
 //! Method: the landmarks' sections, taken along up, still go around a leg that leans or bends
-//! moderately, and their centres trace its centreline. The knee is the centre furthest from the
-//! line from the ankle to the top of the thigh (the apex of the bend); the thigh runs from it to
-//! the top of the thigh, the shin from the ankle to it. Two bones are made of them: the thigh
-//! turns about the top of the thigh to stand along up, the shin about the knee to continue it
-//! (each the least turn between the two directions). Each vertex of the leg (below the top of the
-//! thigh: the piece at the ankle and the pieces along the limb that touch it, a mannequin's
-//! foot, shin, knee ball and thigh; not the other leg) is moved by its
-//! bones' turns blended as linear blend skinning blends them, weighted by smoothsteps across a
-//! band at each joint; the rest of the body stays. The matrix from the rest so made back to the
+//! moderately, and their centres trace its centreline. The knee is the centre that best splits
+//! the centres into a shin's line and a thigh's (least squares), 30–70 % of the way up; the
+//! thigh runs from it to the top of the thigh, the shin from the ankle to it. Two bones are made
+//! of them: the thigh turns about the top of the thigh to stand along up (a lone leg's, whose up
+//! its own bent shape tilts, is left as it leans, and the straight leg's up is found again), the
+//! shin about the knee to continue it (each the least turn between the two directions). Each
+//! vertex of the leg (below the top of the thigh: the piece at the ankle and the pieces along
+//! the limb that touch it, a mannequin's foot, shin, knee ball and thigh; not the other leg) is
+//! moved by its bones' turns blended as linear blend skinning blends them, weighted by
+//! smoothsteps across a band at each joint; the rest of the body stays. The matrix from the rest so made back to the
 //! pose is each vertex's blend inverted, so carrying the rest mesh by it gives the file's mesh
 //! exactly.
 //!
 //! Contract: `None` where the leg is standing straight enough (the axis from the ankle to the top
-//! of the thigh stays inside it and bends less than [`BENT_DEG`]), where its landmarks are not
-//! found as posed, or where they are not found on the straightened leg either: the fit then
-//! reads the leg as it is and says what it saw. A foot pointed at the ankle is not turned back.
+//! of the thigh stays inside it and bends less than [`BENT_DEG`]), or where its joints cannot be
+//! trusted: its landmarks not found as posed, an ankle thinner than a standing leg's (a section
+//! through a pointed foot's toes), no knee where a knee can be, the straightened leg not read as
+//! standing around its straight axis, or not as long as the posed one along its bones. The fit
+//! then reads the leg as it is and says what it saw. A foot pointed at the ankle is not turned
+//! back.
 
 use nalgebra::{Matrix4, Point3, Rotation3, Translation3, Unit, Vector3};
 use serde::Serialize;
@@ -51,11 +55,23 @@ pub struct Bend {
     pub knee_deg: f64,
     /// The thigh's lean off up, degrees.
     pub thigh_deg: f64,
-    /// The joints as posed, world space: the ankle's, the knee's and the thigh top's section
-    /// centres.
+    /// The ankle as posed, world space: its section's centre.
     pub ankle: [f64; 3],
+    /// The knee as posed: the section centre the leg was straightened about.
     pub knee: [f64; 3],
+    /// The top of the thigh as posed: its section's centre.
     pub thigh_top: [f64; 3],
+}
+
+impl Bend {
+    /// The straight axis from the ankle to the top of the thigh.
+    fn straight_axis(&self) -> Axis {
+        Axis {
+            bottom: self.ankle,
+            top: self.thigh_top,
+            source: AxisSource::Landmarks,
+        }
+    }
 }
 
 /// The leg on `side` straightened to stand along up (module docs), with the matrices back to
@@ -64,12 +80,9 @@ pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
     let up = leg.up;
     let landmarks = find_landmarks(&leg.positions, &leg.triangles, up, side, None).ok()?;
     let bend = bend_of(&landmarks, &up)?;
-    let straight = Axis {
-        bottom: bend.ankle,
-        top: bend.thigh_top,
-        source: AxisSource::Landmarks,
-    };
-    if leaves_mesh(leg, &straight).is_none() && bend.knee_deg.max(bend.thigh_deg) < BENT_DEG {
+    if leaves_mesh(leg, &bend.straight_axis()).is_none()
+        && bend.knee_deg.max(bend.thigh_deg) < BENT_DEG
+    {
         return None;
     }
     let (ankle, knee, top) = (
@@ -78,18 +91,17 @@ pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
         Point3::from(bend.thigh_top),
     );
     let (thigh, shin) = ((top - knee).normalize(), (knee - ankle).normalize());
-    // Rest from pose: the thigh turned about its top to stand along up (a lone leg's left), then the shin about
-    // the (turned) knee to continue the thigh.
-    // A lone leg's up is found from its own shape, which a bend tilts: its thigh is left as it
-    // is and only the knee straightened, and the straight leg's up found again. A body's up is
-    // its whole figure's: the thigh is turned to stand along it.
+    // Rest from pose: the thigh turned about its top to stand along up, then the shin about the
+    // (turned) knee to continue the thigh. A lone leg's up is found from its own shape, which a
+    // bend tilts: its thigh is left as it is and only the knee straightened, and the straight
+    // leg's up found again. A body's up is its whole figure's: the thigh is turned to it.
     let lone = landmarks.legs_found == 1 && leg.up_axis_found;
     let thigh_to = if lone { thigh } else { up };
     let thigh_turn = about(&top, &least_turn(&thigh, &thigh_to));
     let knee_then = thigh_turn.transform_point(&knee);
     let shin_then = thigh_turn.transform_vector(&shin);
     let shin_turn = about(&knee_then, &least_turn(&shin_then, &thigh_to)) * thigh_turn;
-    // The leg: below the top of the thigh (square to it) and reached from the ankle there.
+    // The leg: below the top of the thigh (square to it), its pieces along the limb.
     let below_top: Vec<f64> = (leg.positions.iter())
         .map(|p| (top - p).dot(&thigh))
         .collect();
@@ -134,11 +146,7 @@ pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
     // fit reads it as posed, and says what it saw.
     let standing = find_landmarks(&rest_leg.positions, &rest_leg.triangles, up, side, None).ok()?;
     let standing_bend = bend_of(&standing, &up)?;
-    let standing_axis = Axis {
-        bottom: standing_bend.ankle,
-        top: standing_bend.thigh_top,
-        source: AxisSource::Landmarks,
-    };
+    let standing_axis = standing_bend.straight_axis();
     if leaves_mesh(&rest_leg, &standing_axis).is_some() {
         return None;
     }
