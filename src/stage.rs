@@ -31,7 +31,8 @@ pub enum Stage {
     ExactContactPass,
     /// Measure the deepest yarn point inside the leg against the exact triangles.
     CheckPenetration,
-    /// A rigged leg fitted in its rest pose: carry the stocking into the pose the file shows.
+    /// A posed leg fitted in its rest pose (its rig's, or straightened): carry the stocking into
+    /// the pose the file shows.
     Pose,
     /// Stitch density, stretch and coverage per leg vertex.
     LegAttributes,

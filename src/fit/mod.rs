@@ -7,7 +7,8 @@
 //!    need the leg checked;
 //! 4. [`solve()`]: the tube knitted and relaxed onto the leg with sliding contact, and the rest
 //!    state checked (a stall says where and why: [`crate::sim::stall`]);
-//!    A posed rigged leg is placed, sized and solved in its rest pose ([`in_rest_pose`]), then
+//!    A posed leg (by its rig, or bent where its sections show it) is placed, sized and
+//!    solved in its rest pose ([`in_rest_pose`]), then
 //!    [`pose`] carries the stocking into the pose the file shows and relaxes it there;
 //! 5. [`measure`]: density, coverage, stretch, tension and pressure per point and per leg
 //!    vertex, in the real stocking's units at any grid;

@@ -172,9 +172,9 @@ fn choose_axis(
         // ankle to thigh, and leaves a leg that bends between them.
         let why = match axis.source {
             AxisSource::Landmarks => "the leg bends between its ankle and its thigh more than a \
-                 straight stocking allows, and its sections do not show the joints to straighten \
-                 it at (a pointed foot, a knee bent past its sections): export the character \
-                 with its skin, fit it standing straight, or give the part to dress with --axis \
+                 straight stocking allows, and was not straightened from its sections (they show \
+                 no knee to straighten it at, as with a pointed foot): fit it standing straight, \
+                 export it with a rig that poses it, or give the part to dress with --axis \
                  (knitfit plan prints the landmarks)"
                 .to_string(),
             _ => format!(

@@ -37,7 +37,7 @@ use crate::sim::contact::LegContact;
 /// rest, and where the pose folds the skin into itself it would spend the whole step cap there.
 pub const POSE_MAX_ITERATIONS: usize = 3000;
 
-/// A rigged leg as its skin poses it, with each of its rest pose's vertices' matrix into the
+/// A posed leg as the file shows it, with each of its rest pose's vertices' matrix into the
 /// pose (file coordinates and units), from [`super::in_rest_pose`].
 pub struct Posed {
     /// The leg as posed.

@@ -70,7 +70,7 @@ pub struct SolvedFit {
     pub offset: f64,
     /// The knit at rest on the leg, after the exact contact pass.
     pub knit: Knit,
-    /// Where the knit was fitted on a rigged leg's rest pose and carried into its pose
+    /// Where the knit was fitted on a posed leg's rest pose and carried into its pose
     /// ([`super::pose`]): the leg and knit as fitted, which `placement` (landmarks, axis,
     /// centreline) describes.
     pub rest: Option<RestFit>,
@@ -95,7 +95,7 @@ pub struct SolvedFit {
     pub memory: Option<MemoryCheck>,
 }
 
-/// A fit made on a rigged leg's rest pose before it was carried into the pose.
+/// A fit made on a posed leg's rest pose before it was carried into the pose.
 pub struct RestFit {
     /// The leg in its rest pose.
     pub leg: Leg,

@@ -423,7 +423,9 @@ pub fn decode_leg(file: LegFile, units: Units, choice: UpChoice) -> Result<Leg> 
 /// posed, metres.
 pub const POSED_M: f64 = 0.001;
 
-/// A rigged leg's rest pose ([`Leg::rest`]): the mesh as stored, before its skin moves it.
+/// A posed leg's rest pose: a rigged leg's mesh as stored, before its skin moves it
+/// ([`Leg::rest`]), or a leg straightened where its sections show it bends
+/// ([`super::unbend`]).
 #[derive(Clone, Debug)]
 pub struct RestPose {
     /// The leg in its rest pose: cleaned and turned as the posed leg is, with its own up.

@@ -20,7 +20,8 @@
 //! of the thigh stays inside it and bends less than [`BENT_DEG`]), or where its joints cannot be
 //! trusted: its landmarks not found as posed, an ankle thinner than a standing leg's (a section
 //! through a pointed foot's toes), no knee where a knee can be, the straightened leg not read as
-//! standing around its straight axis, or not as long as the posed one along its bones. The fit
+//! standing around its straight axis, or not as long as the posed one along its bones (and where
+//! no triangle lies below the thigh top, or a vertex's blend cannot be inverted). The fit
 //! then reads the leg as it is and says what it saw. A foot pointed at the ankle is not turned
 //! back.
 
@@ -43,6 +44,9 @@ const SAME_LENGTH: f64 = 0.1;
 /// Half the band across the knee over which a vertex's weight goes from the thigh to the shin,
 /// as a fraction of the knee's radius.
 const KNEE_BAND: f64 = 1.0;
+/// The narrowest the knee's band may be, metres: a knee section of no girth does not make the
+/// weights 0/0.
+const MIN_KNEE_BAND_M: f64 = 0.01;
 /// The band below the top of the thigh over which the leg's weight goes from the body's to the
 /// thigh's, metres.
 const HIP_BAND_M: f64 = 0.08;
@@ -78,7 +82,8 @@ impl Bend {
 /// the pose; `None` where it stands straight enough or cannot be read.
 pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
     let up = leg.up;
-    let landmarks = find_landmarks(&leg.positions, &leg.triangles, up, side, None).ok()?;
+    let landmarks =
+        find_landmarks(&leg.positions, &leg.triangles, up, side, leg.rig.as_ref()).ok()?;
     let bend = bend_of(&landmarks, &up)?;
     if leaves_mesh(leg, &bend.straight_axis()).is_none()
         && bend.knee_deg.max(bend.thigh_deg) < BENT_DEG
@@ -101,15 +106,15 @@ pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
     let knee_then = thigh_turn.transform_point(&knee);
     let shin_then = thigh_turn.transform_vector(&shin);
     let shin_turn = about(&knee_then, &least_turn(&shin_then, &thigh_to)) * thigh_turn;
-    // The leg: below the top of the thigh (square to it), its pieces along the limb.
-    let below_top: Vec<f64> = (leg.positions.iter())
-        .map(|p| (top - p).dot(&thigh))
-        .collect();
+    // The leg: below the top of the thigh along up (where the landmarks found the legs apart,
+    // so a hip flexed or stretched does not reach the other leg through the crotch), its
+    // pieces along the limb.
+    let below_top: Vec<f64> = (leg.positions.iter()).map(|p| (top - p).dot(&up)).collect();
     let limb = [Point3::from(landmarks.sole), ankle, knee, top];
     let reach = landmarks.thigh_top.girth_m / std::f64::consts::TAU;
     let member = leg_vertices(leg, &limb, reach, |i| below_top[i] > 0.0)?;
     let knee_radius = landmarks.knee.girth_m / std::f64::consts::TAU;
-    let knee_band = KNEE_BAND * knee_radius;
+    let knee_band = (KNEE_BAND * knee_radius).max(MIN_KNEE_BAND_M);
     // Square to the bisector of the thigh's and shin's lines: the plane between the two bones.
     let across_knee = (-thigh - shin).try_normalize(1e-9).unwrap_or(-up);
     let rest_from_pose: Vec<Matrix4<f64>> = (leg.positions.iter().enumerate())
@@ -219,8 +224,12 @@ fn distance_to_segment(p: &Point3<f64>, a: &Point3<f64>, b: &Point3<f64>) -> f64
     (p - (a + ab * t)).norm()
 }
 
-/// The least rotation taking the unit vector `from` to `to`.
+/// The least rotation taking the unit vector `from` to `to`; none where they are parallel to
+/// rounding (`rotation_between` takes the arc cosine of a dot product a hair above 1 as NaN).
 fn least_turn(from: &Vector3<f64>, to: &Vector3<f64>) -> Rotation3<f64> {
+    if from.dot(to) >= 1.0 - 1e-12 {
+        return Rotation3::identity();
+    }
     Rotation3::rotation_between(from, to).unwrap_or_else(|| {
         // Opposite: half a turn about any axis square to them.
         let axis = from.cross(&Vector3::x()).try_normalize(1e-6);

@@ -94,7 +94,7 @@ pub fn plan_fit(loaded: &LoadedScene, out_dir: &Path) -> Result<PlanOutcome> {
         Placement::NotDecoded
     } else {
         let leg = decode_leg(file, settings.load.units, settings.load.up)?;
-        // A posed rigged leg is placed in its rest pose, as the fit places it.
+        // A posed leg is placed in its rest pose (its rig's, or straightened), as the fit does.
         let (leg, posed) = fit::in_rest_pose(leg, &settings.place);
         // The fit's own stage, untimed.
         let placed = fit::place(&leg, &settings.place, tube, &mut ())?;
@@ -296,12 +296,12 @@ impl Placement {
                 out += &row(
                     "pose",
                     format!(
-                    "the leg bends (knee {:.0}°, thigh {:.0}° off up) and the file has no rig: \
+                        "the leg bends (knee {:.0}°, thigh {:.0}° off up) and no rig poses it: \
                      the landmarks and axis below are the leg's straightened at the joints its \
                      sections show, where the stocking is fitted before it is carried into the \
                      pose",
-                    bend.knee_deg, bend.thigh_deg
-                ),
+                        bend.knee_deg, bend.thigh_deg
+                    ),
                 )
             }
             (true, None) => out += &row(
