@@ -785,16 +785,14 @@ fn run_zoo(variants: &[Variant], settings: &[&str], name: &str) -> Vec<String> {
     failed
 }
 
+/// The zoo's CI settings: it tests how a leg is read, not how far the solver settles
+/// (`solvers.rs` does); a coarser grid and tolerance than the defaults, where penetration, the
+/// checks and the reach to the toe hold all the same, halve its time.
+const CI_SETTINGS: [&str; 4] = ["--resolution", "100x100", "--tolerance", "3e-3"];
+
 #[test]
 fn the_zoo_ci_subset_fits_every_leg_it_should() {
-    // The zoo tests how a leg is read, not how far the solver settles (`solvers.rs` does): a
-    // coarser grid and tolerance than the defaults, where penetration, the checks and the reach
-    // to the toe hold all the same, halve its time.
-    let failed = run_zoo(
-        &ci_subset(),
-        &["--resolution", "100x100", "--tolerance", "3e-3"],
-        "ci",
-    );
+    let failed = run_zoo(&ci_subset(), &CI_SETTINGS, "ci");
     assert!(failed.is_empty(), "{}", failed.join("\n"));
 }
 
@@ -878,6 +876,19 @@ fn strided(
     (posed, toe)
 }
 
+/// Fits `meshes`, written as a GLB into `dir` (and, with `KNITFIT_ZOO_KEEP=DIR`, kept there as
+/// `name.glb`), with the binary writing only `stocking.ply` beside its report, and `flags`.
+fn fit_meshes(dir: &Path, meshes: &[RawMesh], name: &str, flags: &[&str]) -> std::process::Output {
+    let leg = write_raw_meshes(dir, "leg.glb", meshes);
+    if let Some(keep) = std::env::var_os("KNITFIT_ZOO_KEEP") {
+        std::fs::create_dir_all(&keep).unwrap();
+        std::fs::copy(&leg, Path::new(&keep).join(format!("{name}.glb"))).unwrap();
+    }
+    let leg = leg.to_str().unwrap();
+    let args = ["fit", "--leg", leg, "--outputs", "ply", "-q"];
+    knitfit(dir, &[&args[..], flags].concat())
+}
+
 /// How near the yarn of the fit written into `out` (`stocking.ply`) comes to `point`, metres.
 fn yarn_gap_to(out: &Path, point: &Point3<f64>) -> f64 {
     let yarn = crate::support::read_ply(&out.join("stocking.ply"));
@@ -899,23 +910,8 @@ fn a_leg_closed_or_open_at_its_cut_mid_stride_is_straightened_and_fitted_in_its_
         let (meshes, source) = formed(form);
         let (posed, toe) = strided(&meshes, source, 45.0, 30.0);
         let dir = tempfile::tempdir().unwrap();
-        let leg = write_raw_meshes(dir.path(), "leg.glb", &posed);
-        if let Some(keep) = std::env::var_os("KNITFIT_ZOO_KEEP") {
-            std::fs::create_dir_all(&keep).unwrap();
-            std::fs::copy(&leg, Path::new(&keep).join(format!("{form:?}-Stride.glb"))).unwrap();
-        }
-        let leg = leg.to_str().unwrap();
-        let args = [
-            "fit",
-            "--leg",
-            leg,
-            "--outputs",
-            "ply",
-            "-q",
-            "--resolution",
-            "100x100",
-        ];
-        let out = knitfit(dir.path(), &[&args[..], &["--tolerance", "3e-3"]].concat());
+        let name = format!("{form:?}-Stride");
+        let out = fit_meshes(dir.path(), &posed, &name, &CI_SETTINGS);
         assert_eq!(out.status.code(), Some(0), "{form:?}: {}", stderr(&out));
         let report = crate::support::read_fit_report(&dir.path().join("out"));
         let bend = (report.details.pose.as_ref())
@@ -963,15 +959,8 @@ fn the_stride_zoo_table() {
             let (meshes, source) = formed(form);
             let (posed, toe) = strided(&meshes, source, knee, hip);
             let dir = tempfile::tempdir().unwrap();
-            let leg = write_raw_meshes(dir.path(), "leg.glb", &posed);
-            if let Some(keep) = std::env::var_os("KNITFIT_ZOO_KEEP") {
-                let name = format!("{form:?}-{knee}-{hip}.glb");
-                std::fs::create_dir_all(&keep).unwrap();
-                std::fs::copy(&leg, Path::new(&keep).join(name)).unwrap();
-            }
             let started = Instant::now();
-            let leg = leg.to_str().unwrap();
-            let out = knitfit(dir.path(), &["fit", "--leg", leg, "--outputs", "ply", "-q"]);
+            let out = fit_meshes(dir.path(), &posed, &format!("{form:?}-{knee}-{hip}"), &[]);
             let seconds = started.elapsed().as_secs_f64();
             let name = format!("{form:?} / {knee} / {hip}");
             let report_path = dir.path().join("out/report.json");
@@ -1040,20 +1029,8 @@ fn the_body_mirrored_left_to_right_dresses_its_right_leg_as_the_left_was() {
         .collect();
     let fit = |meshes: &[RawMesh], side: &str| {
         let dir = tempfile::tempdir().unwrap();
-        let leg = write_raw_meshes(dir.path(), "leg.glb", meshes);
-        let leg = leg.to_str().unwrap();
-        let args = [
-            "fit",
-            "--leg",
-            leg,
-            "--side",
-            side,
-            "--outputs",
-            "ply",
-            "-q",
-        ];
-        let coarse = ["--resolution", "100x100", "--tolerance", "3e-3"];
-        let out = knitfit(dir.path(), &[&args[..], &coarse[..]].concat());
+        let flags = [&["--side", side][..], &CI_SETTINGS[..]].concat();
+        let out = fit_meshes(dir.path(), meshes, &format!("Body-{side}"), &flags);
         assert_eq!(out.status.code(), Some(0), "{side}: {}", stderr(&out));
         crate::support::read_fit_report(&dir.path().join("out"))
     };
