@@ -55,9 +55,11 @@ pub const SHEET_OPEN_FRACTION: f64 = 0.2;
 pub const HOLE_PERIMETER_M: f64 = 0.12;
 
 /// A loop of open edges is a hole in its piece only where its length squared is at most this
-/// fraction of the piece's area: a lost face of a leg is a few thousandths of it, the rim of a
-/// lone triangle about twenty times it.
-pub const HOLE_OF_PIECE: f64 = 0.1;
+/// fraction of the piece's area: a lost face of a whole leg is a few thousandths of it, of a
+/// mannequin's coarse shin 0.10–0.15; the rim of a patch (a lone triangle, a card) is at least
+/// 4π times it (the isoperimetric bound), and that of a tube open at its end is 2π times its
+/// radius over its length, so a finger-thin tube a few radii long keeps its opening.
+pub const HOLE_OF_PIECE: f64 = 0.3;
 
 /// A triangle whose doubled area (the cross product of two edges) is at most this times its
 /// longest edge squared has no area worth the name: its third corner lies within a millionth of
@@ -589,5 +591,31 @@ mod tests {
         let lone = [triangles[quad]];
         let (_, kept, cleaned) = clean_mesh(&positions, &lone);
         assert_eq!((cleaned.filled_holes, kept.len()), (0, 1));
+    }
+
+    #[test]
+    fn a_face_lost_from_a_coarse_piece_is_closed() {
+        use crate::leg::test_meshes::add_sphere;
+        // A mannequin's coarse piece: a ball 0.16 m across, 0.08 m² of skin, in 3 cm triangles.
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        add_sphere(&mut positions, &mut triangles, [0.0; 3], 0.08, 16, 9);
+        let n = triangles.len();
+        // A triangle of the band below the equator lost: its rim is a tenth of a metre, its
+        // square more than a tenth of the piece's area.
+        let lost = 2 * 16 + 2 * 16 * 4;
+        let rim: f64 = (0..3)
+            .map(|k| {
+                let t = triangles[lost];
+                (positions[t[k] as usize] - positions[t[(k + 1) % 3] as usize]).norm()
+            })
+            .sum();
+        let area: f64 = triangles.iter().map(|t| area(&positions, t)).sum();
+        assert!((0.09..HOLE_PERIMETER_M).contains(&rim), "{rim}");
+        assert!(rim * rim > 0.1 * area && rim * rim <= HOLE_OF_PIECE * area);
+        let mut one = triangles.clone();
+        one.remove(lost);
+        let (_, kept, cleaned) = clean_mesh(&positions, &one);
+        assert_eq!((cleaned.filled_holes, kept.len()), (1, n));
+        assert!(closed_and_consistent(&kept));
     }
 }
