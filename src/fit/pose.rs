@@ -111,13 +111,13 @@ pub fn carry(solved: &mut SolvedFit, posed: Posed, settings: &SolveSettings) -> 
     let lock_axis = (carried(&top) - carried(&(top - solved.lock_axis * 0.05)))
         .try_normalize(1e-12)
         .unwrap_or(solved.lock_axis);
-    let (positions, triangles) = outer_skin(&posed.positions, &posed.triangles);
+    let (positions, triangles, pieces) = outer_skin(&posed.positions, &posed.triangles);
     let skin = Leg {
         positions,
         triangles,
         ..posed.clone()
     };
-    let collider = Collider::new(&skin, method)?;
+    let collider = Collider::new(&skin, method)?.with_pieces(pieces);
     // The toes boxed as the fit saw them, carried as the yarn is: the fabric bridges the gaps
     // between toes in the pose too.
     let toe_box = match &solved.toe_box {

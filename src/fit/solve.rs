@@ -138,13 +138,13 @@ pub fn solve(
     let (collider, toe_box) = timed(times, Stage::BuildCollider, || -> Result<_> {
         // Contact sees the solid's skin: a piece's triangles inside another piece (a ball joint
         // in its shin) are not where yarn rests (leg::solid).
-        let (positions, triangles) = outer_skin(&leg.positions, &leg.triangles);
+        let (positions, triangles, pieces) = outer_skin(&leg.positions, &leg.triangles);
         let skin = Leg {
             positions,
             triangles,
             ..leg.clone()
         };
-        let collider = Collider::new(&skin, settings.contact)?;
+        let collider = Collider::new(&skin, settings.contact)?.with_pieces(pieces);
         // The fit's contact sees the toes boxed (TubePath::box_the_toes).
         let boxed = placement
             .path

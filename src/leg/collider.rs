@@ -4,7 +4,11 @@
 //! Two methods answer the same questions. `Bvh` uses parry's bounding-volume hierarchy over the
 //! triangles. `Brute` tests every triangle, as the paper did (§6.2, §9): it is the slow reference
 //! that the fast path is checked against. Inside/outside comes from angle-weighted pseudo-normals
-//! (Bærentzen & Aanæs), which parry computes for an oriented mesh.
+//! (Bærentzen & Aanæs), which parry computes for an oriented mesh; for a leg in pieces, where the
+//! nearest skin is an open seam of its outer skin, from the pieces themselves
+//! ([`Collider::with_pieces`]).
+
+use std::collections::HashMap;
 
 use nalgebra::{Point3, Vector3};
 use parry3d_f64::query::{PointQuery, PointQueryWithLocation, Ray, RayCast};
@@ -31,6 +35,59 @@ pub struct Closest {
 pub struct Collider {
     mesh: TriMesh,
     method: ContactMethod,
+    seams: Option<Seams>,
+}
+
+/// Where the skin of a leg in pieces is open (its edges used by one triangle: where a piece's
+/// skin was clipped against another's, or at a cut), and the pieces, which tell inside from
+/// outside there. The pseudo-normal of an open edge is no guide: where one piece's rim sits on
+/// another's side, a point a hair below the rim read as inside through it.
+struct Seams {
+    pieces: solid::Pieces,
+    /// Per triangle, whether each of its edges is open, in parry's order (AB, BC, AC).
+    open_edge: Vec<[bool; 3]>,
+    /// Per vertex, whether an open edge ends there.
+    on_seam: Vec<bool>,
+}
+
+impl Seams {
+    fn new(mesh: &TriMesh, pieces: solid::Pieces) -> Seams {
+        let key = |a: u32, b: u32| (a.min(b), a.max(b));
+        let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
+        for t in mesh.indices() {
+            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[0], t[2])] {
+                *uses.entry(key(a, b)).or_default() += 1;
+            }
+        }
+        let mut on_seam = vec![false; mesh.vertices().len()];
+        let open_edge = (mesh.indices().iter())
+            .map(|t| {
+                [(t[0], t[1]), (t[1], t[2]), (t[0], t[2])].map(|(a, b)| {
+                    let open = uses[&key(a, b)] == 1;
+                    if open {
+                        on_seam[a as usize] = true;
+                        on_seam[b as usize] = true;
+                    }
+                    open
+                })
+            })
+            .collect();
+        Seams {
+            pieces,
+            open_edge,
+            on_seam,
+        }
+    }
+
+    /// True when the closest point, on `triangle` (corners `corners`) at `location`, lies on
+    /// an open edge or a vertex where one ends.
+    fn at(&self, triangle: u32, corners: &[u32; 3], location: TrianglePointLocation) -> bool {
+        match location {
+            TrianglePointLocation::OnEdge(i, _) => self.open_edge[triangle as usize][i as usize],
+            TrianglePointLocation::OnVertex(i) => self.on_seam[corners[i as usize] as usize],
+            TrianglePointLocation::OnFace(..) | TrianglePointLocation::OnSolid => false,
+        }
+    }
 }
 
 impl Collider {
@@ -55,7 +112,19 @@ impl Collider {
                     .into(),
             });
         }
-        Ok(Collider { mesh, method })
+        Ok(Collider {
+            mesh,
+            method,
+            seams: None,
+        })
+    }
+
+    /// The collider of a leg's outer skin, told the `pieces` the skin was made from
+    /// ([`solid::outer_skin`]): where the closest point lies on the skin's open edges, inside is
+    /// inside some piece.
+    pub fn with_pieces(self, pieces: Option<solid::Pieces>) -> Collider {
+        let seams = pieces.map(|pieces| Seams::new(&self.mesh, pieces));
+        Collider { seams, ..self }
     }
 
     /// The triangles used for contact, as indices into [`Collider::vertices`] (duplicates
@@ -178,7 +247,8 @@ impl Collider {
             })
     }
 
-    /// Inside test by the pseudo-normal of the closest feature (face, edge or vertex).
+    /// Inside test by the pseudo-normal of the closest feature (face, edge or vertex); on an
+    /// open edge of a leg in pieces, by the pieces.
     fn is_inside(
         &self,
         p: &Point3<f64>,
@@ -186,6 +256,11 @@ impl Collider {
         triangle: u32,
         location: TrianglePointLocation,
     ) -> bool {
+        if let Some(seams) = &self.seams {
+            if seams.at(triangle, &self.mesh.indices()[triangle as usize], location) {
+                return seams.pieces.contain(p);
+            }
+        }
         solid::is_inside(&self.mesh, p, closest, triangle, location)
     }
 
@@ -203,5 +278,60 @@ impl Collider {
     /// Plain distance from `p` to the surface (no sign), for tests and checks.
     pub fn distance(&self, p: &Point3<f64>) -> f64 {
         self.mesh.distance_to_local_point(p, false)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::leg::test_meshes::add_box;
+
+    #[test]
+    fn a_point_whose_nearest_skin_is_a_seam_is_told_inside_or_out_by_the_pieces() {
+        // A mannequin's knee: a shin 10 cm square passing up into a thigh 4 mm wider each side
+        // at its rim, narrowing upwards. The skin where the thigh's rim meets the shin lost the
+        // thigh's cap (as clipping can leave it), so the rim is an open edge, 4 mm out from the
+        // shin's side.
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        add_box(&mut positions, &mut triangles, [0.0; 3], [0.1, 0.3, 0.1]);
+        add_box(
+            &mut positions,
+            &mut triangles,
+            [-0.004, 0.28, -0.004],
+            [0.104, 0.5, 0.104],
+        );
+        for p in &mut positions[12..] {
+            if p.y > 0.4 {
+                (p.x, p.z) = (p.x.clamp(-0.001, 0.101), p.z.clamp(-0.001, 0.101));
+            }
+        }
+        // The skin: the shin below the thigh's rim, the thigh without its cap.
+        let mut skin_positions = positions.clone();
+        let mut skin_triangles = triangles[12..].to_vec();
+        skin_triangles.retain(|t| {
+            !t.iter()
+                .all(|&i| (positions[i as usize].y - 0.28).abs() < 1e-12)
+        });
+        for p in &mut skin_positions[..8] {
+            p.y = p.y.min(0.28);
+        }
+        skin_triangles.extend(&triangles[..12]);
+        skin_triangles.retain(|t| {
+            !t.iter()
+                .all(|&i| (skin_positions[i as usize].y - 0.28).abs() < 1e-12)
+        });
+        let skin = Leg::from_world("mannequin".into(), &skin_positions, &skin_triangles);
+        let pieces = solid::Pieces::of(&positions, &triangles);
+        assert!(pieces.is_some());
+        // Just under the thigh's rim, 4 mm out from the shin: outside both, nearest the rim.
+        let under_the_rim = Point3::new(0.104, 0.2796, 0.05);
+        let seen = Collider::new(&skin, ContactMethod::Bvh).unwrap();
+        // The rim's pseudo-normal (its one face's, tilted up) reads it as inside.
+        assert!(seen.contains(&under_the_rim));
+        let seen = seen.with_pieces(pieces);
+        assert!(!seen.contains(&under_the_rim));
+        // Inside the shin under the gap, and inside the thigh just above its rim.
+        assert!(seen.contains(&Point3::new(0.05, 0.2796, 0.05)));
+        assert!(seen.contains(&Point3::new(0.102, 0.2804, 0.05)));
     }
 }

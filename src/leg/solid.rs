@@ -10,8 +10,11 @@
 //! outward-wound surface once cleaned ([`super::clean`], [`super::orient`]), where the sign is
 //! exact. A piece open at a cut still reads right away from its opening. A triangle across the
 //! line where two pieces meet is split until its parts are a millimetre long, and keeps those
-//! outside, the last ones clipped where they enter the other piece: the skin ends on the other
-//! piece's, with no gap a triangle wide that yarn falls through and no part poking inside. The
+//! outside, the last ones clipped where their edges enter the other piece (searched for within
+//! the bracket that the depth's sign, which is exact, gives): the skin ends on the other piece's, with no gap a triangle
+//! wide that yarn falls through and no part poking inside. The skin is open along those seams,
+//! where its pseudo-normals say nothing, so contact asks the pieces ([`Pieces`]) about a point
+//! whose nearest skin is a seam ([`super::Collider::with_pieces`]). The
 //! generalized winding number (Jacobson, Kavan & Sorkine-Hornung 2013) would also read pieces
 //! with holes; a mesh in one piece, the common case, needs neither and is returned whole.
 
@@ -128,49 +131,57 @@ pub fn triangle_pieces(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Vec
 }
 
 /// A triangle across the line where two pieces meet is split in four, again and again, until
-/// its parts are this long or [`MEETING_SPLITS`] deep; the last parts are clipped where they
-/// enter another piece, the depth taken as linear over each, so this is about how far the
-/// clipped edge may stray from the other piece's curved skin.
+/// its parts are this long or [`MEETING_SPLITS`] deep; the last parts are clipped where their
+/// edges enter another piece, with a straight cut between, so this is about how far the cut
+/// may stray from the curved line where the pieces meet.
 const MEETING_EDGE_M: f64 = 1e-3;
 /// At most this many splits of a triangle across the meeting line: a 3 cm triangle reaches
 /// [`MEETING_EDGE_M`] in five. Fewer are cheaper but fit fewer legs in pieces (decision 0076).
 const MEETING_SPLITS: u32 = 5;
 
-/// The solid's skin: the vertices (`positions`, then the new corners where triangles across a
-/// meeting line were split) and the triangles of `triangles` that lie outside every other piece,
-/// in their order, a triangle across a meeting line replaced by its parts outside (see module
-/// docs).
-pub fn outer_skin(
-    positions: &[Point3<f64>],
-    triangles: &[[u32; 3]],
-) -> (Vec<Point3<f64>>, Vec<[u32; 3]>) {
-    let piece = triangle_pieces(positions, triangles);
-    let count = piece.iter().copied().max().map_or(0, |p| p as usize + 1);
-    if count <= 1 {
-        return (positions.to_vec(), triangles.to_vec());
+/// A leg's pieces (numbered as [`triangle_pieces`] numbers them), each its own closed surface,
+/// for telling how deep a point lies inside them: where pieces meet, the solid's skin has
+/// seams that its pseudo-normals cannot read, and each piece alone can.
+pub struct Pieces {
+    meshes: Vec<Option<TriMesh>>,
+    boxes: Vec<Option<Aabb>>,
+}
+
+impl Pieces {
+    /// The pieces of `triangles` (each a closed surface wound outwards), where there are two or
+    /// more.
+    pub fn of(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Option<Pieces> {
+        let piece = triangle_pieces(positions, triangles);
+        let count = piece.iter().copied().max().map_or(0, |p| p as usize + 1);
+        (count > 1).then(|| Pieces::new(positions, triangles, &piece, count))
     }
-    // Each piece as its own mesh, for inside tests against it alone.
-    let mut own: Vec<Vec<[u32; 3]>> = vec![Vec::new(); count];
-    for (t, &p) in triangles.iter().zip(&piece) {
-        own[p as usize].push(*t);
+
+    /// The pieces of `triangles`, each piece's triangle `piece[t]`; `count` of them.
+    fn new(positions: &[Point3<f64>], triangles: &[[u32; 3]], piece: &[u32], count: usize) -> Self {
+        let mut own: Vec<Vec<[u32; 3]>> = vec![Vec::new(); count];
+        for (t, &p) in triangles.iter().zip(piece) {
+            own[p as usize].push(*t);
+        }
+        let flags = TriMeshFlags::ORIENTED | TriMeshFlags::MERGE_DUPLICATE_VERTICES;
+        let meshes: Vec<Option<TriMesh>> = own
+            .into_iter()
+            .map(|ts| TriMesh::with_flags(positions.to_vec(), ts, flags).ok())
+            .collect();
+        let boxes = (meshes.iter())
+            .map(|m| m.as_ref().map(|m| m.local_aabb().loosened(BURIED_DEPTH_M)))
+            .collect();
+        Pieces { meshes, boxes }
     }
-    let flags = TriMeshFlags::ORIENTED | TriMeshFlags::MERGE_DUPLICATE_VERTICES;
-    let meshes: Vec<Option<TriMesh>> = own
-        .into_iter()
-        .map(|ts| TriMesh::with_flags(positions.to_vec(), ts, flags).ok())
-        .collect();
-    let boxes: Vec<Option<Aabb>> = (meshes.iter())
-        .map(|m| m.as_ref().map(|m| m.local_aabb().loosened(BURIED_DEPTH_M)))
-        .collect();
-    // How deep `p` lies inside the other pieces' union: positive inside (by its distance to the
-    // skin of the piece it is deepest in), negative outside (by its distance to the nearest).
-    let depth_in_others = |p: &Point3<f64>, own: u32| {
-        (meshes.iter().zip(&boxes).enumerate())
-            .filter(|(k, _)| *k as u32 != own)
+
+    /// How deep `p` lies inside the union of the pieces other than `except`: positive inside
+    /// (by its distance to the skin of the piece it is deepest in), negative outside (by its
+    /// distance to the nearest, or to its box where `p` is outside that: finite, for clipping).
+    pub fn depth(&self, p: &Point3<f64>, except: Option<u32>) -> f64 {
+        (self.meshes.iter().zip(&self.boxes).enumerate())
+            .filter(|(k, _)| Some(*k as u32) != except)
             .filter_map(|(_, (mesh, aabb))| {
                 let (mesh, aabb) = (mesh.as_ref()?, aabb.as_ref()?);
                 if !aabb.contains_local_point(p) {
-                    // Outside its box: at least as far out as the box (finite, for clipping).
                     return Some(-aabb.distance_to_local_point(p, true));
                 }
                 let (projection, (triangle, location)) =
@@ -184,7 +195,29 @@ pub fn outer_skin(
                 )
             })
             .fold(f64::NEG_INFINITY, f64::max)
-    };
+    }
+
+    /// True when `p` lies inside some piece.
+    pub fn contain(&self, p: &Point3<f64>) -> bool {
+        self.depth(p, None) > 0.0
+    }
+}
+
+/// The solid's skin: the vertices (`positions`, then the new corners where triangles across a
+/// meeting line were split) and the triangles of `triangles` that lie outside every other piece,
+/// in their order, a triangle across a meeting line replaced by its parts outside (see module
+/// docs); and the pieces, where there are two or more.
+pub fn outer_skin(
+    positions: &[Point3<f64>],
+    triangles: &[[u32; 3]],
+) -> (Vec<Point3<f64>>, Vec<[u32; 3]>, Option<Pieces>) {
+    let piece = triangle_pieces(positions, triangles);
+    let count = piece.iter().copied().max().map_or(0, |p| p as usize + 1);
+    if count <= 1 {
+        return (positions.to_vec(), triangles.to_vec(), None);
+    }
+    let pieces = Pieces::new(positions, triangles, &piece, count);
+    let depth_in_others = |p: &Point3<f64>, own: u32| pieces.depth(p, Some(own));
     let buried = |p: &Point3<f64>, own: u32| depth_in_others(p, own) > BURIED_DEPTH_M;
     // Each vertex's own answer, asked once.
     let vertex_piece = connected_pieces(positions.len(), triangles);
@@ -201,7 +234,7 @@ pub fn outer_skin(
             Across::Both => skin.split(corners, 0, &|p| depth_in_others(p, own)),
         }
     }
-    (skin.positions, skin.triangles)
+    (skin.positions, skin.triangles, Some(pieces))
 }
 
 /// Where a triangle lies against the other pieces, from whether its corners and its centre are
@@ -255,15 +288,15 @@ impl SplitSkin {
 
     /// Splits the triangle `c` across a meeting line in four and keeps, or splits again, each
     /// part: whole where its corners and centre are all outside (`depth` at most
-    /// [`BURIED_DEPTH_M`]), dropped where all are buried. The last parts are clipped where the
-    /// depth, taken as linear over each, is zero: no part pokes into another piece.
+    /// [`BURIED_DEPTH_M`]), dropped where all are buried. The last parts are clipped
+    /// ([`SplitSkin::clipped`]): no part pokes into another piece.
     fn split(&mut self, c: [Point3<f64>; 3], splits: u32, depth: &dyn Fn(&Point3<f64>) -> f64) {
         let longest = (c[1] - c[0])
             .norm()
             .max((c[2] - c[1]).norm())
             .max((c[0] - c[2]).norm());
         if splits == MEETING_SPLITS || longest <= MEETING_EDGE_M {
-            self.clipped(c, c.map(|p| depth(&p)));
+            self.clipped(c, depth);
             return;
         }
         let mid = |a: &Point3<f64>, b: &Point3<f64>| Point3::from((a.coords + b.coords) / 2.0);
@@ -281,23 +314,28 @@ impl SplitSkin {
         }
     }
 
-    /// Keeps the part of the triangle `c` where the depth, `d` at its corners and linear
-    /// between, is at most zero: a triangle or a quad (two triangles), wound as `c`.
-    fn clipped(&mut self, c: [Point3<f64>; 3], d: [f64; 3]) {
+    /// Keeps the part of the triangle `c` where `depth` is at most zero: a triangle or a quad
+    /// (two triangles), wound as `c`. Where an edge crosses into another piece, the crossing is
+    /// searched for ([`crossing`]), not taken from the depth at the ends as linear: near a ledge
+    /// (a piece a millimetre wider than the one it sits on) the depth is the distance to the
+    /// other piece's nearer wall, not to the face being crossed, and a linear guess put the
+    /// crossing tens of micrometres inside it.
+    fn clipped(&mut self, c: [Point3<f64>; 3], depth: &dyn Fn(&Point3<f64>) -> f64) {
+        let outside = c.map(|p| depth(&p) <= 0.0);
         let mut kept: Vec<Point3<f64>> = Vec::with_capacity(4);
         for k in 0..3 {
             let (a, b) = (k, (k + 1) % 3);
-            if d[a] <= 0.0 {
+            if outside[a] {
                 kept.push(c[a]);
             }
-            if (d[a] <= 0.0) != (d[b] <= 0.0) {
-                // The crossing from the lower-ordered end, so that the triangle across the edge
+            if outside[a] != outside[b] {
+                // Searched from the lower-ordered end, so that the triangle across the edge
                 // finds the same point.
-                let (p, q, dp, dq) = match (c[a].x, c[a].y, c[a].z) < (c[b].x, c[b].y, c[b].z) {
-                    true => (c[a], c[b], d[a], d[b]),
-                    false => (c[b], c[a], d[b], d[a]),
+                let (p, q) = match (c[a].x, c[a].y, c[a].z) < (c[b].x, c[b].y, c[b].z) {
+                    true => (c[a], c[b]),
+                    false => (c[b], c[a]),
                 };
-                kept.push(p + (q - p) * (dp / (dp - dq)));
+                kept.push(crossing(&p, &q, depth));
             }
         }
         let ids: Vec<u32> = kept.into_iter().map(|p| self.vertex(p)).collect();
@@ -308,6 +346,56 @@ impl SplitSkin {
             }
         }
     }
+}
+
+/// How near the crossing of an edge into another piece is found, metres: a hundredth of
+/// [`BURIED_DEPTH_M`].
+const CROSSING_TOLERANCE_M: f64 = 1e-7;
+/// At most this many depths are asked for one crossing (bisection alone needs 14 on a
+/// millimetre edge).
+const CROSSING_STEPS: u32 = 40;
+
+/// The point of the segment `p`–`q`, whose ends lie on either side of the other pieces' skin
+/// (`depth` at most zero at one end only), where it crosses that skin, to
+/// [`CROSSING_TOLERANCE_M`]: regula falsi on the depth, bracketed by its sign, which is exact,
+/// with the Illinois rule (an end kept twice has its depth halved, so the bracket shrinks from
+/// both sides however the depth bends), the outer end of the last bracket returned, so the point
+/// is never inside.
+fn crossing(p: &Point3<f64>, q: &Point3<f64>, depth: &dyn Fn(&Point3<f64>) -> f64) -> Point3<f64> {
+    let at = |t: f64| p + (q - p) * t;
+    let (dp, dq) = (depth(p), depth(q));
+    // Along p → q: the outer end (depth at most 0) and the inner one (depth above 0).
+    let ((mut t_out, mut d_out), (mut t_in, mut d_in)) = match dp <= 0.0 {
+        true => ((0.0_f64, dp), (1.0_f64, dq)),
+        false => ((1.0, dq), (0.0, dp)),
+    };
+    let length = (q - p).norm();
+    // How many steps running have moved the outer end (below 0) or the inner one (above 0).
+    let mut streak: i32 = 0;
+    for _ in 0..CROSSING_STEPS {
+        if (t_in - t_out).abs() * length <= CROSSING_TOLERANCE_M {
+            break;
+        }
+        // Where the depth, taken as linear across the bracket, is zero; off its ends by a
+        // hundredth of it at least, so that every step shrinks it.
+        let f = (d_out / (d_out - d_in)).clamp(0.01, 0.99);
+        let t = t_out + (t_in - t_out) * f;
+        let d = depth(&at(t));
+        if d <= 0.0 {
+            (t_out, d_out) = (t, d);
+            streak = streak.min(0) - 1;
+            if streak <= -2 {
+                d_in /= 2.0;
+            }
+        } else {
+            (t_in, d_in) = (t, d);
+            streak = streak.max(0) + 1;
+            if streak >= 2 {
+                d_out /= 2.0;
+            }
+        }
+    }
+    at(t_out)
 }
 
 /// True when `p`, whose closest point on the oriented `mesh` is `closest`, on `triangle` at
@@ -359,7 +447,7 @@ mod tests {
         add_box(&mut positions, &mut triangles, 2.0, 3.0); // apart
         let pieces = connected_pieces(positions.len(), &triangles);
         assert_eq!(pieces.iter().copied().max(), Some(2));
-        let (_, skin) = outer_skin(&positions, &triangles);
+        let (_, skin, _) = outer_skin(&positions, &triangles);
         assert_eq!(skin.len(), 24, "the inner box's 12 triangles go");
         assert!(skin
             .iter()
@@ -388,7 +476,7 @@ mod tests {
         // A second box passing into the first: each loses the three faces' parts inside the
         // other, its triangles across the meeting lines split and clipped there.
         add_box(&mut positions, &mut triangles, 0.25, 1.25);
-        let (skin_positions, skin) = outer_skin(&positions, &triangles);
+        let (skin_positions, skin, _) = outer_skin(&positions, &triangles);
         let corners = |t: &[u32; 3]| t.map(|i| skin_positions[i as usize]);
         // No part pokes into either box (strictly inside both its ranges on every axis).
         let strictly_in =
@@ -410,11 +498,45 @@ mod tests {
         let total: f64 = skin.iter().map(area).sum();
         let union = 12.0 - 6.0 * 0.75 * 0.75;
         assert!((total - union).abs() < 1e-6, "{total} against {union}");
-        // One piece alone is returned whole.
+        // One piece alone is returned whole, with no pieces to ask.
         let one = &triangles[..12];
-        assert_eq!(
-            outer_skin(&positions, one),
-            (positions.clone(), one.to_vec())
+        let (whole_positions, whole, pieces) = outer_skin(&positions, one);
+        assert_eq!((whole_positions, whole), (positions.clone(), one.to_vec()));
+        assert!(pieces.is_none());
+    }
+
+    #[test]
+    fn a_piece_on_a_ledge_is_clipped_at_the_ledge_not_inside_the_piece_above() {
+        // A mannequin's shin (10 cm square) passing 2 cm up into its thigh, 1 mm wider each
+        // side: inside the thigh, the shin's faces are 1 mm from the thigh's walls, nearer than
+        // from the ledge they cross, so the depth is no guide to where they cross it.
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        test_meshes::add_box(&mut positions, &mut triangles, [0.0; 3], [0.1, 0.3, 0.1]);
+        let (lo, hi) = ([-0.001, 0.28, -0.001], [0.101, 0.5, 0.101]);
+        test_meshes::add_box(&mut positions, &mut triangles, lo, hi);
+        let (skin_positions, skin, _) = outer_skin(&positions, &triangles);
+        // How deep a point lies inside the thigh (negative: outside it).
+        let in_thigh = |p: &Point3<f64>| {
+            (0..3)
+                .map(|k| (p[k] - lo[k]).min(hi[k] - p[k]))
+                .fold(f64::INFINITY, f64::min)
+        };
+        let deepest = (skin.iter().flatten())
+            .map(|&i| in_thigh(&skin_positions[i as usize]))
+            .fold(f64::NEG_INFINITY, f64::max);
+        assert!(
+            deepest < 1e-6,
+            "a corner of the skin lies {deepest} m inside the thigh"
+        );
+        // The shin's sides still reach the ledge: no gap under it for yarn to fall into.
+        let missing = (skin.iter().flatten())
+            .map(|&i| skin_positions[i as usize])
+            .filter(|p| (p.x.abs() < 1e-12 || (p.x - 0.1).abs() < 1e-12) && p.y > 0.2)
+            .map(|p| p.y)
+            .fold(f64::NEG_INFINITY, f64::max);
+        assert!(
+            (missing - 0.28).abs() < 1e-6,
+            "the shin's side ends at {missing} m, not at the ledge"
         );
     }
 }
