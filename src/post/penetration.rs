@@ -40,8 +40,9 @@ use crate::leg::{Closest, Collider};
 const INTERPOLATED: [&str; 3] = ["course", "wale", "tension"];
 /// How many edges one segment's walk may cross before it gives up.
 const MAX_CROSSINGS: usize = 512;
-/// How many times the fallback may split a piece.
-const MAX_SPLIT_DEPTH: u32 = 8;
+/// How many times the fallback may split a piece (at most 2¹⁰ parts, each a ray cast): a
+/// yarn piece cutting the corner of a millimetre ledge's rim, on a leg in pieces, took nine.
+const MAX_SPLIT_DEPTH: u32 = 10;
 /// The least determinant of the fallback's two planes, in the plane of the piece, for them to
 /// meet at an apex (about the sine of the angle between their traces; 1e-6: not parallel).
 const MIN_APEX_DETERMINANT: f64 = 1e-6;
