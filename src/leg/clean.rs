@@ -56,9 +56,10 @@ pub const HOLE_PERIMETER_M: f64 = 0.12;
 
 /// A loop of open edges is a hole in its piece only where its length squared is at most this
 /// fraction of the piece's area: a lost face of a whole leg is a few thousandths of it, of a
-/// mannequin's coarse shin 0.10–0.15; the rim of a patch (a lone triangle, a card) is at least
-/// 4π times it (the isoperimetric bound), and that of a tube open at its end is 2π times its
-/// radius over its length, so a finger-thin tube a few radii long keeps its opening.
+/// mannequin's coarse shin 0.10–0.15; the rim of a patch is 4π times it or more when flat (the
+/// isoperimetric bound), 2π for a hemisphere's shell, and that of a tube open at one end about
+/// 2π times its radius over its length, so such a tube keeps its opening up to about 21 radii
+/// long. A small coarse piece (a 3 cm ball in 3 cm triangles: about 0.7) keeps a lost face open.
 pub const HOLE_OF_PIECE: f64 = 0.3;
 
 /// A triangle whose doubled area (the cross product of two edges) is at most this times its

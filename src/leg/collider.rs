@@ -39,9 +39,10 @@ pub struct Collider {
 }
 
 /// Where the skin of a leg in pieces is open (its edges used by one triangle: where a piece's
-/// skin was clipped against another's, or at a cut), and the pieces, which tell inside from
-/// outside there. The pseudo-normal of an open edge is no guide: where one piece's rim sits on
-/// another's side, a point a hair below the rim read as inside through it.
+/// skin was clipped against another's, where a split triangle meets a whole one, at a cut), and
+/// the pieces, which tell inside from outside there. The pseudo-normal of an open edge is no
+/// guide: where one piece's rim sits on another's side, a point a hair below the rim read as
+/// inside through it.
 struct Seams {
     pieces: solid::Pieces,
     /// Per triangle, whether each of its edges is open, in parry's order (AB, BC, AC).

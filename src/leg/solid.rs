@@ -11,12 +11,13 @@
 //! exact. A piece open at a cut still reads right away from its opening. A triangle across the
 //! line where two pieces meet is split until its parts are a millimetre long, and keeps those
 //! outside, the last ones clipped where their edges enter the other piece (searched for within
-//! the bracket that the depth's sign, which is exact, gives): the skin ends on the other piece's, with no gap a triangle
-//! wide that yarn falls through and no part poking inside. The skin is open along those seams,
-//! where its pseudo-normals say nothing, so contact asks the pieces ([`Pieces`]) about a point
-//! whose nearest skin is a seam ([`super::Collider::with_pieces`]). The
-//! generalized winding number (Jacobson, Kavan & Sorkine-Hornung 2013) would also read pieces
-//! with holes; a mesh in one piece, the common case, needs neither and is returned whole.
+//! the bracket the depth's sign gives): the skin ends on the other piece's, with no gap a
+//! triangle wide that yarn falls through and no part poking inside. The skin is open along
+//! those seams (and where split triangles meet whole ones), where its pseudo-normals say
+//! nothing, so contact asks the pieces ([`Pieces`]) about a point whose nearest skin is an open
+//! edge ([`super::Collider::with_pieces`]). The generalized winding number (Jacobson, Kavan &
+//! Sorkine-Hornung 2013) would also read pieces with holes; a mesh in one piece, the common
+//! case, needs neither and is returned whole.
 
 use std::collections::HashMap;
 
@@ -139,17 +140,17 @@ const MEETING_EDGE_M: f64 = 1e-3;
 /// [`MEETING_EDGE_M`] in five. Fewer are cheaper but fit fewer legs in pieces (decision 0076).
 const MEETING_SPLITS: u32 = 5;
 
-/// A leg's pieces (numbered as [`triangle_pieces`] numbers them), each its own closed surface,
-/// for telling how deep a point lies inside them: where pieces meet, the solid's skin has
-/// seams that its pseudo-normals cannot read, and each piece alone can.
+/// A leg's pieces (numbered as [`triangle_pieces`] numbers them), each its own surface, for
+/// telling how deep a point lies inside them: where pieces meet, the solid's skin has seams
+/// that its pseudo-normals cannot read, and each piece alone can (exactly where it is closed;
+/// a piece open at a cut reads right away from its opening, and beyond its box is outside).
 pub struct Pieces {
     meshes: Vec<Option<TriMesh>>,
     boxes: Vec<Option<Aabb>>,
 }
 
 impl Pieces {
-    /// The pieces of `triangles` (each a closed surface wound outwards), where there are two or
-    /// more.
+    /// The pieces of `triangles` (each wound outwards), where there are two or more.
     pub fn of(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Option<Pieces> {
         let piece = triangle_pieces(positions, triangles);
         let count = piece.iter().copied().max().map_or(0, |p| p as usize + 1);
@@ -357,10 +358,10 @@ const CROSSING_STEPS: u32 = 40;
 
 /// The point of the segment `p`–`q`, whose ends lie on either side of the other pieces' skin
 /// (`depth` at most zero at one end only), where it crosses that skin, to
-/// [`CROSSING_TOLERANCE_M`]: regula falsi on the depth, bracketed by its sign, which is exact,
-/// with the Illinois rule (an end kept twice has its depth halved, so the bracket shrinks from
-/// both sides however the depth bends), the outer end of the last bracket returned, so the point
-/// is never inside.
+/// [`CROSSING_TOLERANCE_M`] (or as near as [`CROSSING_STEPS`] bring it): regula falsi on the
+/// depth, bracketed by its sign, which is exact, with the Illinois rule (an end kept twice has
+/// its depth halved, so the bracket shrinks from both sides however the depth bends), the
+/// outer end of the last bracket returned, so the point is never inside.
 fn crossing(p: &Point3<f64>, q: &Point3<f64>, depth: &dyn Fn(&Point3<f64>) -> f64) -> Point3<f64> {
     let at = |t: f64| p + (q - p) * t;
     let (dp, dq) = (depth(p), depth(q));

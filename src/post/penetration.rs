@@ -40,7 +40,8 @@ use crate::leg::{Closest, Collider};
 const INTERPOLATED: [&str; 3] = ["course", "wale", "tension"];
 /// How many edges one segment's walk may cross before it gives up.
 const MAX_CROSSINGS: usize = 512;
-/// How many times the fallback may split a piece (at most 2¹⁰ parts, each a ray cast): a
+/// How many times the fallback may split a piece: a piece that never clears becomes at most
+/// 2¹⁰ parts (each split a few ray casts and closest-point queries, and a point inserted). A
 /// yarn piece cutting the corner of a millimetre ledge's rim, on a leg in pieces, took nine.
 const MAX_SPLIT_DEPTH: u32 = 10;
 /// The least determinant of the fallback's two planes, in the plane of the piece, for them to

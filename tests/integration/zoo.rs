@@ -5,8 +5,9 @@
 //!
 //! A variant is a **source** cut to an **export form** (the MakeHuman body whole, as a lower body,
 //! its left leg cut open, closed, slanted or in pieces, the whole body as a mannequin in pieces;
-//! the procedural leg closed, open, slanted or in pieces), written in a **mesh form** (as exported, subdivided, as quads in a PLY, damaged
-//! with repeated and zero-area faces and small holes, cluttered with debris and a floor) and a
+//! the procedural leg closed, open, slanted or in pieces), written in a **mesh form** (as
+//! exported, subdivided, as quads in a PLY, damaged with repeated and zero-area faces and small
+//! holes, cluttered with debris and a floor) and a
 //! **frame** (Y-up metres, Z-up metres, Z-up centimetres, turned and moved, inches, Z-up
 //! millimetres). Randomness (the turn, where the holes and debris go) comes from the variant's
 //! seed, so a variant is the same file on every run.
