@@ -12,9 +12,9 @@
 //! vertex of the leg (below the top of the thigh: the piece at the ankle and the pieces along
 //! the limb that touch it, a mannequin's foot, shin, knee ball and thigh; not the other leg) is
 //! moved by its bones' turns blended as linear blend skinning blends them, weighted by
-//! smoothsteps across a band at each joint; the rest of the body stays. The matrix from the rest so made back to the
-//! pose is each vertex's blend inverted, so carrying the rest mesh by it gives the file's mesh
-//! exactly.
+//! smoothsteps across a band at each joint; the rest of the body stays. The matrix from the
+//! rest so made back to the pose is each vertex's blend inverted, so carrying the rest mesh by
+//! it gives the file's mesh exactly.
 //!
 //! Contract: `None` where the leg is standing straight enough (the axis from the ankle to the top
 //! of the thigh stays inside it and bends less than [`BENT_DEG`]), or where its joints cannot be

@@ -297,9 +297,9 @@ impl Placement {
                     "pose",
                     format!(
                         "the leg bends (knee {:.0}°, thigh {:.0}° off up) and no rig poses it: \
-                     the landmarks and axis below are the leg's straightened at the joints its \
-                     sections show, where the stocking is fitted before it is carried into the \
-                     pose",
+                         the landmarks and axis below are the leg's straightened at the joints \
+                         its sections show, where the stocking is fitted before it is carried \
+                         into the pose",
                         bend.knee_deg, bend.thigh_deg
                     ),
                 )
