@@ -17,7 +17,9 @@ use crate::fit::pose::PoseStats;
 use crate::fit::FitChecks;
 use crate::knit::{Pattern, Stretch, TubeBottom, TubeHeel};
 use crate::leg::landmarks::Ring;
-use crate::leg::{Axis, Cleaned, ContactMethod, Landmarks, Leg, Side, ThighTopKind, Units, UpAxis};
+use crate::leg::{
+    Axis, Cleaned, ContactMethod, Landmarks, Leg, Side, ThighTopKind, Units, UpAxis, UpFrom,
+};
 use crate::limits::MemoryCheck;
 use crate::plan::{Plan, PlannedStage};
 use crate::post::lattice::LaidStitches;
@@ -221,8 +223,9 @@ pub struct LegDetails {
     pub units: Units,
     /// The file's up axis (`+y`): given, or the nearest to the body's up.
     pub up_axis: UpAxis,
-    /// True when `up_axis` was found from the anatomy (`leg.up_axis: "auto"`).
-    pub up_axis_found: bool,
+    /// Where `up_axis` came from: `given` (`leg.up_axis`), or with `leg.up_axis: "auto"`
+    /// `anatomy` (the body's shape shows up) or `convention` (it does not: glTF's +Y).
+    pub up_axis_from: UpFrom,
     /// Triangles whose winding was flipped to face outwards.
     pub reoriented_triangles: usize,
     /// What cleaning removed from the file's mesh (repeats, slivers, debris).

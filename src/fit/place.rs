@@ -17,6 +17,7 @@ use crate::knit::tube::{tube_axis, Centreline};
 use crate::knit::{TubeBottom, TubeSettings};
 use crate::leg::{
     find_landmarks, leaves_mesh, Axis, AxisSource, Landmarks, Leg, LegAxis, NoLandmarks, Side,
+    UpFrom,
 };
 use crate::stage::{timed, Stage, StageTimes};
 
@@ -123,19 +124,25 @@ fn advised(no: &NoLandmarks, leg: &Leg) -> String {
         return no.seen.clone();
     }
     let axis = leg.up_axis.name();
-    if leg.up_axis_found {
-        format!(
+    match leg.up_from {
+        UpFrom::Anatomy => format!(
             "{}: up may be the wrong way; it was found from the anatomy as the file's {axis} \
              (leg.up_axis \"auto\"): if the file's up is another axis, name it with \
              leg.up_axis (--up-axis)",
             no.seen
-        )
-    } else {
-        format!(
+        ),
+        UpFrom::Convention => format!(
+            "{}: up may be the wrong way; it was taken as the file's {axis}, glTF's \
+             convention, as the mesh's shape does not show which end is up (leg.up_axis \
+             \"auto\"): if the file's up is another axis, name it with leg.up_axis \
+             (--up-axis)",
+            no.seen
+        ),
+        UpFrom::Given => format!(
             "{}: up may be the wrong way; leg.up_axis (--up-axis) gives it as the file's \
              {axis}: give the file's real up axis, or \"auto\" to find it from the anatomy",
             no.seen
-        )
+        ),
     }
 }
 
@@ -233,7 +240,7 @@ mod tests {
         };
         // Up found from the anatomy: name the file's own up axis, not "auto" again.
         leg.up_axis = UpAxis::PosZ;
-        leg.up_axis_found = true;
+        leg.up_from = UpFrom::Anatomy;
         let found = advised(&upside_down, &leg);
         assert!(
             found.starts_with("the leg found narrows upwards: "),
@@ -246,13 +253,27 @@ mod tests {
         assert!(!found.contains("or \"auto\""), "{found}");
         // Up given: leaving it to the anatomy is a way out.
         leg.up_axis = UpAxis::NegY;
-        leg.up_axis_found = false;
+        leg.up_from = UpFrom::Given;
         let given = advised(&upside_down, &leg);
         assert!(given.contains("gives it as the file's -y"), "{given}");
         assert!(
             given.contains("\"auto\" to find it from the anatomy"),
             "{given}"
         );
+        // Up taken by glTF's convention, the shape not clear: name the file's axis; "auto"
+        // is what gave it.
+        leg.up_axis = UpAxis::PosY;
+        leg.up_from = UpFrom::Convention;
+        let convention = advised(&upside_down, &leg);
+        assert!(
+            convention.contains("taken as the file's +y, glTF's convention"),
+            "{convention}"
+        );
+        assert!(
+            convention.contains("name it with leg.up_axis"),
+            "{convention}"
+        );
+        assert!(!convention.contains("or \"auto\""), "{convention}");
         // What does not put up in doubt is said as seen.
         let other = NoLandmarks::from("no closed cross-section");
         assert_eq!(advised(&other, &leg), "no closed cross-section");

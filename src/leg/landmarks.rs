@@ -10,6 +10,9 @@
 //! - **Up** ([`anatomical_up`]): of the principal axes nearly as long as the longest (a T-pose's
 //!   span matches its height), the one whose ends differ most in girth, pointed away from the
 //!   slimmer end (feet and calves are slimmer than thighs, hips, or a head and shoulders).
+//!   Only where the ends differ by [`CLEAR_ENDS_RATIO`] or more does the shape overrule glTF's
+//!   +Y ([`BodyUp::clear`]): a limb's ends differ by 1.4 to 3.3 in the samples; a part as wide
+//!   at both ends says nothing.
 //! - **The legs**: the closed loops of the section [`SEED_HEIGHT_M`] above the lowest point, each
 //!   followed up and down from slice to slice: the loop that encloses the last centre, or else
 //!   the nearest within [`MAX_STEP_M`]. Following stops where the mesh is cut, or where two legs'
@@ -75,6 +78,10 @@ pub const SLICE_STEP_M: f64 = 0.0025;
 pub const MAX_STEP_M: f64 = 0.03;
 /// A principal axis at least this fraction of the longest one's extent is a candidate for up.
 pub const CANDIDATE_EXTENT: f64 = 0.6;
+/// The least ratio of the mean girths of a body's two ends (the thicker over the slimmer) for
+/// its shape to say which way is up: the legs and bodies of the samples and the zoo have 1.36
+/// or more (a leg with its foot: ankle against thigh; a body: feet against hips and chest).
+pub const CLEAR_ENDS_RATIO: f64 = 1.2;
 /// A followed leg whose girth grows by this factor within [`JUMP_SPAN_M`] has reached the
 /// crotch (a thigh grows far slower).
 pub const GIRTH_JUMP: f64 = 1.5;
@@ -249,10 +256,27 @@ impl Landmarks {
     }
 }
 
+/// Up a body as its shape shows it ([`anatomical_up`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BodyUp {
+    /// Unit vector up the body.
+    pub up: Vector3<f64>,
+    /// The mean girth of its thicker end over its slimmer one's; infinite where only one end
+    /// has a closed section (the other is an open cut, the top).
+    pub ends_ratio: f64,
+}
+
+impl BodyUp {
+    /// True when the ends differ enough to overrule glTF's +Y ([`CLEAR_ENDS_RATIO`]).
+    pub fn clear(&self) -> bool {
+        self.ends_ratio >= CLEAR_ENDS_RATIO
+    }
+}
+
 /// Up the body (see module docs): of the principal axes nearly as long as the longest, the one
 /// whose ends differ most in girth, pointed away from the slimmer end; `None` for a mesh with
 /// no area or no closed section.
-pub fn anatomical_up(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Option<Vector3<f64>> {
+pub fn anatomical_up(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Option<BodyUp> {
     let mut area_sum = 0.0;
     let mut centroid = Vector3::zeros();
     let mut second = Matrix3::zeros();
@@ -295,16 +319,23 @@ pub fn anatomical_up(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Optio
         let Some((score, up)) = signed_by_slimmer_end(positions, triangles, axes[k]) else {
             continue;
         };
+        if std::env::var_os("KNITFIT_DEBUG_UP").is_some() {
+            eprintln!(
+                "UP candidate {:?} extent {:.3} score {score:.3}",
+                up.map(|x| (x * 100.0).round() / 100.0).as_slice(),
+                extents[k]
+            );
+        }
         if best.is_none_or(|(b, _)| score > b) {
             best = Some((score, up));
         }
     }
-    best.map(|(_, up)| up)
+    best.map(|(ends_ratio, up)| BodyUp { up, ends_ratio })
 }
 
 /// `axis` pointed away from its slimmer end (the mean girth of the closed sections in each end
 /// quarter), with how much slimmer it is (a ratio of at least 1); `None` without any closed
-/// section. An end with none counts as the top (an open cut).
+/// section. An end with none counts as the top (an open cut), the ratio infinite.
 fn signed_by_slimmer_end(
     positions: &[Point3<f64>],
     triangles: &[[u32; 3]],
@@ -327,8 +358,8 @@ fn signed_by_slimmer_end(
     match (end_girth(lo, lo + quarter), end_girth(hi - quarter, hi)) {
         (Some(bottom), Some(top)) if top < bottom => Some((bottom / top, -axis)),
         (Some(bottom), Some(top)) => Some((top / bottom.max(f64::MIN_POSITIVE), axis)),
-        (None, Some(_)) => Some((1.0, -axis)),
-        (Some(_), None) => Some((1.0, axis)),
+        (None, Some(_)) => Some((f64::INFINITY, -axis)),
+        (Some(_), None) => Some((f64::INFINITY, axis)),
         (None, None) => None,
     }
 }
@@ -337,7 +368,7 @@ fn signed_by_slimmer_end(
 /// its landmarks): what a picture of a finished fit is seen from, where only the leg mesh is
 /// at hand. glTF's stance where neither is found.
 pub fn stance_of(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Stance {
-    let Some(up) = anatomical_up(positions, triangles) else {
+    let Some(BodyUp { up, .. }) = anatomical_up(positions, triangles).filter(BodyUp::clear) else {
         return Stance::default();
     };
     find_landmarks(positions, triangles, up, Side::Left, None)

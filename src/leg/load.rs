@@ -9,7 +9,8 @@
 //! is then handled here, in one place: scaled to metres, cleaned ([`super::clean`]: repeated
 //! vertices and faces, slivers, debris), and turned so that the file's up axis is +Y (glTF's
 //! own convention, so a well-formed glTF file needs no turning; PLY has none). With
-//! `up_axis: auto` the up axis is the file axis nearest the body's own up ([`anatomical_up`]).
+//! `up_axis: auto` the up axis is the file axis nearest the body's own up ([`anatomical_up`])
+//! where its shape makes that clear, else glTF's +Y.
 //! The mesh is checked: it must have triangles, finite coordinates, no compressed geometry, and
 //! a plausible height.
 
@@ -19,13 +20,13 @@ use std::path::{Path, PathBuf};
 use nalgebra::{Matrix4, Point3, Vector3};
 
 use super::clean::{clean_mesh, Cleaned};
-use super::landmarks::anatomical_up;
+use super::landmarks::{anatomical_up, BodyUp};
 use super::orient::orient_outward;
 use super::ply::{self, PlyHeader};
 use super::rig::Rig;
 use crate::base::Material;
 use crate::error::{Error, Result};
-use crate::leg::{Units, UpAxis, UpChoice};
+use crate::leg::{Units, UpAxis, UpChoice, UpFrom};
 
 /// A leg mesh in world space: metres, Y up.
 #[derive(Clone, Debug)]
@@ -43,8 +44,9 @@ pub struct Leg {
     pub units: Units,
     /// The up axis the file was read with (given, or the nearest to the body's up).
     pub up_axis: UpAxis,
-    /// True when `up_axis` was found from the anatomy (`leg.up_axis: auto`).
-    pub up_axis_found: bool,
+    /// Where `up_axis` came from: given, or with `leg.up_axis: auto` the anatomy or, where
+    /// that is not clear, glTF's +Y.
+    pub up_from: UpFrom,
     /// Unit vector up the body, world space: +Y where the up axis was given; found from the
     /// anatomy with `auto` (then it turns with the body, so a turned copy of a leg gets the
     /// same landmarks, turned).
@@ -93,7 +95,7 @@ impl Leg {
             reoriented_triangles,
             units: Units::Metres,
             up_axis: UpAxis::PosY,
-            up_axis_found: false,
+            up_from: UpFrom::Given,
             up: Vector3::y(),
             cleaned,
             material: None,
@@ -504,19 +506,18 @@ fn leg_in_world(
     if triangles.is_empty() {
         return Err(fail("has no triangles with area".into()));
     }
-    let (up_axis, up) = match choice {
-        UpChoice::Axis(axis) => (axis, Vector3::y()),
-        UpChoice::Auto => {
-            let body_up = anatomical_up(&scaled, &triangles).ok_or_else(|| {
-                fail(
-                    "cannot tell which way is up: no cross-section of the mesh is closed; set \
-                     leg.up_axis (or --up-axis)"
-                        .into(),
-                )
-            })?;
-            let axis = nearest_axis(&body_up);
-            (axis, turn(axis, &Point3::from(body_up)).coords)
-        }
+    let (up_axis, up, up_from) = match choice {
+        UpChoice::Axis(axis) => (axis, Vector3::y(), UpFrom::Given),
+        UpChoice::Auto => match anatomical_up(&scaled, &triangles).filter(BodyUp::clear) {
+            Some(body) => {
+                let axis = nearest_axis(&body.up);
+                let up = turn(axis, &Point3::from(body.up)).coords;
+                (axis, up, UpFrom::Anatomy)
+            }
+            // The shape does not say (no closed section, or ends of a like girth): the file is
+            // taken as glTF says files are.
+            None => (UpAxis::PosY, Vector3::y(), UpFrom::Convention),
+        },
     };
     let positions: Vec<Point3<f64>> = scaled.iter().map(|p| turn(up_axis, p)).collect();
     let reoriented_triangles = orient_outward(&positions, &mut triangles);
@@ -527,7 +528,7 @@ fn leg_in_world(
         reoriented_triangles,
         units,
         up_axis,
-        up_axis_found: choice == UpChoice::Auto,
+        up_from,
         up,
         cleaned,
         material: None,
@@ -707,17 +708,14 @@ fn check_height(leg: &Leg) -> Result<()> {
     .map(Units::name)
     .collect();
     let hint = if fitting.is_empty() {
-        format!(
-            "check leg.up_axis or --up-axis (now \"{}\")",
-            leg.up_axis.name()
-        )
+        format!("check leg.up_axis or --up-axis ({})", up_said(leg))
     } else {
         format!(
             "it is probably in other units: set leg.units or --units to \"{}\" (now \"{}\"), \
-             or check leg.up_axis (now \"{}\")",
+             or check leg.up_axis ({})",
             fitting[0],
             leg.units.name(),
-            leg.up_axis.name()
+            up_said(leg)
         )
     };
     Err(Error::Leg {
@@ -727,6 +725,19 @@ fn check_height(leg: &Leg) -> Result<()> {
              {hint}"
         ),
     })
+}
+
+/// How the leg's up axis was chosen, for a message: the axis given, or what `auto` made of it.
+fn up_said(leg: &Leg) -> String {
+    let axis = leg.up_axis.name();
+    match leg.up_from {
+        UpFrom::Given => format!("now \"{axis}\""),
+        UpFrom::Anatomy => format!("now \"auto\", which found {axis} from the anatomy"),
+        UpFrom::Convention => format!(
+            "now \"auto\", which took {axis}, glTF's convention, as the shape does not show \
+             which end is up"
+        ),
+    }
 }
 
 /// Gathers triangles from a node tree, in the file's coordinates.
@@ -1252,5 +1263,84 @@ impl MeshCollector {
             metallic: unit(pbr.metallic_factor()),
             roughness: unit(pbr.roughness_factor()),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A closed prism of 16 sides along +Z from z = 0 to 0.8 m, its radius going from
+    /// `bottom` to `top`.
+    fn prism_along_z(bottom: f64, top: f64) -> (Vec<Point3<f64>>, Vec<[u32; 3]>) {
+        const SIDES: u32 = 16;
+        const RINGS: u32 = 9;
+        let mut positions = Vec::new();
+        for ring in 0..RINGS {
+            let t = f64::from(ring) / f64::from(RINGS - 1);
+            let r = bottom + (top - bottom) * t;
+            for k in 0..SIDES {
+                let a = std::f64::consts::TAU * f64::from(k) / f64::from(SIDES);
+                positions.push(Point3::new(r * a.cos(), r * a.sin(), 0.8 * t));
+            }
+        }
+        let mut triangles = Vec::new();
+        for ring in 0..RINGS - 1 {
+            for k in 0..SIDES {
+                let (a, b) = (ring * SIDES + k, ring * SIDES + (k + 1) % SIDES);
+                triangles.push([a, b, b + SIDES]);
+                triangles.push([a, b + SIDES, a + SIDES]);
+            }
+        }
+        let (low, high) = (positions.len() as u32, positions.len() as u32 + 1);
+        positions.push(Point3::new(0.0, 0.0, 0.0));
+        positions.push(Point3::new(0.0, 0.0, 0.8));
+        let last = (RINGS - 1) * SIDES;
+        for k in 0..SIDES {
+            triangles.push([low, (k + 1) % SIDES, k]);
+            triangles.push([high, last + k, last + (k + 1) % SIDES]);
+        }
+        (positions, triangles)
+    }
+
+    #[test]
+    fn up_is_the_anatomys_where_the_ends_differ_and_gltfs_plus_y_where_they_do_not() {
+        let read = |(positions, triangles): (Vec<Point3<f64>>, Vec<[u32; 3]>)| {
+            leg_in_world(
+                "leg.glb".into(),
+                &positions,
+                &triangles,
+                Units::Metres,
+                UpChoice::Auto,
+            )
+            .unwrap()
+        };
+        // A limb along +Z, slim at its foot: +Z is up, as its shape says.
+        let limb = read(prism_along_z(0.03, 0.08));
+        assert_eq!(
+            (limb.up_axis, limb.up_from),
+            (UpAxis::PosZ, UpFrom::Anatomy)
+        );
+        // As wide at both ends (1.1 times): the shape does not say, so glTF's +Y stands.
+        let even = read(prism_along_z(0.05, 0.055));
+        assert_eq!(
+            (even.up_axis, even.up_from),
+            (UpAxis::PosY, UpFrom::Convention)
+        );
+        assert_eq!(even.up, Vector3::y());
+        // Named, the axis is the file's, whatever the shape.
+        let (positions, triangles) = prism_along_z(0.05, 0.055);
+        let given = leg_in_world(
+            "leg.glb".into(),
+            &positions,
+            &triangles,
+            Units::Metres,
+            UpChoice::Axis(UpAxis::PosZ),
+        )
+        .unwrap();
+        assert_eq!(
+            (given.up_axis, given.up_from),
+            (UpAxis::PosZ, UpFrom::Given)
+        );
     }
 }

@@ -26,4 +26,4 @@ pub use curvature::SkinCurvature;
 pub use landmarks::{find_landmarks, Landmarks, NoLandmarks, ThighTopKind};
 pub use load::{decode_leg, load_leg, read_leg_file, Leg, LegFile, RestPose};
 pub use rig::{Rig, RigLeg};
-pub use settings::{ContactMethod, LegAxis, LegSettings, Side, Units, UpAxis, UpChoice};
+pub use settings::{ContactMethod, LegAxis, LegSettings, Side, Units, UpAxis, UpChoice, UpFrom};

@@ -1,6 +1,7 @@
 //! The leg's settings (the scene's `leg` and `contact.method`): the file, its units and up axis,
 //! which leg to dress, the stocking's axis if given, and how contact queries are answered.
-//! Units default to glTF's metres; up defaults to the body's own (found from the anatomy).
+//! Units default to glTF's metres; up defaults to the body's own (found from the anatomy), or
+//! glTF's +Y where the body's shape does not show it.
 
 use serde::{Deserialize, Serialize};
 
@@ -49,6 +50,20 @@ impl Units {
             Units::Inches => "in",
         }
     }
+}
+
+/// Where the file's up axis came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum UpFrom {
+    /// Named by `leg.up_axis` (`--up-axis`).
+    #[default]
+    Given,
+    /// `auto`: the file axis nearest the body's up, which its shape makes clear (its ends'
+    /// girths differ by [`super::landmarks::CLEAR_ENDS_RATIO`] or more).
+    Anatomy,
+    /// `auto` where the shape does not make up clear: glTF's +Y.
+    Convention,
 }
 
 /// Which file axis points up.
@@ -103,7 +118,8 @@ impl UpAxis {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
 #[serde(try_from = "String", into = "String")]
 pub enum UpChoice {
-    /// From the anatomy: the feet are at the bottom (default).
+    /// From the anatomy: the feet are at the bottom (default); glTF's +Y where the shape does
+    /// not show which end is up.
     #[default]
     Auto,
     /// This file axis points up.

@@ -28,8 +28,9 @@
 use nalgebra::{Matrix4, Point3, Rotation3, Translation3, Unit, Vector3};
 use serde::Serialize;
 
-use super::landmarks::{anatomical_up, find_landmarks, Landmarks, MIN_STANDING_GIRTH_M};
+use super::landmarks::{anatomical_up, find_landmarks, BodyUp, Landmarks, MIN_STANDING_GIRTH_M};
 use super::solid::{touching_groups, triangle_pieces};
+use super::UpFrom;
 use super::{leaves_mesh, Axis, AxisSource, Leg, RestPose, Side};
 
 /// A leg whose thigh leans off up, or whose knee bends, more than this, degrees, is fitted
@@ -100,7 +101,7 @@ pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
     // (turned) knee to continue the thigh. A lone leg's up is found from its own shape, which a
     // bend tilts: its thigh is left as it is and only the knee straightened, and the straight
     // leg's up found again. A body's up is its whole figure's: the thigh is turned to it.
-    let lone = landmarks.legs_found == 1 && leg.up_axis_found;
+    let lone = landmarks.legs_found == 1 && leg.up_from == UpFrom::Anatomy;
     let thigh_to = if lone { thigh } else { up };
     let thigh_turn = about(&top, &least_turn(&thigh, &thigh_to));
     let knee_then = thigh_turn.transform_point(&knee);
@@ -144,7 +145,9 @@ pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
         pose_from_rest.push(file * back * world);
     }
     if lone {
-        rest_leg.up = anatomical_up(&rest_leg.positions, &rest_leg.triangles).unwrap_or(up);
+        rest_leg.up = (anatomical_up(&rest_leg.positions, &rest_leg.triangles))
+            .filter(BodyUp::clear)
+            .map_or(up, |body| body.up);
     }
     let up = rest_leg.up;
     // Straightened, the leg must read as a standing one, around its straight axis; else the

@@ -117,7 +117,7 @@ fn details(
             file: leg.path.display().to_string(),
             units: leg.units,
             up_axis: leg.up_axis,
-            up_axis_found: leg.up_axis_found,
+            up_axis_from: leg.up_from,
             reoriented_triangles: leg.reoriented_triangles,
             cleaned: leg.cleaned,
             bounds_m: Bounds {

@@ -13,7 +13,9 @@ use serde::Serialize;
 use crate::error::Result;
 use crate::fit;
 use crate::leg::unbend::Bend;
-use crate::leg::{decode_leg, read_leg_file, Axis, Landmarks, Leg, ThighTopKind, Units, UpAxis};
+use crate::leg::{
+    decode_leg, read_leg_file, Axis, Landmarks, Leg, ThighTopKind, Units, UpAxis, UpFrom,
+};
 use crate::limits::{MemoryCheck, MemoryEstimate, MemoryLimit};
 use crate::plan::{LeftOut, Plan, PlannedStage};
 use crate::report::{stocking_extent, LandmarkDetails, LandmarkRing};
@@ -55,8 +57,8 @@ pub struct Placed {
     pub up: [f64; 3],
     /// The file's up axis: given, or the nearest to the body's up.
     pub up_axis: UpAxis,
-    /// True when `up_axis` was found from the anatomy.
-    pub up_axis_found: bool,
+    /// Where `up_axis` came from.
+    pub up_axis_from: UpFrom,
     /// The units the file was read in.
     pub units: Units,
     /// The landmarks, as `report.json` has them; `None` where the axis is given.
@@ -123,7 +125,7 @@ impl Placed {
         Placed {
             up: leg.up.into(),
             up_axis: leg.up_axis,
-            up_axis_found: leg.up_axis_found,
+            up_axis_from: leg.up_from,
             units: leg.units,
             landmarks: landmarks.map(|l| LandmarkDetails::of(l, leg)),
             axis_file: [file(axis.bottom()), file(axis.top())],
@@ -157,7 +159,7 @@ fn files(plan: &Plan, out_dir: &Path) -> Vec<PathBuf> {
 
 impl PlanOutcome {
     /// The plan as JSON, for scripts: `command`, `scene`, `leg` (`file`, `declared_triangles`,
-    /// and as decoded `up_axis`, `up_axis_found`, `in_rest_pose`, true where a posed leg is
+    /// and as decoded `up_axis`, `up_axis_from` (`given`, `anatomy` or `convention`), `in_rest_pose`, true where a posed leg is
     /// placed in a rest pose, and `straightened`, where that rest pose is the leg straightened
     /// without a rig, its bend as `details.pose.bend` gives it; null for a patch), `effects`,
     /// `forces`,
@@ -180,7 +182,7 @@ impl PlanOutcome {
                 file: file.display().to_string(),
                 declared_triangles: *triangles,
                 up_axis: placed.map(|p| p.up_axis),
-                up_axis_found: placed.map(|p| p.up_axis_found),
+                up_axis_from: placed.map(|p| p.up_axis_from),
                 in_rest_pose: placed.map(|p| p.in_rest_pose),
                 straightened: placed.and_then(|p| p.straightened),
             }),
@@ -283,10 +285,11 @@ impl Placement {
                 "{}, the file's {} ({})",
                 m(placed.up),
                 placed.up_axis.name(),
-                if placed.up_axis_found {
-                    "found from the anatomy"
-                } else {
-                    "leg.up_axis"
+                match placed.up_axis_from {
+                    UpFrom::Anatomy => "found from the anatomy",
+                    UpFrom::Convention =>
+                        "glTF's convention: the shape does not show which end is up",
+                    UpFrom::Given => "leg.up_axis",
                 }
             ),
         );
@@ -430,7 +433,7 @@ struct LegJson {
     file: String,
     declared_triangles: usize,
     up_axis: Option<UpAxis>,
-    up_axis_found: Option<bool>,
+    up_axis_from: Option<UpFrom>,
     in_rest_pose: Option<bool>,
     straightened: Option<Bend>,
 }

@@ -654,7 +654,7 @@ fn every_sample_turned_or_moved_fits_as_upright_up_to_the_motion() {
             let file = write_raw_meshes(dir.path(), "moved.glb", &moved);
             let got = fit_checked(&name, &file, json!({}));
             let leg = &got.report.details.leg;
-            assert!(leg.up_axis_found, "{name}");
+            assert_eq!(leg.up_axis_from, knitfit::leg::UpFrom::Anatomy, "{name}");
             if let Some(up) = *up_axis {
                 assert_eq!(leg.up_axis, up, "{name}");
             }

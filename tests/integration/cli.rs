@@ -416,7 +416,7 @@ fn units_up_axis_and_side_flags_reach_the_fit() {
     );
     let l = &r.details.leg;
     assert_eq!((l.units, l.up_axis), (Units::Metres, UpAxis::PosY));
-    assert!(!l.up_axis_found);
+    assert_eq!(l.up_axis_from, knitfit::leg::UpFrom::Given);
     assert_eq!(l.landmarks.as_ref().unwrap().side, Some(Side::Right));
     // The character's right is -X (glTF characters face +Z, their left on +X).
     assert!(r.details.axis.bottom[0] < 0.0, "{:?}", r.details.axis);

@@ -564,7 +564,7 @@ fn an_arbitrarily_rotated_leg_fits_along_its_detected_axis() {
     let leg = load_leg(&path, Units::Metres, UpChoice::Axis(UpAxis::PosY)).unwrap();
     let got = check_leg_fit("rotated 35°", run.path(), &out, &leg);
     let r = read_fit_report(&run.path().join("out"));
-    assert!(r.details.leg.up_axis_found);
+    assert_eq!(r.details.leg.up_axis_from, knitfit::leg::UpFrom::Anatomy);
     // The detected axis follows the leg: the leg's own +Y, rotated.
     let along = r.details.axis.direction();
     let want = rotation * Vector3::y();

@@ -380,7 +380,7 @@ fn plan_shows_the_landmarks_and_the_axis_the_fit_then_uses() {
             serde_json::from_value::<UpAxis>(plan["leg"]["up_axis"].clone()).unwrap(),
             r.details.leg.up_axis
         );
-        assert_eq!(plan["leg"]["up_axis_found"], true);
+        assert_eq!(plan["leg"]["up_axis_from"], "anatomy");
         let extent = line_starting(&text, extent);
         assert_eq!(
             extent,

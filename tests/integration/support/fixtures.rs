@@ -83,7 +83,7 @@ fn leg(name: &str, positions: Vec<Vec3>, triangles: Vec<[u32; 3]>) -> Leg {
         triangles,
         units: Units::Metres,
         up_axis: UpAxis::PosY,
-        up_axis_found: false,
+        up_from: knitfit::leg::UpFrom::Given,
         up: Vec3::y(),
         cleaned: Default::default(),
         reoriented_triangles: 0,
