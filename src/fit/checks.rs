@@ -25,6 +25,9 @@ pub struct FitChecks {
     /// Yarn pieces that still cross the skin after the penetration fix; `null` where the fix
     /// did not run.
     pub yarn_pieces_crossing: Option<usize>,
+    /// Where one of them lies, world space, metres; `null` where none does.
+    #[serde(default)]
+    pub yarn_crossing_at_m: Option<[f64; 3]>,
     /// The stitch density check; `null` where the leg's fields were not measured.
     pub density: Option<DensityJumps>,
 }
@@ -55,6 +58,7 @@ impl FitChecks {
         FitChecks {
             yarn_inside_skin_m: max_penetration_m,
             yarn_pieces_crossing: fix.map(|f| f.still_crossing),
+            yarn_crossing_at_m: fix.and_then(|f| f.still_crossing_at_m),
             density: (density.len() == leg.positions.len()).then(|| density_jumps(leg, density)),
         }
     }
@@ -69,8 +73,11 @@ impl FitChecks {
             ));
         }
         if let Some(n @ 1..) = self.yarn_pieces_crossing {
+            let at = (self.yarn_crossing_at_m).map_or(String::new(), |[x, y, z]| {
+                format!(" (one at ({x:.3}, {y:.3}, {z:.3}) m)")
+            });
             failed.push(format!(
-                "{n} yarn piece{} still cross{} the skin after the penetration fix",
+                "{n} yarn piece{} still cross{} the skin after the penetration fix{at}",
                 if n == 1 { "" } else { "s" },
                 if n == 1 { "es" } else { "" }
             ));
@@ -196,6 +203,19 @@ mod tests {
         assert_eq!(
             checks.failures(),
             ["3 yarn pieces still cross the skin after the penetration fix"]
+        );
+        // Where the fix says one lies, the check says it too.
+        let fix = PenetrationStats {
+            still_crossing_at_m: Some([0.1, -0.42, 0.03]),
+            ..fix
+        };
+        let checks = FitChecks::of(&cylinder(), 0.0, &[], Some(&fix));
+        assert_eq!(
+            checks.failures(),
+            [
+                "3 yarn pieces still cross the skin after the penetration fix (one at (0.100, \
+              -0.420, 0.030) m)"
+            ]
         );
     }
 

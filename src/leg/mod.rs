@@ -15,7 +15,7 @@ pub mod settings;
 pub mod slice;
 pub mod solid;
 #[cfg(test)]
-mod test_meshes;
+pub(crate) mod test_meshes;
 pub mod unbend;
 pub mod weld;
 

@@ -1,4 +1,5 @@
-//! Meshes the leg module's unit tests build: closed boxes, as legs, feet, pieces and debris.
+//! Meshes unit tests build (the leg module's, the penetration fix's): closed boxes, as legs,
+//! feet, pieces, debris and thin plates.
 
 use nalgebra::Point3;
 

@@ -56,7 +56,7 @@ const ACROSS_REACH: f64 = 4.0;
 const MIN_ACROSS: f64 = 0.05;
 
 /// What the fix did, for the report.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PenetrationStats {
     /// Yarn segments looked at.
@@ -76,6 +76,10 @@ pub struct PenetrationStats {
     pub used_fallback: usize,
     /// Pieces that still cross the skin after the fix (0 unless the mesh is broken).
     pub still_crossing: usize,
+    /// Where one of them lies (the middle of the first, in the yarns' order), world space,
+    /// metres; `null` where none does.
+    #[serde(default)]
+    pub still_crossing_at_m: Option<[f64; 3]>,
 }
 
 /// Returns `yarns` with every segment that cuts through the leg replaced by a polyline on the
@@ -118,6 +122,9 @@ pub fn fix_penetrations(
         stats.crossing_missed_by_angle += usize::from(!repair.flagged_by_angle);
         stats.used_fallback += usize::from(repair.used_fallback);
         stats.still_crossing += repair.still_crossing;
+        if stats.still_crossing_at_m.is_none() {
+            stats.still_crossing_at_m = repair.stuck_at.map(|p| p.into());
+        }
         if repair.still_crossing == 0 {
             stats.repaired += 1;
         }
@@ -184,6 +191,8 @@ struct Repair {
     used_fallback: bool,
     /// Pieces still crossing after the fix.
     still_crossing: usize,
+    /// The middle of the first of them.
+    stuck_at: Option<Vec3>,
 }
 
 /// The leg's triangles with their edge neighbours, for walking over the skin.
@@ -245,6 +254,7 @@ impl<'a> SurfaceWalker<'a> {
                 points: Vec::new(),
                 used_fallback: false,
                 still_crossing: 0,
+                stuck_at: None,
             });
         }
         let walked = self.walk(&closest[a], &closest[b]).unwrap_or_default();
@@ -252,11 +262,14 @@ impl<'a> SurfaceWalker<'a> {
         let mut points = Vec::with_capacity(walked.len());
         let mut used_fallback = false;
         let mut still_crossing = 0;
+        let mut stuck_at = None;
         let mut from = pa;
         for to in walked.iter().copied().chain(std::iter::once(pb)) {
             if self.crosses(&from, &to) {
                 used_fallback = true;
-                still_crossing += self.split(&from, &to, MAX_SPLIT_DEPTH, &mut points);
+                let mut stuck = Vec::new();
+                still_crossing += self.split(&from, &to, MAX_SPLIT_DEPTH, &mut points, &mut stuck);
+                stuck_at = stuck_at.or(stuck.first().copied());
             }
             if to != pb {
                 points.push(to);
@@ -269,6 +282,7 @@ impl<'a> SurfaceWalker<'a> {
             points,
             used_fallback,
             still_crossing,
+            stuck_at,
         })
     }
 
@@ -284,21 +298,29 @@ impl<'a> SurfaceWalker<'a> {
     }
 
     /// Splits the piece `a`–`b` at [`Self::split_point`], recursively while a part crosses
-    /// and `depth` lasts, pushing the points between `a` and `b` in order. Returns how many
-    /// pieces still cross.
-    fn split(&self, a: &Vec3, b: &Vec3, depth: u32, points: &mut Vec<Vec3>) -> usize {
+    /// and `depth` lasts, pushing the points between `a` and `b` in order, and the middles of
+    /// the parts that still cross to `stuck`. Returns how many pieces still cross.
+    fn split(
+        &self,
+        a: &Vec3,
+        b: &Vec3,
+        depth: u32,
+        points: &mut Vec<Vec3>,
+        stuck: &mut Vec<Vec3>,
+    ) -> usize {
         if depth == 0 {
+            stuck.push((a + b) / 2.0);
             return 1;
         }
         let mid = self.split_point(a, b);
         let mut left = 0;
         if self.crosses(a, &mid) {
-            left = self.split(a, &mid, depth - 1, points);
+            left = self.split(a, &mid, depth - 1, points, stuck);
         }
         points.push(mid);
         let mut right = 0;
         if self.crosses(&mid, b) {
-            right = self.split(&mid, b, depth - 1, points);
+            right = self.split(&mid, b, depth - 1, points, stuck);
         }
         left + right
     }
@@ -591,7 +613,10 @@ mod tests {
         let (a, b) = (on_flank(-0.008), on_flank(0.008));
         assert!(walker.crosses(&a, &b));
         let mut points = Vec::new();
-        assert_eq!(walker.split(&a, &b, MAX_SPLIT_DEPTH, &mut points), 0);
+        assert_eq!(
+            walker.split(&a, &b, MAX_SPLIT_DEPTH, &mut points, &mut Vec::new()),
+            0
+        );
         assert_eq!(points.len(), 1, "{points:?}");
         // The one point is on the crest, offset above it.
         assert!(points[0].x.abs() < 1e-9 && (points[0].z - (w + h + offset)).abs() < 1e-9);
@@ -600,7 +625,10 @@ mod tests {
         // Lopsided, the one point is on the crest too: the flanks' planes meet there.
         let (a, b) = (on_flank(-0.008), on_flank(0.003));
         let mut points = Vec::new();
-        assert_eq!(walker.split(&a, &b, MAX_SPLIT_DEPTH, &mut points), 0);
+        assert_eq!(
+            walker.split(&a, &b, MAX_SPLIT_DEPTH, &mut points, &mut Vec::new()),
+            0
+        );
         assert_eq!(points.len(), 1, "{points:?}");
         assert!(points[0].x.abs() < 1e-4 && (points[0].z - (w + h)).abs() < 3.0 * offset);
         let chain: Vec<Vec3> = [a].into_iter().chain(points).chain([b]).collect();
@@ -636,6 +664,29 @@ mod tests {
             .filter(|s| s[0] != NONE && s[1] == NONE)
             .count();
         assert_eq!(open, 8, "each fan triangle's two outer edges");
+    }
+
+    #[test]
+    fn a_piece_the_fix_cannot_clear_is_counted_where_it_lies() {
+        // A plate 10 µm thick, a yarn straight through its middle: its two faces' normals are
+        // opposite, so the fallback has no crest to lift the yarn over, and the piece stays.
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        crate::leg::test_meshes::add_box(
+            &mut positions,
+            &mut triangles,
+            [0.0, 0.0, 0.0],
+            [0.1, 1e-5, 0.1],
+        );
+        let plate = Leg::from_world("plate".into(), &positions, &triangles);
+        let collider = Collider::new(&plate, ContactMethod::Bvh).unwrap();
+        let yarns = two_points([0.05, 0.001, 0.05], [0.05, -0.001, 0.05]);
+        let (_, stats) = fix_penetrations(&yarns, &collider, 0.00003);
+        assert!(stats.still_crossing >= 1, "{stats:?}");
+        let [x, y, z] = stats.still_crossing_at_m.unwrap();
+        assert!(
+            (x - 0.05).abs() < 0.01 && y.abs() < 0.002 && (z - 0.05).abs() < 0.01,
+            "{stats:?}"
+        );
     }
 
     #[test]
