@@ -16,7 +16,9 @@
 //! - **The legs**: the closed loops of the section [`SEED_HEIGHT_M`] above the lowest point, each
 //!   followed up and down from slice to slice: the loop that encloses the last centre, or else
 //!   the nearest within [`MAX_STEP_M`]. Following stops where the mesh is cut, or where two legs'
-//!   loops become one (the crotch).
+//!   loops become one (the crotch), or a leg's girth jumps there once it has risen a shin's
+//!   length. Loops thinner than an ankle that meet within [`TOES_JOIN_M`] are the toes of one
+//!   foot standing on them (a stride's back foot).
 //! - **Facing and side**: the character faces where its standing feet point, on average, where
 //!   they agree within [`FEET_AGREE_DEG`]; its left is `up × facing`. Where they disagree, left
 //!   is taken from the lowest foot alone; with no foot the character faces +Z, as glTF
@@ -72,6 +74,11 @@ pub const MAX_SPAN_M: f64 = 4.5;
 /// How far a leg's loop goes on up from its seed, at the least, metres: a shin above an ankle
 /// does for ten centimetres or more, a box beside the leg does not.
 const MIN_LIMB_RISE_M: f64 = 0.10;
+/// How far a followed limb rises from its seed before a jump in its girth can be the crotch,
+/// metres: a shin's length (a crotch stands 0.45 m or more above the sole).
+const JUMP_MIN_RISE_M: f64 = 0.3;
+/// Loops of toes join within this rise, metres: a foot's toes meet at their ball.
+const TOES_JOIN_M: f64 = 0.1;
 /// Spacing of the sections, metres.
 pub const SLICE_STEP_M: f64 = 0.0025;
 /// Furthest a limb's centre may move between two sections, metres.
@@ -319,13 +326,6 @@ pub fn anatomical_up(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Optio
         let Some((score, up)) = signed_by_slimmer_end(positions, triangles, axes[k]) else {
             continue;
         };
-        if std::env::var_os("KNITFIT_DEBUG_UP").is_some() {
-            eprintln!(
-                "UP candidate {:?} extent {:.3} score {score:.3}",
-                up.map(|x| (x * 100.0).round() / 100.0).as_slice(),
-                extents[k]
-            );
-        }
         if best.is_none_or(|(b, _)| score > b) {
             best = Some((score, up));
         }
@@ -462,6 +462,21 @@ pub fn find_landmarks(
             .is_some_and(|r| r.s >= top - SLICE_STEP_M)
     };
     let seeds: Vec<Ring> = seeds.into_iter().filter(rises).collect();
+    // A foot standing on its toes (a stride's back foot, a pointed foot) is cut through its
+    // toes: loops thinner than any ankle that become one a few centimetres up are one limb,
+    // seeded at the widest of them.
+    let joins_soon = |a: &Ring, b: &Ring| {
+        let up = heights(a.s, a.s + TOES_JOIN_M, SLICE_STEP_M).skip(1);
+        follow(&slicer, &[*a, *b], up, false).joined
+    };
+    let seeds: Vec<Ring> = (seeds.iter().enumerate())
+        .filter(|&(k, r)| {
+            r.girth_m >= MIN_STANDING_GIRTH_M
+                || !(seeds.iter().enumerate())
+                    .any(|(j, o)| j != k && (o.girth_m, k) > (r.girth_m, j) && joins_soon(r, o))
+        })
+        .map(|(_, r)| *r)
+        .collect();
     let seeds = Some(seeds).filter(|rings| !rings.is_empty()).ok_or(
         "no closed cross-section near its lowest point looks like a leg (the mesh is open \
                 all around there, or has holes)",
@@ -830,9 +845,10 @@ fn follow(
                         .map(|(k, _)| k)
                 });
         }
-        // Only once the limb has grown well past where it started: a seed in a lifted foot
-        // grows as fast into its heel.
+        // Only once the limb has grown well past where it started, and risen a shin's length:
+        // a seed in a lifted foot grows as fast into its heel, one in a toe into its foot.
         let jumped = upward
+            && s - start[0].s >= JUMP_MIN_RISE_M
             && taken[0].is_some_and(|k| {
                 let below = rings[0].iter().rev().find(|r| r.s <= s - JUMP_SPAN_M);
                 below.is_some_and(|r| {

@@ -381,10 +381,16 @@ fn pose_known_failing(pose: Pose, rigging: Rigging, frame: RigFrame) -> Option<&
              about 60° (and at a pointed foot's toes): the carried stocking crosses it there, \
              exit 3 or 4 (decision 0077)",
         ),
-        Rigging::Baked if deep && pose != Pose::FootPointed => Some(
-            "without its rig, a leg whose foot does not stand (lifted, or on its toes) is refused \
-             (exit 2): its sections along up do not rise from its foot, and no curve skeleton \
-             follows it from elsewhere yet (issue 45 item 2)",
+        Rigging::Baked if matches!(pose, Pose::KneeBent90 | Pose::Sitting | Pose::Kneeling) => {
+            Some(
+                "without its rig, a leg whose foot is lifted is refused (exit 2): its sections \
+                 along up do not rise from its foot, and no curve skeleton follows it from \
+                 elsewhere yet (issue 45 item 2)",
+            )
+        }
+        Rigging::Baked if pose == Pose::MidStrideDeep && frame == RigFrame::Turned => Some(
+            "turned 120°, straightened and carried back, the stocking crosses the skin behind the \
+             knee bent 60° (66 pieces, points 3 µm inside), exit 4, as the rigged one turned does",
         ),
         Rigging::Baked if pose == Pose::FootPointed && frame == RigFrame::Turned => Some(
             "turned 120°, the pointed foot's sections put the ankle in the foot: straightened at \
@@ -577,16 +583,15 @@ fn the_posed_zoo_fits_every_pose_the_skin_bends_cleanly() {
 
 #[test]
 fn a_posed_leg_without_its_rig_is_refused_saying_so_not_dressed_on_the_other_leg() {
-    // Baked (no skin): a knee bent 90° lifts the left foot off the ground, and a deep stride
-    // bends the leg out of the horizontal sections. Before, the first was fitted on the right
-    // leg, exit 0, and the second refused as "up may be the wrong way".
+    // Baked (no skin): a knee bent 90° lifts the left foot off the ground. Before, it was
+    // fitted on the right leg, exit 0; a deep stride (its foot on its toes) was refused as "up
+    // may be the wrong way", and then as "lifted or bent out of standing", until its toes were
+    // read as one foot (`a_deep_stride_on_its_toes_is_read_from_its_toes_up`).
+    // Sitting and kneeling lift it too.
     for (pose, says, never) in [
         (Pose::KneeBent90, "the only leg standing", "up may be"),
-        (
-            Pose::MidStrideDeep,
-            "lifted or bent out of standing",
-            "up may be",
-        ),
+        (Pose::Sitting, "the only leg standing", "up may be"),
+        (Pose::Kneeling, "the only leg standing", "up may be"),
     ] {
         let dir = tempfile::tempdir().unwrap();
         let (file, _) = posed_file(dir.path(), pose, Rigging::Baked, RigFrame::AsExported);
@@ -599,4 +604,31 @@ fn a_posed_leg_without_its_rig_is_refused_saying_so_not_dressed_on_the_other_leg
         );
         assert!(err.contains("rig"), "{pose:?}: {err}");
     }
+}
+
+#[test]
+fn a_deep_stride_on_its_toes_is_read_from_its_toes_up() {
+    // Baked, hip 40° and knee 60°: the back foot stands on its toes, cut by the lowest
+    // sections as two loops a few centimetres apart. Read as one foot, the leg is followed up
+    // from it to the crotch (its girth jumping as the toes meet the foot is not the crotch), and
+    // straightened at the knee its sections show.
+    let dir = tempfile::tempdir().unwrap();
+    let (file, _) = posed_file(
+        dir.path(),
+        Pose::MidStrideDeep,
+        Rigging::Baked,
+        RigFrame::AsExported,
+    );
+    let out = knitfit(
+        dir.path(),
+        &["plan", "--leg", file.to_str().unwrap(), "--json"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let plan: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let bend = &plan["leg"]["straightened"];
+    let knee = bend["knee_deg"].as_f64().unwrap();
+    let thigh = bend["thigh_deg"].as_f64().unwrap();
+    assert!((knee - 60.0).abs() < 10.0, "{bend}");
+    assert!((thigh - 40.0).abs() < 10.0, "{bend}");
+    assert_eq!(plan["landmarks"]["thigh_top_kind"], "crotch", "{plan}");
 }
