@@ -78,7 +78,7 @@ const MIN_LIMB_RISE_M: f64 = 0.10;
 /// metres: a shin's length (a crotch stands 0.45 m or more above the sole).
 const JUMP_MIN_RISE_M: f64 = 0.3;
 /// Loops of toes join within this rise, metres: a foot's toes meet at their ball.
-const TOES_JOIN_M: f64 = 0.1;
+pub const TOES_JOIN_M: f64 = 0.1;
 /// Spacing of the sections, metres.
 pub const SLICE_STEP_M: f64 = 0.0025;
 /// Furthest a limb's centre may move between two sections, metres.
