@@ -318,19 +318,28 @@ pub fn anatomical_up(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Optio
     let longest = extents.iter().copied().fold(0.0, f64::max);
     let mut order: Vec<usize> = (0..3).collect();
     order.sort_by(|&a, &b| extents[b].total_cmp(&extents[a]));
-    let mut best: Option<(f64, Vector3<f64>)> = None;
+    // Ranked by the ratio of their ends' girths; an axis with an open end ranks as an even one
+    // (1) but is clear: its open end is the top.
+    let mut best: Option<(f64, BodyUp)> = None;
     for k in order {
         if extents[k] < CANDIDATE_EXTENT * longest {
             continue;
         }
-        let Some((score, up)) = signed_by_slimmer_end(positions, triangles, axes[k]) else {
+        let Some((ratio, up)) = signed_by_slimmer_end(positions, triangles, axes[k]) else {
             continue;
         };
-        if best.is_none_or(|(b, _)| score > b) {
-            best = Some((score, up));
+        let rank = if ratio.is_finite() { ratio } else { 1.0 };
+        if best.is_none_or(|(b, _)| rank > b) {
+            best = Some((
+                rank,
+                BodyUp {
+                    up,
+                    ends_ratio: ratio,
+                },
+            ));
         }
     }
-    best.map(|(ends_ratio, up)| BodyUp { up, ends_ratio })
+    best.map(|(_, body)| body)
 }
 
 /// `axis` pointed away from its slimmer end (the mean girth of the closed sections in each end
