@@ -117,31 +117,24 @@ pub fn place(
 }
 
 /// What was seen instead of a leg, and where up is in doubt, the way out that fits how up was
-/// chosen: a found up can be overruled by naming the file's axis; a given one can be left to
-/// the anatomy. Never the advice to do what the user already did.
+/// chosen ([`Leg::up_chosen`]): an up `auto` chose can be overruled by naming the file's axis;
+/// a given one can be left to the anatomy. Never the advice to do what the user already did.
 fn advised(no: &NoLandmarks, leg: &Leg) -> String {
     if !no.up_in_doubt {
         return no.seen.clone();
     }
-    let axis = leg.up_axis.name();
     match leg.up_from {
-        UpFrom::Anatomy => format!(
-            "{}: up may be the wrong way; it was found from the anatomy as the file's {axis} \
-             (leg.up_axis \"auto\"): if the file's up is another axis, name it with \
-             leg.up_axis (--up-axis)",
-            no.seen
-        ),
-        UpFrom::Convention => format!(
-            "{}: up may be the wrong way; it was taken as the file's {axis}, glTF's \
-             convention, as the mesh's shape does not show which end is up (leg.up_axis \
-             \"auto\"): if the file's up is another axis, name it with leg.up_axis \
-             (--up-axis)",
-            no.seen
+        UpFrom::Anatomy | UpFrom::Convention => format!(
+            "{}: up may be the wrong way (leg.up_axis {}): if the file's up is another axis, \
+             name it with leg.up_axis (--up-axis)",
+            no.seen,
+            leg.up_chosen()
         ),
         UpFrom::Given => format!(
-            "{}: up may be the wrong way; leg.up_axis (--up-axis) gives it as the file's \
-             {axis}: give the file's real up axis, or \"auto\" to find it from the anatomy",
-            no.seen
+            "{}: up may be the wrong way; leg.up_axis (--up-axis) gives it as the file's {}: \
+             give the file's real up axis, or \"auto\" to find it from the anatomy",
+            no.seen,
+            leg.up_axis.name()
         ),
     }
 }
@@ -247,7 +240,7 @@ mod tests {
             "{found}"
         );
         assert!(
-            found.contains("found from the anatomy as the file's +z"),
+            found.contains("now \"auto\", which found +z from the anatomy"),
             "{found}"
         );
         assert!(!found.contains("or \"auto\""), "{found}");
@@ -266,7 +259,7 @@ mod tests {
         leg.up_from = UpFrom::Convention;
         let convention = advised(&upside_down, &leg);
         assert!(
-            convention.contains("taken as the file's +y, glTF's convention"),
+            convention.contains("which took +y, glTF's convention"),
             "{convention}"
         );
         assert!(

@@ -708,14 +708,14 @@ fn check_height(leg: &Leg) -> Result<()> {
     .map(Units::name)
     .collect();
     let hint = if fitting.is_empty() {
-        format!("check leg.up_axis or --up-axis ({})", up_said(leg))
+        format!("check leg.up_axis or --up-axis ({})", leg.up_chosen())
     } else {
         format!(
             "it is probably in other units: set leg.units or --units to \"{}\" (now \"{}\"), \
              or check leg.up_axis ({})",
             fitting[0],
             leg.units.name(),
-            up_said(leg)
+            leg.up_chosen()
         )
     };
     Err(Error::Leg {
@@ -727,16 +727,18 @@ fn check_height(leg: &Leg) -> Result<()> {
     })
 }
 
-/// How the leg's up axis was chosen, for a message: the axis given, or what `auto` made of it.
-fn up_said(leg: &Leg) -> String {
-    let axis = leg.up_axis.name();
-    match leg.up_from {
-        UpFrom::Given => format!("now \"{axis}\""),
-        UpFrom::Anatomy => format!("now \"auto\", which found {axis} from the anatomy"),
-        UpFrom::Convention => format!(
-            "now \"auto\", which took {axis}, glTF's convention, as the shape does not show \
-             which end is up"
-        ),
+impl Leg {
+    /// How its up axis was chosen, for a message: the axis given, or what `auto` made of it.
+    pub fn up_chosen(&self) -> String {
+        let axis = self.up_axis.name();
+        match self.up_from {
+            UpFrom::Given => format!("now \"{axis}\""),
+            UpFrom::Anatomy => format!("now \"auto\", which found {axis} from the anatomy"),
+            UpFrom::Convention => format!(
+                "now \"auto\", which took {axis}, glTF's convention, as the shape does not \
+                 show which end is up"
+            ),
+        }
     }
 }
 
@@ -1305,39 +1307,31 @@ mod tests {
 
     #[test]
     fn up_is_the_anatomys_where_the_ends_differ_and_gltfs_plus_y_where_they_do_not() {
-        let read = |(positions, triangles): (Vec<Point3<f64>>, Vec<[u32; 3]>)| {
+        let read = |(positions, triangles): (Vec<Point3<f64>>, Vec<[u32; 3]>), choice| {
             leg_in_world(
                 "leg.glb".into(),
                 &positions,
                 &triangles,
                 Units::Metres,
-                UpChoice::Auto,
+                choice,
             )
             .unwrap()
         };
         // A limb along +Z, slim at its foot: +Z is up, as its shape says.
-        let limb = read(prism_along_z(0.03, 0.08));
+        let limb = read(prism_along_z(0.03, 0.08), UpChoice::Auto);
         assert_eq!(
             (limb.up_axis, limb.up_from),
             (UpAxis::PosZ, UpFrom::Anatomy)
         );
         // As wide at both ends (1.1 times): the shape does not say, so glTF's +Y stands.
-        let even = read(prism_along_z(0.05, 0.055));
+        let even = read(prism_along_z(0.05, 0.055), UpChoice::Auto);
         assert_eq!(
             (even.up_axis, even.up_from),
             (UpAxis::PosY, UpFrom::Convention)
         );
         assert_eq!(even.up, Vector3::y());
         // Named, the axis is the file's, whatever the shape.
-        let (positions, triangles) = prism_along_z(0.05, 0.055);
-        let given = leg_in_world(
-            "leg.glb".into(),
-            &positions,
-            &triangles,
-            Units::Metres,
-            UpChoice::Axis(UpAxis::PosZ),
-        )
-        .unwrap();
+        let given = read(prism_along_z(0.05, 0.055), UpChoice::Axis(UpAxis::PosZ));
         assert_eq!(
             (given.up_axis, given.up_from),
             (UpAxis::PosZ, UpFrom::Given)
