@@ -3,6 +3,7 @@
 
 pub mod axis;
 pub mod caps;
+pub mod centreline;
 pub mod clean;
 pub mod collider;
 pub mod curvature;

@@ -287,6 +287,18 @@ fn merged_across_pieces(
         .collect()
 }
 
+/// True when `p`, projected into the plane of the closed loop `l` (square to the unit vector
+/// `normal`), lies inside it (crossing number, half-open rule).
+pub fn encloses_in_plane(l: &Loop, normal: &Vector3<f64>, p: &Point3<f64>) -> bool {
+    if !l.closed || l.points.len() < 3 {
+        return false;
+    }
+    let (u, v) = perpendicular_frame(normal);
+    let flat = |q: &Point3<f64>| [q.coords.dot(&u), q.coords.dot(&v)];
+    let corners: Vec<[f64; 2]> = l.points.iter().map(flat).collect();
+    inside_polygon(&corners, flat(p))
+}
+
 /// True when `p` lies inside the polygon `corners` (crossing number, half-open rule).
 fn inside_polygon(corners: &[[f64; 2]], [px, py]: [f64; 2]) -> bool {
     let mut inside = false;

@@ -299,11 +299,17 @@ impl Placement {
                 out += &row(
                     "pose",
                     format!(
-                        "the leg bends (knee {:.0}°, thigh {:.0}° off up) and no rig poses it: \
-                         the landmarks and axis below are the leg's straightened at the joints \
-                         its sections show, where the stocking is fitted before it is carried \
-                         into the pose",
-                        bend.knee_deg, bend.thigh_deg
+                        "the leg bends (knee {:.0}°, thigh {:.0}° off up{}) and no rig poses \
+                         it: the landmarks and axis below are the leg's straightened at the \
+                         joints its sections show, where the stocking is fitted before it is \
+                         carried into the pose",
+                        bend.knee_deg,
+                        bend.thigh_deg,
+                        if bend.foot_deg > 0.0 {
+                            format!(", the foot pointed {:.0}°", bend.foot_deg)
+                        } else {
+                            String::new()
+                        }
                     ),
                 )
             }
