@@ -36,8 +36,8 @@ strides=$?
   echo
   echo "Each left leg of the zoo (cut open, closed, slanted, in pieces, the whole mannequin's with"
   echo "its trunk and right leg still; the procedural leg closed, open, slanted, in pieces) posed"
-  echo "as a stride with no rig, its knee bent back and its hip flexed"
-  echo "forward by the degrees named (a piece turned whole, a mesh across the knee blended over"
+  echo "as a stride with no rig, its knee bent back and its hip flexed forward, or its foot"
+  echo "pointed down, by the degrees named (a piece turned whole, a mesh across a joint blended over"
   echo "4 cm), fitted at the defaults (\`zoo::the_stride_zoo_table\`; the bend read is"
   echo "\`details.pose.bend\`, [decision 0077](decisions/0077-rigged-legs-are-fitted-at-rest-and-carried-into-the-pose.md))."
   echo
