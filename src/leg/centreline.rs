@@ -2,17 +2,18 @@
 //! sections along up ([`super::landmarks`]) cut a foot pointed down through its toes, or a shin
 //! lying forward lengthwise, these still go around the limb.
 //!
-//! Method: section tracking, as centrelines of tubular shapes (vessels, airways, limbs in body
-//! scans) are followed (Aylward & Bullitt 2002, "Initialization, noise, singularities, and scale
-//! in height ridge traversal for tubular object centerline extraction", IEEE TMI 21(2)): from a
-//! point and a direction, step [`STEP_M`] along the direction, cut the skin there square to it,
-//! take the loop around the stepped point, and its centre is the next point; the chord from the
-//! last centre is the new direction, and the section is cut again square to it through the new
-//! centre, so each station's section is square to the centreline there, not to the last one.
+//! Method: predictor–corrector traversal of a tube's centreline, after Aylward & Bullitt 2002
+//! ("Initialization, noise, singularities, and scale in height ridge traversal for tubular
+//! object centerline extraction", IEEE TMI 21(2)), with the mesh's plane sections in place of
+//! intensity ridges: from a point and a direction, step [`STEP_M`] along the direction, cut the
+//! skin there square to it, take the outermost loop around the stepped point, and its centre is
+//! the next point; the chord from the last centre is the new direction, and the section is cut
+//! again square to it through the new centre, so each station's section is square to the
+//! centreline there, not to the last one.
 //!
-//! Contract: the stations run from the start along the limb until the section holds no loop
-//! around the stepped point (the limb's end: a toe's cleft, a cut, the sole), the loop's girth
-//! jumps by more than [`GIRTH_JUMP`] (the plane has reached the body or the other leg), the
+//! Contract: the stations run from the start along the limb until the section holds no closed
+//! loop around the stepped point (the limb's end: a toe's cleft, a cut, the sole), the loop's girth
+//! jumps by more than [`STEP_GIRTH_JUMP`] (the plane has reached the body or the other leg), the
 //! direction turns more than [`MAX_TURN_DEG`] in one step, or [`MAX_LENGTH_M`] is followed.
 //! Loops are of the skin without caps over cuts, across pieces as the landmarks' are (a
 //! mannequin's shin and its ankle ball are one section). Nothing is smoothed: a station is
@@ -21,14 +22,15 @@
 use nalgebra::{Point3, Vector3};
 
 use super::caps::open_cut_caps;
-use super::slice::{convex_hull, encloses_in_plane, section, Loop};
+use super::slice::{encloses_in, girth_in, section};
 use super::solid::triangle_pieces;
 use crate::base::perpendicular_frame;
 
 /// Distance between stations, metres: a few per ankle radius, so a joint's turn is seen.
 pub const STEP_M: f64 = 0.01;
-/// A loop more than this many times as far round as the last is not the limb's.
-pub const GIRTH_JUMP: f64 = 1.5;
+/// A loop more than this many times as far round as the last station's, a step before, is not
+/// the limb's.
+pub const STEP_GIRTH_JUMP: f64 = 1.5;
 /// A step that turns the centreline more than this, degrees, has left the limb.
 pub const MAX_TURN_DEG: f64 = 40.0;
 /// The longest centreline followed, metres: longer than any leg.
@@ -39,7 +41,8 @@ pub const MAX_LENGTH_M: f64 = 1.6;
 pub struct Station {
     /// The section's centre, world space.
     pub centre: Point3<f64>,
-    /// Unit vector along the centreline, the way it is followed.
+    /// Unit vector along the centreline, the way it is followed: the chord from the last
+    /// station (its section was cut square to it).
     pub along: Vector3<f64>,
     /// Girth of the section (convex perimeter), metres.
     pub girth_m: f64,
@@ -98,33 +101,22 @@ impl<'a> Skin<'a> {
         stations
     }
 
-    /// The section through `p` square to `normal`: the closed loop around `p`, unless it is
-    /// more than [`GIRTH_JUMP`] times `last_girth` round.
+    /// The section through `p` square to `normal`: the outermost closed loop around `p` (the
+    /// skin, not a wall inside it), unless it is more than [`STEP_GIRTH_JUMP`] times
+    /// `last_girth` round.
     fn station(&self, p: &Point3<f64>, normal: &Vector3<f64>, last_girth: f64) -> Option<Station> {
+        let (u, v) = perpendicular_frame(normal);
         let loops = section(self.positions, &self.triangles, &self.piece, p, normal);
-        let around: &Loop = loops
-            .iter()
-            .find(|l| l.closed && encloses_in_plane(l, normal, p))?;
-        let girth_m = girth_in_plane(around, normal);
-        (girth_m <= GIRTH_JUMP * last_girth).then(|| Station {
+        let (around, girth_m) = (loops.iter())
+            .filter(|l| encloses_in(l, &u, &v, p))
+            .map(|l| (l, girth_in(l, &u, &v)))
+            .max_by(|a, b| a.1.total_cmp(&b.1))?;
+        (girth_m <= STEP_GIRTH_JUMP * last_girth).then(|| Station {
             centre: around.centre(),
             along: *normal,
             girth_m,
         })
     }
-}
-
-/// The perimeter of `l`'s convex hull in its plane, square to `normal`.
-fn girth_in_plane(l: &Loop, normal: &Vector3<f64>) -> f64 {
-    let (u, v) = perpendicular_frame(normal);
-    let hull = convex_hull(
-        (l.points.iter())
-            .map(|p| [p.coords.dot(&u), p.coords.dot(&v)])
-            .collect(),
-    );
-    (hull.iter().zip(hull.iter().cycle().skip(1)))
-        .map(|(a, b)| ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt())
-        .sum()
 }
 
 #[cfg(test)]

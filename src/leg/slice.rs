@@ -136,22 +136,39 @@ impl<'a> Slicer<'a> {
 
     /// The girth of `l`: the perimeter of its convex hull in the plane, metres.
     pub fn girth(&self, l: &Loop) -> f64 {
-        let hull = convex_hull(l.points.iter().map(|p| self.flat(p)).collect());
-        hull.iter()
-            .zip(hull.iter().cycle().skip(1))
-            .map(|(a, b)| ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt())
-            .sum()
+        girth_in(l, &self.u, &self.v)
     }
 
     /// True when `p`, projected into the plane, lies inside the closed loop `l` (crossing
     /// number, half-open rule).
     pub fn encloses(&self, l: &Loop, p: &Point3<f64>) -> bool {
-        if !l.closed || l.points.len() < 3 {
-            return false;
-        }
-        let flat: Vec<[f64; 2]> = l.points.iter().map(|q| self.flat(q)).collect();
-        inside_polygon(&flat, self.flat(p))
+        encloses_in(l, &self.u, &self.v, p)
     }
+}
+
+/// The girth of the loop `l` in the plane spanned by the unit vectors `u` and `v`: the
+/// perimeter of its convex hull there, metres.
+pub fn girth_in(l: &Loop, u: &Vector3<f64>, v: &Vector3<f64>) -> f64 {
+    let hull = convex_hull(
+        (l.points.iter())
+            .map(|p| [p.coords.dot(u), p.coords.dot(v)])
+            .collect(),
+    );
+    hull.iter()
+        .zip(hull.iter().cycle().skip(1))
+        .map(|(a, b)| ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt())
+        .sum()
+}
+
+/// True when `p`, projected into the plane spanned by the unit vectors `u` and `v`, lies inside
+/// the closed loop `l` (crossing number, half-open rule).
+pub fn encloses_in(l: &Loop, u: &Vector3<f64>, v: &Vector3<f64>, p: &Point3<f64>) -> bool {
+    if !l.closed || l.points.len() < 3 {
+        return false;
+    }
+    let flat = |q: &Point3<f64>| [q.coords.dot(u), q.coords.dot(v)];
+    let corners: Vec<[f64; 2]> = l.points.iter().map(flat).collect();
+    inside_polygon(&corners, flat(p))
 }
 
 impl Loop {
@@ -285,18 +302,6 @@ fn merged_across_pieces(
             })
         })
         .collect()
-}
-
-/// True when `p`, projected into the plane of the closed loop `l` (square to the unit vector
-/// `normal`), lies inside it (crossing number, half-open rule).
-pub fn encloses_in_plane(l: &Loop, normal: &Vector3<f64>, p: &Point3<f64>) -> bool {
-    if !l.closed || l.points.len() < 3 {
-        return false;
-    }
-    let (u, v) = perpendicular_frame(normal);
-    let flat = |q: &Point3<f64>| [q.coords.dot(&u), q.coords.dot(&v)];
-    let corners: Vec<[f64; 2]> = l.points.iter().map(flat).collect();
-    inside_polygon(&corners, flat(p))
 }
 
 /// True when `p` lies inside the polygon `corners` (crossing number, half-open rule).

@@ -54,25 +54,32 @@ const SAME_LENGTH: f64 = 0.1;
 /// Half the band across the knee over which a vertex's weight goes from the thigh to the shin,
 /// as a fraction of the knee's radius.
 const KNEE_BAND: f64 = 1.0;
-/// The narrowest the knee's band may be, metres: a knee section of no girth does not make the
+/// The narrowest a joint's band may be, metres: a section of no girth does not make the
 /// weights 0/0.
-const MIN_KNEE_BAND_M: f64 = 0.01;
+const MIN_JOINT_BAND_M: f64 = 0.01;
 /// The band below the top of the thigh over which the leg's weight goes from the body's to the
 /// thigh's, metres.
 const HIP_BAND_M: f64 = 0.08;
+/// An ankle the sections along up found lower than this above the sole, metres, may be a
+/// section through a pointed foot: a standing adult's narrowest ankle is 7–12 cm up.
+pub const LOWEST_ANKLE_M: f64 = 0.05;
 /// The shin's own sections put the ankle this much higher than the sections along up did,
 /// metres, where those cut a pointed foot: a standing leg's two ankles are within a centimetre
 /// or two.
 pub const POINTED_ANKLE_RISE_M: f64 = 0.04;
+/// An ankle lies in this lowest share of the leg from the sole to the top of the thigh, as the
+/// landmarks look for it.
+const ANKLE_SHARE: f64 = 1.0 / 3.0;
 /// The leg is followed down from the top of its thigh towards the centre of its section this
 /// far below, metres.
 const START_DROP_M: f64 = 0.15;
 /// The shin's ankle is looked for in this lower share of the way followed.
 const SHIN_ANKLE_SHARE: f64 = 0.4;
-/// The shortest way followed down the leg that reaches its ankle, metres.
+/// The shortest way followed down the leg from the top of its thigh that can reach its ankle,
+/// metres: more than a thigh.
 const MIN_SHIN_TRACK_M: f64 = 0.3;
 /// A foot's ball: its vertices over this share of the way forward from the ankle to the toe
-/// tip; its heel: those under [`HEEL_SHARE`] of it (the heel stands under the ankle, not
+/// tip; its heel: those under [`HEEL_SHARE`] of it (the heel's sole is under the ankle, not
 /// behind it).
 const BALL_SHARE: f64 = 0.6;
 /// See [`BALL_SHARE`].
@@ -117,13 +124,21 @@ pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
     let landmarks =
         find_landmarks(&leg.positions, &leg.triangles, up, side, leg.rig.as_ref()).ok()?;
     // A foot pointed down is cut through its toes by sections along up, which then put the
-    // ankle in the foot: the shin's own sections find it where it is.
-    let shin = shin_sections(leg, &landmarks);
+    // ankle in the foot (thinner than any standing ankle, or lower): the shin's own sections
+    // find it where it is. A standing leg's ankle is not followed for: it costs a section of
+    // the whole mesh every centimetre.
     let sole_s = landmarks.sole_s();
+    let in_doubt = landmarks.ankle.girth_m < MIN_STANDING_GIRTH_M
+        || landmarks.ankle.s - sole_s < LOWEST_ANKLE_M;
+    let shin = if in_doubt {
+        shin_sections(leg, &landmarks)
+    } else {
+        None
+    };
     let pointed = shin.as_ref().filter(|s| {
         let ankle_s = s.ankle.centre.coords.dot(&up);
         (ankle_s - landmarks.ankle.s) > POINTED_ANKLE_RISE_M
-            && ankle_s - sole_s < (landmarks.thigh_top.s - sole_s) / 3.0
+            && ankle_s - sole_s < ANKLE_SHARE * (landmarks.thigh_top.s - sole_s)
     });
     let mut bend = match pointed {
         Some(shin) => bend_through(
@@ -181,19 +196,21 @@ pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
         return None;
     }
     let knee_radius = landmarks.knee.girth_m / std::f64::consts::TAU;
-    let knee_band = (KNEE_BAND * knee_radius).max(MIN_KNEE_BAND_M);
-    // Square to the bisector of the thigh's and shin's lines: the plane between the two bones.
-    let across_knee = (-thigh - shin_up).try_normalize(1e-9).unwrap_or(-up);
+    let knee_band = JointBand {
+        at: knee,
+        // Square to the bisector of the thigh's and shin's lines: the plane between the bones.
+        across: (-thigh - shin_up).try_normalize(1e-9).unwrap_or(-up),
+        half: (KNEE_BAND * knee_radius).max(MIN_JOINT_BAND_M),
+    };
     let rest_from_pose: Vec<Matrix4<f64>> = (leg.positions.iter().enumerate())
         .map(|(i, p)| {
             if !member[i] {
                 return Matrix4::identity();
             }
             let on_leg = smoothstep(below_top[i] / HIP_BAND_M);
-            let on_shin =
-                smoothstep(((p - knee).dot(&across_knee) + knee_band) / (2.0 * knee_band));
+            let on_shin = knee_band.weight(p);
             let below_knee = match &foot {
-                Some(f) => shin_turn * (1.0 - f.weight(p)) + f.turn * f.weight(p),
+                Some(f) => shin_turn * (1.0 - f.band.weight(p)) + f.turn * f.band.weight(p),
                 None => shin_turn,
             };
             let leg_matrix = thigh_turn * (1.0 - on_shin) + below_knee * on_shin;
@@ -248,14 +265,14 @@ pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
 /// The shin's ankle and the centres of the leg's own sections above it.
 struct ShinSections {
     ankle: Station,
-    /// Section centres from the ankle up to the top of the thigh.
+    /// Section centres from the top of the thigh down to the ankle.
     centres: Vec<Point3<f64>>,
 }
 
 /// The leg followed down from the top of its thigh by sections square to its own centreline
 /// ([`super::centreline`]): they go round the shin down to the heel, where the foot's sections
 /// along up do not; the ankle is the narrowest of them in the lower [`SHIN_ANKLE_SHARE`] of the
-/// way, no thinner than a standing leg's. `None` where they stop short of that.
+/// way, no thinner than a standing leg's. `None` where they stop within [`MIN_SHIN_TRACK_M`].
 fn shin_sections(leg: &Leg, landmarks: &Landmarks) -> Option<ShinSections> {
     let top = Point3::from(landmarks.thigh_top.centre);
     let below =
@@ -263,15 +280,17 @@ fn shin_sections(leg: &Leg, landmarks: &Landmarks) -> Option<ShinSections> {
     let down = (Point3::from(below.centre) - top).try_normalize(1e-9)?;
     let skin = Skin::new(&leg.positions, &leg.triangles, &leg.up);
     let stations = skin.follow(&top, &down);
+    // A leg's length followed, not a stub.
+    let length: f64 = (stations.windows(2))
+        .map(|w| (w[1].centre - w[0].centre).norm())
+        .sum();
+    if length < MIN_SHIN_TRACK_M {
+        return None;
+    }
     let lower = (stations.len() as f64 * (1.0 - SHIN_ANKLE_SHARE)) as usize;
     let (at, ankle) = (stations.iter().enumerate().skip(lower))
         .filter(|(_, s)| s.girth_m >= MIN_STANDING_GIRTH_M)
         .min_by(|a, b| a.1.girth_m.total_cmp(&b.1.girth_m))?;
-    // Its centreline must reach from the thigh past the knee: a leg's length, not a stub.
-    let length = (stations.len() as f64) * super::centreline::STEP_M;
-    if length < MIN_SHIN_TRACK_M {
-        return None;
-    }
     Some(ShinSections {
         ankle: *ankle,
         centres: stations[..=at].iter().map(|s| s.centre).collect(),
@@ -284,17 +303,23 @@ struct FootTurn {
     turn: Matrix4<f64>,
     /// The foot's turn, degrees.
     degrees: f64,
-    /// The plane across the ankle, through it, square to the bisector of the shin's and the
-    /// foot's lines; and half the band across it over which a vertex goes from shin to foot.
-    ankle: Point3<f64>,
-    across: Vector3<f64>,
-    band: f64,
+    /// Where a vertex goes from the shin's turn to the foot's.
+    band: JointBand,
 }
 
-impl FootTurn {
-    /// How much of vertex `p` (posed) moves with the foot.
+/// The band across a joint over which a vertex's weight goes from one bone to the next: the
+/// plane through the joint square to `across` (the bisector of the two bones' lines), `half`
+/// either side of it.
+struct JointBand {
+    at: Point3<f64>,
+    across: Vector3<f64>,
+    half: f64,
+}
+
+impl JointBand {
+    /// How much of vertex `p` (posed) moves with the next bone: 0 to 1 across the band.
     fn weight(&self, p: &Point3<f64>) -> f64 {
-        smoothstep(((p - self.ankle).dot(&self.across) + self.band) / (2.0 * self.band))
+        smoothstep(((p - self.at).dot(&self.across) + self.half) / (2.0 * self.half))
     }
 }
 
@@ -321,15 +346,19 @@ fn foot_turn(
         .iter()
         .max_by(|a, b| (*a - ankle).norm().total_cmp(&(*b - ankle).norm()))?;
     let to_toe = (toe - ankle).try_normalize(1e-9)?;
-    // The foot's line: to the middle of its ball and toes, not to the big toe's tip beside it.
+    // The foot's line: to the middle of its ball and toes, not to the big toe's tip beside it
+    // (the tip itself is among them, so they are never none).
     let ball: Vec<&Point3<f64>> = (foot.iter())
-        .filter(|p| (*p - ankle).dot(&to_toe) > BALL_SHARE * (toe - ankle).norm())
+        .filter(|p| (*p - ankle).dot(&to_toe) >= BALL_SHARE * (toe - ankle).norm())
         .collect();
     let ball_centre =
-        ball.iter().fold(Vector3::zeros(), |sum, p| sum + p.coords) / ball.len() as f64;
+        ball.iter().fold(Vector3::zeros(), |sum, p| sum + p.coords) / ball.len().max(1) as f64;
     let to_ball = (Point3::from(ball_centre) - ankle).try_normalize(1e-9)?;
-    let across = (to_toe - shin_up).try_normalize(1e-9)?;
-    let band = (ankle_girth / std::f64::consts::TAU).max(MIN_KNEE_BAND_M);
+    let band = JointBand {
+        at: *ankle,
+        across: (to_toe - shin_up).try_normalize(1e-9)?,
+        half: (ankle_girth / std::f64::consts::TAU).max(MIN_JOINT_BAND_M),
+    };
     let ankle_then = shin_turn.transform_point(ankle);
     let hinge = Unit::try_new(shin_turn.transform_vector(&to_ball.cross(shin_up)), 1e-9)?;
     let turned = |degrees: f64| {
@@ -338,37 +367,36 @@ fn foot_turn(
             &Rotation3::from_axis_angle(&hinge, degrees.to_radians()),
         ) * shin_turn
     };
-    let weight = |p: &Point3<f64>| smoothstep(((p - ankle).dot(&across) + band) / (2.0 * band));
-    // The ball's height above the heel's, the foot turned `degrees`.
-    let ball_over_heel = |degrees: f64| -> f64 {
+    // The ball's height above the heel's, the foot turned `degrees`; `None` where the foot has
+    // no way forward or no vertex at its heel or its ball.
+    let ball_over_heel = |degrees: f64| -> Option<f64> {
         let turn = turned(degrees);
         let rested: Vec<Point3<f64>> = (foot.iter())
             .map(|p| {
-                let w = weight(p);
+                let w = band.weight(p);
                 (shin_turn * (1.0 - w) + turn * w).transform_point(p)
             })
             .collect();
         let tip = turn.transform_point(toe);
         let forward = (tip - ankle_then) - rest_up * (tip - ankle_then).dot(rest_up);
-        let Some(forward) = forward.try_normalize(1e-9) else {
-            return f64::NAN;
-        };
+        let forward = forward.try_normalize(1e-9)?;
         let reach = (tip - ankle_then).dot(&forward);
         let lowest = |keep: &dyn Fn(f64) -> bool| {
             (rested.iter())
                 .filter(|p| keep((*p - ankle_then).dot(&forward)))
                 .map(|p| p.coords.dot(rest_up))
-                .fold(f64::INFINITY, f64::min)
+                .min_by(f64::total_cmp)
         };
-        lowest(&|f| f > BALL_SHARE * reach) - lowest(&|f| f < HEEL_SHARE * reach)
+        let height = lowest(&|f| f > BALL_SHARE * reach)? - lowest(&|f| f < HEEL_SHARE * reach)?;
+        Some(height).filter(|h| h.is_finite())
     };
     let (mut lo, mut hi) = (0.0, MAX_FOOT_TURN_DEG);
-    if !(ball_over_heel(lo) < 0.0 && ball_over_heel(hi) > 0.0) {
+    if !(ball_over_heel(lo)? < 0.0 && ball_over_heel(hi)? > 0.0) {
         return None;
     }
     for _ in 0..40 {
         let mid = (lo + hi) / 2.0;
-        if ball_over_heel(mid) < 0.0 {
+        if ball_over_heel(mid)? < 0.0 {
             lo = mid;
         } else {
             hi = mid;
@@ -378,8 +406,6 @@ fn foot_turn(
     Some(FootTurn {
         turn: turned(degrees),
         degrees,
-        ankle: *ankle,
-        across,
         band,
     })
 }
@@ -599,6 +625,8 @@ mod tests {
         // matters is that straightening it leaves a leg that stands.
         assert!((bend.knee_deg - 50.0).abs() < 15.0, "{bend:?}");
         assert!((bend.thigh_deg - 25.0).abs() < 12.0, "{bend:?}");
+        // Its foot stands: not turned.
+        assert_eq!(bend.foot_deg, 0.0, "{bend:?}");
         // The rest pose carried by its matrices is the file's pose, exactly.
         for ((r, m), p) in rest
             .leg

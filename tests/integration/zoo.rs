@@ -34,6 +34,7 @@ use std::sync::OnceLock;
 use std::time::Instant;
 
 use knitfit::knit::TubeBottom;
+use knitfit::leg::unbend::Bend;
 use knitfit::leg::{Side, Units, UpChoice};
 use knitfit::report::{FitDetails, LandmarkDetails, Report};
 use nalgebra::{Point3, Rotation3, Unit, Vector3};
@@ -937,6 +938,36 @@ fn yarn_gap_to(out: &Path, point: &Point3<f64>) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// `form` (a leg with a foot) posed by `strided` (knee, hip and foot degrees) fitted at
+/// [`CI_SETTINGS`], held to exit 0, no yarn inside the leg, the checks passed, a stocking to the
+/// toe and its yarn within 1.5 cm of the posed toe tip; and the bend its straightening read.
+fn posed_fit(form: Form, pose: (f64, f64, f64), name: &str) -> Bend {
+    let (meshes, source) = formed(form);
+    let (posed, toe) = strided(&meshes, source, pose);
+    let dir = tempfile::tempdir().unwrap();
+    let out = fit_meshes(
+        dir.path(),
+        &posed,
+        &format!("{form:?}-{name}"),
+        &CI_SETTINGS,
+    );
+    assert_eq!(out.status.code(), Some(0), "{form:?}: {}", stderr(&out));
+    let report = crate::support::read_fit_report(&dir.path().join("out"));
+    assert_eq!(report.metrics.max_penetration_m, Some(0.0), "{form:?}");
+    assert!(report.details.checks.failures().is_empty(), "{form:?}");
+    // The stocking is on the posed foot, to its toe: its yarn reaches the toe tip.
+    let toe = toe.unwrap_or_else(|| panic!("{form:?} has a foot"));
+    assert_eq!(report.details.tube.bottom, TubeBottom::Toe, "{form:?}");
+    let gap = yarn_gap_to(&dir.path().join("out"), &toe);
+    assert!(
+        gap < 0.015,
+        "{form:?}: the yarn is {gap} m from the toe tip"
+    );
+    (report.details.pose.as_ref())
+        .and_then(|p| p.bend)
+        .unwrap_or_else(|| panic!("{form:?}: not straightened"))
+}
+
 #[test]
 fn a_leg_closed_or_open_at_its_cut_mid_stride_is_straightened_and_fitted_in_its_pose() {
     // Issue 45's table: a closed leg with its knee bent, and a mannequin's leg (pieces, a ball
@@ -944,26 +975,8 @@ fn a_leg_closed_or_open_at_its_cut_mid_stride_is_straightened_and_fitted_in_its_
     // closed and open at its cut. Not every stride fits yet: the stride zoo's table in ZOO.md
     // (`the_stride_zoo_table`) says which.
     for form in [Form::LeftLegClosed, Form::LeftLegOpen] {
-        let (meshes, source) = formed(form);
-        let (posed, toe) = strided(&meshes, source, (45.0, 30.0, 0.0));
-        let dir = tempfile::tempdir().unwrap();
-        let name = format!("{form:?}-Stride");
-        let out = fit_meshes(dir.path(), &posed, &name, &CI_SETTINGS);
-        assert_eq!(out.status.code(), Some(0), "{form:?}: {}", stderr(&out));
-        let report = crate::support::read_fit_report(&dir.path().join("out"));
-        let bend = (report.details.pose.as_ref())
-            .and_then(|p| p.bend)
-            .unwrap_or_else(|| panic!("{form:?}: not straightened"));
+        let bend = posed_fit(form, (45.0, 30.0, 0.0), "Stride");
         assert!((bend.knee_deg - 45.0).abs() < 15.0, "{form:?}: {bend:?}");
-        assert_eq!(report.metrics.max_penetration_m, Some(0.0), "{form:?}");
-        assert!(report.details.checks.failures().is_empty(), "{form:?}");
-        // The stocking is on the posed foot: its yarn reaches the toe tip.
-        let Some(toe) = toe else { continue };
-        let gap = yarn_gap_to(&dir.path().join("out"), &toe);
-        assert!(
-            gap < 0.015,
-            "{form:?}: the yarn is {gap} m from the toe tip"
-        );
     }
 }
 
@@ -974,25 +987,8 @@ fn a_foot_pointed_down_without_a_rig_is_turned_back_to_stand_and_dressed_to_its_
     // cannot settle (exit 3). The MakeHuman left leg closed and open at its cut, its foot
     // pointed 45° and no rig: the foot is turned back to stand, fitted, and carried back.
     for form in [Form::LeftLegClosed, Form::LeftLegOpen] {
-        let (meshes, source) = formed(form);
-        let (posed, toe) = strided(&meshes, source, (0.0, 0.0, 45.0));
-        let dir = tempfile::tempdir().unwrap();
-        let name = format!("{form:?}-Pointed");
-        let out = fit_meshes(dir.path(), &posed, &name, &CI_SETTINGS);
-        assert_eq!(out.status.code(), Some(0), "{form:?}: {}", stderr(&out));
-        let report = crate::support::read_fit_report(&dir.path().join("out"));
-        let bend = (report.details.pose.as_ref())
-            .and_then(|p| p.bend)
-            .unwrap_or_else(|| panic!("{form:?}: not straightened"));
+        let bend = posed_fit(form, (0.0, 0.0, 45.0), "Pointed");
         assert!((bend.foot_deg - 45.0).abs() < 10.0, "{form:?}: {bend:?}");
-        assert_eq!(report.details.tube.bottom, TubeBottom::Toe, "{form:?}");
-        assert_eq!(report.metrics.max_penetration_m, Some(0.0), "{form:?}");
-        assert!(report.details.checks.failures().is_empty(), "{form:?}");
-        let gap = yarn_gap_to(&dir.path().join("out"), &toe.unwrap());
-        assert!(
-            gap < 0.015,
-            "{form:?}: the yarn is {gap} m from the toe tip"
-        );
     }
 }
 
