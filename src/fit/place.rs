@@ -173,7 +173,7 @@ fn choose_axis(
         let why = match axis.source {
             AxisSource::Landmarks => "the leg bends between its ankle and its thigh more than a \
                  straight stocking allows, and was not straightened from its sections (they show \
-                 no knee to straighten it at, as with a pointed foot): fit it standing straight, \
+                 no knee or ankle to straighten it at): fit it standing straight, \
                  export it with a rig that poses it, or give the part to dress with --axis \
                  (knitfit plan prints the landmarks)"
                 .to_string(),
