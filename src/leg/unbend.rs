@@ -2,26 +2,27 @@
 //! its own joints: the geometry's rest pose, standing straight, where the stocking is fitted
 //! before it is carried into the pose as a rigged leg's is ([`crate::fit::pose`]).
 //!
-//! Method: the landmarks' sections, taken along up, still go around a leg that leans or bends
-//! moderately, and their centres trace its centreline. The knee is the centre that best splits
-//! the centres into a shin's line and a thigh's (least squares), 30–70 % of the way up; the
-//! thigh runs from it to the top of the thigh, the shin from the ankle to it. A foot pointed
-//! down is cut through its toes by sections along up, which put the ankle in the foot; the
-//! leg followed down from its thigh by sections square to its own centreline
-//! ([`super::centreline`]) finds the ankle where it is (the narrowest of them above the heel), and
-//! where that is [`POINTED_ANKLE_RISE_M`] or more above the other, and in the lowest third of
-//! the leg (sections that stop at a bent knee do not reach an ankle), the ankle and knee are read
-//! from those sections. A third bone, the foot, turns about the ankle until its heel and the
-//! ball of its foot stand level, where that takes [`BENT_DEG`] or more (or the ankle is the
-//! shin's own sections'). The thigh turns about the top of the thigh to stand along up (a
-//! lone leg's, whose up its own bent shape tilts, is left as it leans, and the straight leg's up
-//! is found again), the shin about the knee to continue it (each the least turn between the two
-//! directions). Each vertex of the leg (below the top of the thigh: the piece at the ankle and
-//! the pieces along the limb that touch it, a mannequin's foot, shin, knee ball and thigh; not
-//! the other leg) is moved by its bones' turns blended as linear blend skinning blends them,
-//! weighted by smoothsteps across a band at each joint; the rest of the body stays. The matrix
-//! from the rest so made back to the pose is each vertex's blend inverted, so carrying the rest
-//! mesh by it gives the file's mesh exactly.
+//! Method, one bone at a time:
+//! - **Knee**: the landmarks' sections, taken along up, still go around a leg that leans or
+//!   bends moderately, and their centres trace its centreline. The knee is the centre that best
+//!   splits them into a shin's line and a thigh's (least squares), 30–70 % of the way up.
+//! - **Ankle**: the landmarks'. Where it is in doubt (thinner than a standing leg's, or under
+//!   [`LOWEST_ANKLE_M`] above the sole: a foot pointed down, cut through its toes), the leg is
+//!   followed down from its thigh by sections square to its own centreline
+//!   ([`super::centreline`]); their narrowest above the heel is the ankle where it lies
+//!   [`POINTED_ANKLE_RISE_M`] or more higher, in the lowest third of the leg, and the knee is
+//!   then read from those sections.
+//! - **Turns**: the thigh about the top of the thigh to stand along up (a lone leg's, whose up
+//!   its own bent shape tilts, is left as it leans, and the straight leg's up found again); the
+//!   shin about the knee to continue it (each the least turn between the two directions); the
+//!   foot up about the ankle until its heel and ball stand level, where that takes
+//!   [`BENT_DEG`] or more (always, for an ankle from the shin's own sections).
+//! - **Blend**: each vertex of the leg (below the top of the thigh: the piece at the ankle and
+//!   the pieces along the limb that touch it, a mannequin's foot, shin, knee ball and thigh;
+//!   not the other leg) moves by its bones' turns blended as linear blend skinning blends them,
+//!   weighted by smoothsteps across a band at each joint; the rest of the body stays. The
+//!   matrix back to the pose is each vertex's blend inverted, so carrying the rest mesh by it
+//!   gives the file's mesh exactly.
 //!
 //! Contract: `None` where the leg is standing straight enough (the axis from the ankle to the top
 //! of the thigh stays inside it, and the knee, the thigh and a pointed foot bend less than
@@ -96,7 +97,8 @@ pub struct Bend {
     /// The thigh's lean off up, degrees.
     pub thigh_deg: f64,
     /// How far a pointed foot was turned back up about the ankle to stand flat, degrees; 0
-    /// where the foot was not turned.
+    /// where the foot was not turned (and in reports written before the foot was turned).
+    #[serde(default)]
     pub foot_deg: f64,
     /// The ankle as posed, world space: its section's centre.
     pub ankle: [f64; 3],
