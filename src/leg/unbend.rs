@@ -32,7 +32,8 @@
 //! [`MAX_FOOT_TURN_DEG`] stands flat, the straightened leg not read as standing around its
 //! straight axis, or not as long as the posed one along its bones (and where no triangle lies
 //! below the thigh top, or a vertex's blend cannot be inverted). The fit then reads the leg as it
-//! is and says what it saw.
+//! is and says what it saw, except for a pointed foot whose levelling fails: it is dressed as an
+//! open tube ending in its toes, with no warning (a gap, decision 0077).
 
 use nalgebra::{Matrix4, Point3, Rotation3, Translation3, Unit, Vector3};
 use serde::Serialize;
