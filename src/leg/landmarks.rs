@@ -79,6 +79,10 @@ const MIN_LIMB_RISE_M: f64 = 0.10;
 const JUMP_MIN_RISE_M: f64 = 0.3;
 /// Loops of toes join within this rise, metres: a foot's toes meet at their ball.
 pub const TOES_JOIN_M: f64 = 0.1;
+/// Two loops of one section whose centres are closer than this share of the sum of their
+/// radii (each a circle's of its girth) overlap as circles: one limb cut apart by a fold, not
+/// two limbs side by side (a pointed foot's heel lobe lies at 0.86–0.89).
+const LOBE_OVERLAP: f64 = 0.95;
 /// Spacing of the sections, metres.
 pub const SLICE_STEP_M: f64 = 0.0025;
 /// Furthest a limb's centre may move between two sections, metres.
@@ -473,16 +477,48 @@ pub fn find_landmarks(
     let seeds: Vec<Ring> = seeds.into_iter().filter(rises).collect();
     // A foot standing on its toes (a stride's back foot, a pointed foot) is cut through its
     // toes: loops thinner than any ankle that become one a few centimetres up are one limb,
-    // seeded at the widest of them.
+    // seeded at the widest of them. A foot pointed steeply is cut through its ankle and, apart,
+    // its heel raised behind it: two loops closer than their radii add up to (as circles of
+    // their girths, they overlap; two legs side by side at most touch) that become one a few
+    // centimetres both up and down are one limb, seeded at the one over its lowest end (the
+    // ankle over the toes, not the heel behind it).
     let joins_soon = |a: &Ring, b: &Ring| {
         let up = heights(a.s, a.s + TOES_JOIN_M, SLICE_STEP_M).skip(1);
         follow(&slicer, &[*a, *b], up, false).joined
     };
+    let joins_below = |a: &Ring, b: &Ring| {
+        let down = heights((a.s - TOES_JOIN_M).max(lo), a.s, SLICE_STEP_M)
+            .rev()
+            .skip(1);
+        follow(&slicer, &[*a, *b], down, false).joined
+    };
+    let overlap = |a: &Ring, b: &Ring| {
+        let apart = (Vector3::from(a.centre) - Vector3::from(b.centre)).norm();
+        apart < LOBE_OVERLAP * (a.girth_m + b.girth_m) / std::f64::consts::TAU
+    };
+    // How far a loop's centre lies, across up, from the centre of the last section below it.
+    let off_its_end = |r: &Ring| {
+        let down = heights(lo, r.s, SLICE_STEP_M).rev().skip(1);
+        let end = follow(&slicer, &[*r], down, false).rings[0].last().copied();
+        let d = Vector3::from(end.unwrap_or(*r).centre) - Vector3::from(r.centre);
+        (d - up * d.dot(&up)).norm()
+    };
     let seeds: Vec<Ring> = (seeds.iter().enumerate())
         .filter(|&(k, r)| {
-            r.girth_m >= MIN_STANDING_GIRTH_M
-                || !(seeds.iter().enumerate())
-                    .any(|(j, o)| j != k && (o.girth_m, k) > (r.girth_m, j) && joins_soon(r, o))
+            !(seeds.iter().enumerate()).any(|(j, o)| {
+                let toes = || {
+                    r.girth_m < MIN_STANDING_GIRTH_M
+                        && (o.girth_m, k) > (r.girth_m, j)
+                        && joins_soon(r, o)
+                };
+                let lobe = || {
+                    overlap(r, o)
+                        && (off_its_end(o), j) < (off_its_end(r), k)
+                        && joins_soon(r, o)
+                        && joins_below(r, o)
+                };
+                j != k && (toes() || lobe())
+            })
         })
         .map(|(_, r)| *r)
         .collect();
