@@ -138,16 +138,25 @@ pub struct Fitted {
 /// coordinates): a rigged leg's rest pose where its skin poses it, else the leg straightened
 /// where it bends ([`crate::leg::unbend`]), with the leg as posed and each rest vertex's matrix
 /// into the pose ([`pose`]); else `leg` itself.
-pub fn in_rest_pose(mut leg: Leg, place: &PlaceSettings) -> (Leg, Option<pose::Posed>) {
+///
+/// Errors: [`Error::Leg`] for a foot seen pointed down that cannot be turned back to stand
+/// ([`crate::leg::unbend::straightened`]).
+pub fn in_rest_pose(mut leg: Leg, place: &PlaceSettings) -> Result<(Leg, Option<pose::Posed>)> {
     if place.axis.is_some() {
-        return (leg, None);
+        return Ok((leg, None));
     }
     let (rest, bend) = match leg.rest.take() {
         Some(rest) => (*rest, None),
         // No rig: the geometry's own joints, where the leg bends.
         None => match crate::leg::unbend::straightened(&leg, place.side) {
-            Some((rest, bend)) => (rest, Some(bend)),
-            None => return (leg, None),
+            Ok(Some((rest, bend))) => (rest, Some(bend)),
+            Ok(None) => return Ok((leg, None)),
+            Err(message) => {
+                return Err(Error::Leg {
+                    path: leg.path.clone(),
+                    message,
+                })
+            }
         },
     };
     let crate::leg::RestPose {
@@ -161,7 +170,7 @@ pub fn in_rest_pose(mut leg: Leg, place: &PlaceSettings) -> (Leg, Option<pose::P
         skin_moved_m,
         bend,
     };
-    (rest_leg, Some(posed))
+    Ok((rest_leg, Some(posed)))
 }
 
 /// Reads the leg file at `path`, refuses a fit too large for memory before the leg is decoded
@@ -198,7 +207,7 @@ pub fn fit(
     progress: &mut dyn Progress,
 ) -> Result<Fitted> {
     settings.validate().map_err(Error::Settings)?;
-    let (leg, posed) = in_rest_pose(leg, &settings.place);
+    let (leg, posed) = in_rest_pose(leg, &settings.place)?;
     let placement = place(&leg, &settings.place, &settings.tube, times)?;
     let real_stitches = settings
         .products

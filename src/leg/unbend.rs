@@ -15,14 +15,16 @@
 //! - **Turns**: the thigh about the top of the thigh to stand along up (a lone leg's, whose up
 //!   its own bent shape tilts, is left as it leans, and the straight leg's up found again); the
 //!   shin about the knee to continue it (each the least turn between the two directions); the
-//!   foot up about the ankle until its heel and ball stand level, where that takes
+//!   foot up about the ankle's hinge (square to the plane of the ankle, toe tip and back of the
+//!   heel, which pointing keeps) until its heel and ball stand level, where that takes
 //!   [`BENT_DEG`] or more (always, for an ankle from the shin's own sections).
 //! - **Blend**: each vertex of the leg (below the top of the thigh: the piece at the ankle and
 //!   the pieces along the limb that touch it, a mannequin's foot, shin, knee ball and thigh;
 //!   not the other leg) moves by its bones' turns blended as linear blend skinning blends them,
-//!   weighted by smoothsteps across a band at each joint; the rest of the body stays. The
-//!   matrix back to the pose is each vertex's blend inverted, so carrying the rest mesh by it
-//!   gives the file's mesh exactly.
+//!   weighted by smoothsteps across a band at each joint (the ankle's placed at rest, as a rig's
+//!   weights are painted, so a pointed foot's raised heel is the foot's); the rest of the body
+//!   stays. The matrix back to the pose is each vertex's blend inverted, so carrying the rest
+//!   mesh by it gives the file's mesh exactly.
 //!
 //! Contract: `None` where the leg is standing straight enough (the axis from the ankle to the top
 //! of the thigh stays inside it, and the knee, the thigh and a pointed foot bend less than
@@ -32,8 +34,8 @@
 //! [`MAX_FOOT_TURN_DEG`] stands flat, the straightened leg not read as standing around its
 //! straight axis, or not as long as the posed one along its bones (and where no triangle lies
 //! below the thigh top, or a vertex's blend cannot be inverted). The fit then reads the leg as it
-//! is and says what it saw, except for a pointed foot whose levelling fails: it is dressed as an
-//! open tube ending in its toes, with no warning (a gap, decision 0077).
+//! is and says what it saw. An error where the shin's own sections show a pointed foot that is
+//! not turned back to stand: read as posed, its stocking would end in the foot, toes bare.
 
 use nalgebra::{Matrix4, Point3, Rotation3, Translation3, Unit, Vector3};
 use serde::Serialize;
@@ -86,8 +88,9 @@ const MIN_SHIN_TRACK_M: f64 = 0.3;
 const BALL_SHARE: f64 = 0.6;
 /// See [`BALL_SHARE`].
 const HEEL_SHARE: f64 = 0.3;
-/// The furthest a pointed foot is turned back up, degrees.
-pub const MAX_FOOT_TURN_DEG: f64 = 90.0;
+/// The furthest a pointed foot is turned back up, degrees: a dancer's, on point, is about 90
+/// (the ankle's 50 and the foot's arch), which the levelling reads a few degrees over.
+pub const MAX_FOOT_TURN_DEG: f64 = 100.0;
 
 /// How the geometry's joints straightened a leg (`report.json`'s `details.pose.bend`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
@@ -122,10 +125,16 @@ impl Bend {
 
 /// The leg on `side` straightened to stand along up (module docs), with the matrices back to
 /// the pose; `None` where it stands straight enough or cannot be read.
-pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
+///
+/// Errors: a foot seen pointed down (the shin's own sections put its ankle where sections along
+/// up cut the foot) that is not turned back to stand: read as posed, its stocking would end
+/// in the foot, open, with the toes bare. The message says what was seen and what to do.
+pub fn straightened(leg: &Leg, side: Side) -> Result<Option<(RestPose, Bend)>, String> {
     let up = leg.up;
-    let landmarks =
-        find_landmarks(&leg.positions, &leg.triangles, up, side, leg.rig.as_ref()).ok()?;
+    let Ok(landmarks) = find_landmarks(&leg.positions, &leg.triangles, up, side, leg.rig.as_ref())
+    else {
+        return Ok(None);
+    };
     // A foot pointed down is cut through its toes by sections along up, which then put the
     // ankle in the foot (thinner than any standing ankle, or lower): the shin's own sections
     // find it where it is. A standing leg's ankle is not followed for: it costs a section of
@@ -140,9 +149,36 @@ pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
     };
     let pointed = shin.as_ref().filter(|s| {
         let ankle_s = s.ankle.centre.coords.dot(&up);
-        (ankle_s - landmarks.ankle.s) > POINTED_ANKLE_RISE_M
+        (ankle_s - landmarks.ankle.s > POINTED_ANKLE_RISE_M
+            || landmarks.ankle.girth_m < MIN_STANDING_GIRTH_M)
             && ankle_s - sole_s < ANKLE_SHARE * (landmarks.thigh_top.s - sole_s)
     });
+    let straight = straighten(leg, side, &landmarks, pointed);
+    match (straight, pointed) {
+        (None, Some(shin)) => Err(format!(
+            "its foot points down (the leg's own sections put its ankle {:.3} m above its \
+             lowest point, {:.3} m around, where sections along up found one {:.3} m around \
+             {:.3} m up, in the foot), and it could not be turned back to stand on its heel and \
+             its ball: fit the leg standing, export the character with its rig, or give the \
+             part to dress with --axis",
+            shin.ankle.centre.coords.dot(&up) - sole_s,
+            shin.ankle.girth_m,
+            landmarks.ankle.girth_m,
+            landmarks.ankle.s - sole_s,
+        )),
+        (straight, _) => Ok(straight),
+    }
+}
+
+/// [`straightened`] once its ankle is known: the landmarks', or the shin's own sections' where
+/// the foot is `pointed`.
+fn straighten(
+    leg: &Leg,
+    side: Side,
+    landmarks: &Landmarks,
+    pointed: Option<&ShinSections>,
+) -> Option<(RestPose, Bend)> {
+    let up = leg.up;
     let mut bend = match pointed {
         Some(shin) => bend_through(
             &shin.ankle.centre,
@@ -150,7 +186,7 @@ pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
             &shin.centres,
             &up,
         )?,
-        None => bend_of(&landmarks, &up)?,
+        None => bend_of(landmarks, &up)?,
     };
     let (ankle, knee, top) = (
         Point3::from(bend.ankle),
@@ -190,6 +226,8 @@ pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
     );
     let foot = match pointed {
         Some(_) => Some(foot?),
+        // A leg ending at its ankle (no foot found) has nothing below it to level.
+        None if landmarks.foot.is_none() => None,
         None => foot.filter(|f| f.degrees >= BENT_DEG),
     };
     bend.foot_deg = foot.as_ref().map_or(0.0, |f| f.degrees);
@@ -213,7 +251,7 @@ pub fn straightened(leg: &Leg, side: Side) -> Option<(RestPose, Bend)> {
             let on_leg = smoothstep(below_top[i] / HIP_BAND_M);
             let on_shin = knee_band.weight(p);
             let below_knee = match &foot {
-                Some(f) => shin_turn * (1.0 - f.band.weight(p)) + f.turn * f.band.weight(p),
+                Some(f) => shin_turn * (1.0 - f.weight(p)) + f.turn * f.weight(p),
                 None => shin_turn,
             };
             let leg_matrix = thigh_turn * (1.0 - on_shin) + below_knee * on_shin;
@@ -306,8 +344,17 @@ struct FootTurn {
     turn: Matrix4<f64>,
     /// The foot's turn, degrees.
     degrees: f64,
-    /// Where a vertex goes from the shin's turn to the foot's.
+    /// Where a vertex goes from the shin's turn to the foot's, in the rest pose.
     band: JointBand,
+}
+
+impl FootTurn {
+    /// How much of vertex `p` (posed) moves with the foot: its band's weight where the foot's
+    /// turn takes it. Weighed at rest, as a rig's weights are painted: a pointed foot's heel,
+    /// raised to the ankle's height as posed, is the foot's wholly.
+    fn weight(&self, p: &Point3<f64>) -> f64 {
+        self.band.weight(&self.turn.transform_point(p))
+    }
 }
 
 /// The band across a joint over which a vertex's weight goes from one bone to the next: the
@@ -320,17 +367,24 @@ struct JointBand {
 }
 
 impl JointBand {
-    /// How much of vertex `p` (posed) moves with the next bone: 0 to 1 across the band.
+    /// How much of vertex `p` moves with the next bone: 0 to 1 across the band.
     fn weight(&self, p: &Point3<f64>) -> f64 {
         smoothstep(((p - self.at).dot(&self.across) + self.half) / (2.0 * self.half))
     }
 }
 
+/// Turns tried for a pointed foot, evenly from 0 to [`MAX_FOOT_TURN_DEG`], before the level
+/// one is narrowed down between two of them.
+const FOOT_TURNS_TRIED: usize = 40;
+
 /// The turn about the ankle that stands the foot flat again: after the shin's turn
 /// (`shin_turn`, rest from pose) its heel and the ball of its foot (the lowest of its vertices
 /// behind the ankle and of those over [`BALL_SHARE`] of the way to the toe tip) are level along
-/// `rest_up`. The foot turns up about the axis square to the shin and to the line from the ankle
-/// to the toe tip. `None` where no turn up to [`MAX_FOOT_TURN_DEG`] levels them.
+/// `rest_up`. The foot turns up about the ankle's hinge, square to the shin and to the plane of
+/// the ankle, the toe tip and the back of the heel; the least turn that raises the ball, below
+/// the heel as posed, to its level is taken. `None` where the ball is not below the heel as
+/// posed (a foot that stands, or a leg with none), or no turn up to [`MAX_FOOT_TURN_DEG`]
+/// levels them.
 fn foot_turn(
     leg: &Leg,
     member: &[bool],
@@ -349,68 +403,87 @@ fn foot_turn(
         .iter()
         .max_by(|a, b| (*a - ankle).norm().total_cmp(&(*b - ankle).norm()))?;
     let to_toe = (toe - ankle).try_normalize(1e-9)?;
-    // The foot's line: to the middle of its ball and toes, not to the big toe's tip beside it
-    // (the tip itself is among them, so they are never none).
-    let ball: Vec<&Point3<f64>> = (foot.iter())
-        .filter(|p| (*p - ankle).dot(&to_toe) >= BALL_SHARE * (toe - ankle).norm())
+    let reach = (toe - ankle).norm();
+    let along = |p: &Point3<f64>| (p - ankle).dot(&to_toe);
+    let half = (ankle_girth / std::f64::consts::TAU).max(MIN_JOINT_BAND_M);
+    // The leg's vertices that may move with the foot: below the knee, as the shin's turn
+    // leaves them.
+    let lower: Vec<&Point3<f64>> = (leg.positions.iter().zip(member))
+        .filter(|&(p, &m)| m && (p - ankle).dot(shin_up) < 2.0 * half)
+        .map(|(p, _)| p)
         .collect();
-    let ball_centre =
-        ball.iter().fold(Vector3::zeros(), |sum, p| sum + p.coords) / ball.len().max(1) as f64;
-    let to_ball = (Point3::from(ball_centre) - ankle).try_normalize(1e-9)?;
-    let band = JointBand {
-        at: *ankle,
-        across: (to_toe - shin_up).try_normalize(1e-9)?,
-        half: (ankle_girth / std::f64::consts::TAU).max(MIN_JOINT_BAND_M),
-    };
+    // The ankle's hinge is square to the foot's own plane, through the ankle, the toe tip and
+    // the back of the heel (the vertex near the ankle along the foot's line that lies furthest
+    // from that line): turning about it keeps that plane, however far the foot points. (The
+    // shin's line and the foot's are nearly one where it points straight down.)
+    let off_line = |p: &Point3<f64>| ((p - ankle) - to_toe * along(p)).norm();
+    let heel_back = (lower.iter())
+        .filter(|p| along(p).abs() < HEEL_SHARE * reach)
+        .max_by(|a, b| off_line(a).total_cmp(&off_line(b)))?;
+    let hinge = (*heel_back - ankle).cross(&to_toe);
+    // Square to the shin, as an ankle's hinge is.
+    let hinge = hinge - shin_up * hinge.dot(shin_up);
     let ankle_then = shin_turn.transform_point(ankle);
-    let hinge = Unit::try_new(shin_turn.transform_vector(&to_ball.cross(shin_up)), 1e-9)?;
+    let hinge = Unit::try_new(shin_turn.transform_vector(&hinge), 1e-9)?;
     let turned = |degrees: f64| {
-        about(
+        let turn = about(
             &ankle_then,
             &Rotation3::from_axis_angle(&hinge, degrees.to_radians()),
-        ) * shin_turn
+        ) * shin_turn;
+        // The band at rest: square to the bisector of the turned foot's line and down.
+        let across = (turn.transform_vector(&to_toe) - rest_up).try_normalize(1e-9)?;
+        Some(FootTurn {
+            turn,
+            degrees,
+            band: JointBand {
+                at: ankle_then,
+                across,
+                half,
+            },
+        })
     };
-    // The ball's height above the heel's, the foot turned `degrees`; `None` where the foot has
-    // no way forward or no vertex at its heel or its ball.
+    // The heel and the ball, read along the foot's own line as posed so that turning it does
+    // not change which vertices they are: the heel the vertices near the ankle along that line
+    // (under it, and behind it), the ball those over [`BALL_SHARE`] of the way to the toe tip.
+    let heel: Vec<&Point3<f64>> = (lower.iter().copied())
+        .filter(|p| along(p) < HEEL_SHARE * reach)
+        .collect();
+    let ball: Vec<&Point3<f64>> = (lower.iter().copied())
+        .filter(|p| along(p) > BALL_SHARE * reach)
+        .collect();
+    // The ball's height above the heel's, the foot turned `degrees`.
     let ball_over_heel = |degrees: f64| -> Option<f64> {
-        let turn = turned(degrees);
-        let rested: Vec<Point3<f64>> = (foot.iter())
-            .map(|p| {
-                let w = band.weight(p);
-                (shin_turn * (1.0 - w) + turn * w).transform_point(p)
-            })
-            .collect();
-        let tip = turn.transform_point(toe);
-        let forward = (tip - ankle_then) - rest_up * (tip - ankle_then).dot(rest_up);
-        let forward = forward.try_normalize(1e-9)?;
-        let reach = (tip - ankle_then).dot(&forward);
-        let lowest = |keep: &dyn Fn(f64) -> bool| {
-            (rested.iter())
-                .filter(|p| keep((*p - ankle_then).dot(&forward)))
-                .map(|p| p.coords.dot(rest_up))
+        let foot_turn = turned(degrees)?;
+        let lowest = |part: &[&Point3<f64>]| {
+            (part.iter())
+                .map(|p| {
+                    let w = foot_turn.weight(p);
+                    let rested = (shin_turn * (1.0 - w) + foot_turn.turn * w).transform_point(p);
+                    rested.coords.dot(rest_up)
+                })
                 .min_by(f64::total_cmp)
         };
-        let height = lowest(&|f| f > BALL_SHARE * reach)? - lowest(&|f| f < HEEL_SHARE * reach)?;
-        Some(height).filter(|h| h.is_finite())
+        Some(lowest(&ball)? - lowest(&heel)?).filter(|h| h.is_finite())
     };
-    let (mut lo, mut hi) = (0.0, MAX_FOOT_TURN_DEG);
-    if !(ball_over_heel(lo)? < 0.0 && ball_over_heel(hi)? > 0.0) {
+    // Pointed, the ball lies below the heel as posed; the first turn tried that raises it to
+    // the heel's level or over brackets the level one.
+    let step = MAX_FOOT_TURN_DEG / FOOT_TURNS_TRIED as f64;
+    let below = |k: usize| ball_over_heel(k as f64 * step).map(|h| h < 0.0);
+    if below(0) != Some(true) {
         return None;
     }
-    for _ in 0..40 {
+    let level = (1..=FOOT_TURNS_TRIED).find(|&k| below(k) != Some(true))?;
+    below(level)?;
+    let (mut lo, mut hi) = ((level - 1) as f64 * step, level as f64 * step);
+    for _ in 0..30 {
         let mid = (lo + hi) / 2.0;
-        if ball_over_heel(mid)? < 0.0 {
-            lo = mid;
-        } else {
-            hi = mid;
+        match ball_over_heel(mid) {
+            Some(h) if h < 0.0 => lo = mid,
+            Some(_) => hi = mid,
+            None => break,
         }
     }
-    let degrees = (lo + hi) / 2.0;
-    Some(FootTurn {
-        turn: turned(degrees),
-        degrees,
-        band,
-    })
+    turned((lo + hi) / 2.0)
 }
 
 /// The joints and bends of the leg as its landmarks' section centres trace it; `None` where
@@ -623,7 +696,9 @@ mod tests {
     #[test]
     fn a_bent_knee_is_found_from_the_sections_and_straightened_back_to_the_pose() {
         let leg = bent_sample(50.0);
-        let (rest, bend) = straightened(&leg, Side::Left).expect("a knee bent 50° is read");
+        let (rest, bend) = straightened(&leg, Side::Left)
+            .unwrap()
+            .expect("a knee bent 50° is read");
         // Horizontal sections of leaning bones read the bend short (37.6° and 13.9° here); what
         // matters is that straightening it leaves a leg that stands.
         assert!((bend.knee_deg - 50.0).abs() < 15.0, "{bend:?}");
@@ -679,7 +754,15 @@ mod tests {
 
     #[test]
     fn a_pointed_foot_is_found_by_the_shins_own_sections_and_turned_back_to_stand() {
-        let (leg, standing) = pointed_sample(45.0);
+        // A high heel's, and a dancer's pointed nearly straight down (its heel, raised behind
+        // the ankle, cut apart from it by sections along up).
+        for degrees in [45.0, 75.0] {
+            pointed_foot_stands(degrees);
+        }
+    }
+
+    fn pointed_foot_stands(degrees: f64) {
+        let (leg, standing) = pointed_sample(degrees);
         // Sections along up cut the pointed foot through its toes and put the ankle there.
         let posed = find_landmarks(&leg.positions, &leg.triangles, leg.up, Side::Left, None);
         let low_ankle = posed.map_or(true, |l| {
@@ -691,8 +774,10 @@ mod tests {
             low_ankle,
             "the sections along up found the ankle where it is"
         );
-        let (rest, bend) = straightened(&leg, Side::Left).expect("a pointed foot is read");
-        assert!((bend.foot_deg - 45.0).abs() < 10.0, "{bend:?}");
+        let (rest, bend) = (straightened(&leg, Side::Left).unwrap())
+            .unwrap_or_else(|| panic!("a foot pointed {degrees}° is not read"));
+        // Levelled on its heel and ball, which stand a few millimetres apart on the sample.
+        assert!((bend.foot_deg - degrees).abs() < 5.0, "{bend:?}");
         // Its ankle is the leg's, within 3 cm of the standing leg's.
         let ankle_off = (Point3::from(bend.ankle) - Point3::from(standing.ankle.centre)).norm();
         assert!(ankle_off < 0.03, "ankle {ankle_off} m off");
@@ -731,6 +816,18 @@ mod tests {
     }
 
     #[test]
+    fn a_foot_pointed_too_far_to_stand_is_refused_not_dressed_open() {
+        // Past any dancer's: no turn the levelling tries stands it, and read as posed its
+        // stocking would end in the foot.
+        let (leg, _) = pointed_sample(MAX_FOOT_TURN_DEG + 15.0);
+        let Err(refused) = straightened(&leg, Side::Left) else {
+            panic!("a foot pointed past any dancer's is dressed");
+        };
+        assert!(refused.starts_with("its foot points down"), "{refused}");
+        assert!(refused.contains("--axis"), "{refused}");
+    }
+
+    #[test]
     fn a_leg_in_pieces_moves_whole_and_the_other_leg_and_a_hand_touching_it_stay() {
         use crate::leg::test_meshes::add_box;
         let (mut positions, mut triangles) = (Vec::new(), Vec::new());
@@ -762,7 +859,13 @@ mod tests {
 
     #[test]
     fn a_leg_standing_straight_is_left_as_it_is() {
-        assert!(straightened(&bent_sample(0.0), Side::Left).is_none());
-        assert!(straightened(&bent_sample(10.0), Side::Left).is_none());
+        assert_eq!(
+            straightened(&bent_sample(0.0), Side::Left).map(|s| s.is_none()),
+            Ok(true)
+        );
+        assert_eq!(
+            straightened(&bent_sample(10.0), Side::Left).map(|s| s.is_none()),
+            Ok(true)
+        );
     }
 }

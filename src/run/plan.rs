@@ -97,7 +97,7 @@ pub fn plan_fit(loaded: &LoadedScene, out_dir: &Path) -> Result<PlanOutcome> {
     } else {
         let leg = decode_leg(file, settings.load.units, settings.load.up)?;
         // A posed leg is placed in its rest pose (its rig's, or straightened), as the fit does.
-        let (leg, posed) = fit::in_rest_pose(leg, &settings.place);
+        let (leg, posed) = fit::in_rest_pose(leg, &settings.place)?;
         // The fit's own stage, untimed.
         let placed = fit::place(&leg, &settings.place, tube, &mut ())?;
         let mut shown = Placed::new(&leg, placed.landmarks.as_ref(), placed.axis);
