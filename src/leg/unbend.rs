@@ -147,15 +147,17 @@ pub fn straightened(leg: &Leg, side: Side) -> Result<Option<(RestPose, Bend)>, S
     } else {
         None
     };
+    let rise = |s: &ShinSections| s.ankle.centre.coords.dot(&up) - landmarks.ankle.s;
     let pointed = shin.as_ref().filter(|s| {
-        let ankle_s = s.ankle.centre.coords.dot(&up);
-        (ankle_s - landmarks.ankle.s > POINTED_ANKLE_RISE_M
-            || landmarks.ankle.girth_m < MIN_STANDING_GIRTH_M)
-            && ankle_s - sole_s < ANKLE_SHARE * (landmarks.thigh_top.s - sole_s)
+        (rise(s) > POINTED_ANKLE_RISE_M || landmarks.ankle.girth_m < MIN_STANDING_GIRTH_M)
+            && rise(s) + landmarks.ankle.s - sole_s < ANKLE_SHARE * (landmarks.thigh_top.s - sole_s)
     });
-    let straight = straighten(leg, side, &landmarks, pointed);
-    match (straight, pointed) {
-        (None, Some(shin)) => Err(format!(
+    // Refused only where the foot clearly points down: the shin's ankle well above the one
+    // sections along up found in the foot. A thin ankle alone (a mannequin's ball joint) is
+    // read as posed where it cannot be straightened, as any leg is.
+    match (straighten(leg, side, &landmarks, pointed), pointed) {
+        (Some(straight), _) => Ok(straight),
+        (None, Some(shin)) if rise(shin) > POINTED_ANKLE_RISE_M => Err(format!(
             "its foot points down (the leg's own sections put its ankle {:.3} m above its \
              lowest point, {:.3} m around, where sections along up found one {:.3} m around \
              {:.3} m up, in the foot), and it could not be turned back to stand on its heel and \
@@ -166,18 +168,19 @@ pub fn straightened(leg: &Leg, side: Side) -> Result<Option<(RestPose, Bend)>, S
             landmarks.ankle.girth_m,
             landmarks.ankle.s - sole_s,
         )),
-        (straight, _) => Ok(straight),
+        (None, _) => Ok(None),
     }
 }
 
 /// [`straightened`] once its ankle is known: the landmarks', or the shin's own sections' where
-/// the foot is `pointed`.
+/// the foot is `pointed`. `Some(None)` where the leg stands straight enough, `None` where it
+/// cannot be read.
 fn straighten(
     leg: &Leg,
     side: Side,
     landmarks: &Landmarks,
     pointed: Option<&ShinSections>,
-) -> Option<(RestPose, Bend)> {
+) -> Option<Option<(RestPose, Bend)>> {
     let up = leg.up;
     let mut bend = match pointed {
         Some(shin) => bend_through(
@@ -215,7 +218,7 @@ fn straighten(
     // shin's own sections must be; one whose ankle the sections along up found, where it needs
     // as much turning as a bend straightened.
     let ankle_girth = pointed.map_or(landmarks.ankle.girth_m, |s| s.ankle.girth_m);
-    let foot = foot_turn(
+    let levelling = foot_turn(
         leg,
         &member,
         &ankle,
@@ -224,17 +227,19 @@ fn straighten(
         &shin_turn,
         &thigh_to,
     );
-    let foot = match pointed {
-        Some(_) => Some(foot?),
+    let foot = match (levelling, pointed) {
+        (Some(Levelling::Turn(foot)), Some(_)) => Some(foot),
+        (None, Some(_)) => return None,
         // A leg ending at its ankle (no foot found) has nothing below it to level.
-        None if landmarks.foot.is_none() => None,
-        None => foot.filter(|f| f.degrees >= BENT_DEG),
+        (_, None) if landmarks.foot.is_none() => None,
+        (Some(Levelling::Turn(foot)), None) => Some(foot).filter(|f| f.degrees >= BENT_DEG),
+        (_, _) => None,
     };
     bend.foot_deg = foot.as_ref().map_or(0.0, |f| f.degrees);
     if leaves_mesh(leg, &bend.straight_axis()).is_none()
         && (bend.knee_deg.max(bend.thigh_deg)).max(bend.foot_deg) < BENT_DEG
     {
-        return None;
+        return Some(None);
     }
     let knee_radius = landmarks.knee.girth_m / std::f64::consts::TAU;
     let knee_band = JointBand {
@@ -293,14 +298,14 @@ fn straighten(
     if (standing_length - along_bones).abs() > SAME_LENGTH * along_bones {
         return None;
     }
-    Some((
+    Some(Some((
         RestPose {
             leg: rest_leg,
             pose_from_rest,
             skin_moved_m: moved,
         },
         bend,
-    ))
+    )))
 }
 
 /// The shin's ankle and the centres of the leg's own sections above it.
@@ -336,6 +341,14 @@ fn shin_sections(leg: &Leg, landmarks: &Landmarks) -> Option<ShinSections> {
         ankle: *ankle,
         centres: stations[..=at].iter().map(|s| s.centre).collect(),
     })
+}
+
+/// What levelling a foot found.
+enum Levelling {
+    /// Its ball is not below its heel as posed: it stands (or the leg has no foot).
+    Stands,
+    /// The turn that stands it.
+    Turn(FootTurn),
 }
 
 /// A pointed foot's turn back about the ankle, in the rest pose the shin's turn makes.
@@ -382,9 +395,9 @@ const FOOT_TURNS_TRIED: usize = 40;
 /// behind the ankle and of those over [`BALL_SHARE`] of the way to the toe tip) are level along
 /// `rest_up`. The foot turns up about the ankle's hinge, square to the shin and to the plane of
 /// the ankle, the toe tip and the back of the heel; the least turn that raises the ball, below
-/// the heel as posed, to its level is taken. `None` where the ball is not below the heel as
-/// posed (a foot that stands, or a leg with none), or no turn up to [`MAX_FOOT_TURN_DEG`]
-/// levels them.
+/// the heel as posed, to its level is taken ([`Levelling::Stands`] where the ball is not below
+/// the heel as posed). `None` where no turn up to [`MAX_FOOT_TURN_DEG`] levels them, or the
+/// foot has no toe or heel to level.
 fn foot_turn(
     leg: &Leg,
     member: &[bool],
@@ -393,7 +406,7 @@ fn foot_turn(
     shin_up: &Vector3<f64>,
     shin_turn: &Matrix4<f64>,
     rest_up: &Vector3<f64>,
-) -> Option<FootTurn> {
+) -> Option<Levelling> {
     // The foot: the leg's vertices below the ankle, square to the shin; its tip the furthest.
     let foot: Vec<Point3<f64>> = (leg.positions.iter().zip(member))
         .filter(|&(p, &m)| m && (p - ankle).dot(shin_up) < 0.0)
@@ -470,7 +483,7 @@ fn foot_turn(
     let step = MAX_FOOT_TURN_DEG / FOOT_TURNS_TRIED as f64;
     let below = |k: usize| ball_over_heel(k as f64 * step).map(|h| h < 0.0);
     if below(0) != Some(true) {
-        return None;
+        return Some(Levelling::Stands);
     }
     let level = (1..=FOOT_TURNS_TRIED).find(|&k| below(k) != Some(true))?;
     below(level)?;
@@ -483,7 +496,7 @@ fn foot_turn(
             None => break,
         }
     }
-    turned((lo + hi) / 2.0)
+    turned((lo + hi) / 2.0).map(Levelling::Turn)
 }
 
 /// The joints and bends of the leg as its landmarks' section centres trace it; `None` where
