@@ -34,8 +34,9 @@
 //! [`MAX_FOOT_TURN_DEG`] stands flat, the straightened leg not read as standing around its
 //! straight axis, or not as long as the posed one along its bones (and where no triangle lies
 //! below the thigh top, or a vertex's blend cannot be inverted). The fit then reads the leg as it
-//! is and says what it saw. An error where the shin's own sections show a pointed foot that is
-//! not turned back to stand: read as posed, its stocking would end in the foot, toes bare.
+//! is and says what it saw. An error where the shin's own sections show a pointed foot (their
+//! ankle [`POINTED_ANKLE_RISE_M`] or more above the one sections along up found in the foot)
+//! that is not turned back to stand: read as posed, its stocking would end in the foot, bare.
 
 use nalgebra::{Matrix4, Point3, Rotation3, Translation3, Unit, Vector3};
 use serde::Serialize;
@@ -126,9 +127,10 @@ impl Bend {
 /// The leg on `side` straightened to stand along up (module docs), with the matrices back to
 /// the pose; `None` where it stands straight enough or cannot be read.
 ///
-/// Errors: a foot seen pointed down (the shin's own sections put its ankle where sections along
-/// up cut the foot) that is not turned back to stand: read as posed, its stocking would end
-/// in the foot, open, with the toes bare. The message says what was seen and what to do.
+/// Errors: a foot seen pointed down (the shin's own sections put its ankle
+/// [`POINTED_ANKLE_RISE_M`] or more above where sections along up cut the foot) that is not
+/// turned back to stand: read as posed, its stocking would end in the foot, open, with the
+/// toes bare. The message says what was seen and what to do.
 pub fn straightened(leg: &Leg, side: Side) -> Result<Option<(RestPose, Bend)>, String> {
     let up = leg.up;
     let Ok(landmarks) = find_landmarks(&leg.positions, &leg.triangles, up, side, leg.rig.as_ref())
