@@ -18,7 +18,9 @@
 //!   the nearest within [`MAX_STEP_M`]. Following stops where the mesh is cut, or where two legs'
 //!   loops become one (the crotch), or a leg's girth jumps there once it has risen a shin's
 //!   length. Loops thinner than an ankle that meet within [`TOES_JOIN_M`] are the toes of one
-//!   foot standing on them (a stride's back foot).
+//!   foot standing on them (a stride's back foot); two that overlap as circles of their girths
+//!   and meet within it both above and below are one limb cut apart by a fold (a steeply
+//!   pointed foot's heel beside its ankle).
 //! - **Facing and side**: the character faces where its standing feet point, on average, where
 //!   they agree within [`FEET_AGREE_DEG`]; its left is `up × facing`. Where they disagree, left
 //!   is taken from the lowest foot alone; with no foot the character faces +Z, as glTF
@@ -478,10 +480,11 @@ pub fn find_landmarks(
     // A foot standing on its toes (a stride's back foot, a pointed foot) is cut through its
     // toes: loops thinner than any ankle that become one a few centimetres up are one limb,
     // seeded at the widest of them. A foot pointed steeply is cut through its ankle and, apart,
-    // its heel raised behind it: two loops closer than their radii add up to (as circles of
-    // their girths, they overlap; two legs side by side at most touch) that become one a few
-    // centimetres both up and down are one limb, seeded at the one over its lowest end (the
-    // ankle over the toes, not the heel behind it).
+    // its heel raised behind it: two loops, neither as thin as a toe, closer than their radii
+    // add up to (as circles of their girths they overlap) that become one a few centimetres
+    // both up and down are one limb, seeded at the one over its lowest end (the ankle over the
+    // toes, not the heel behind it). Two legs with their ankles side by side may be as close
+    // (an ankle is wider than its girth's circle), but do not become one both above and below.
     let joins_soon = |a: &Ring, b: &Ring| {
         let up = heights(a.s, a.s + TOES_JOIN_M, SLICE_STEP_M).skip(1);
         follow(&slicer, &[*a, *b], up, false).joined
@@ -512,7 +515,8 @@ pub fn find_landmarks(
                         && joins_soon(r, o)
                 };
                 let lobe = || {
-                    overlap(r, o)
+                    r.girth_m.min(o.girth_m) >= MIN_STANDING_GIRTH_M
+                        && overlap(r, o)
                         && (off_its_end(o), j) < (off_its_end(r), k)
                         && joins_soon(r, o)
                         && joins_below(r, o)

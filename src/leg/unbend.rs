@@ -10,14 +10,16 @@
 //!   [`LOWEST_ANKLE_M`] above the sole: a foot pointed down, cut through its toes), the leg is
 //!   followed down from its thigh by sections square to its own centreline
 //!   ([`super::centreline`]); their narrowest above the heel is the ankle where it lies
-//!   [`POINTED_ANKLE_RISE_M`] or more higher, in the lowest third of the leg, and the knee is
-//!   then read from those sections.
+//!   [`POINTED_ANKLE_RISE_M`] or more higher, or where the landmarks' is thinner than a standing
+//!   leg's (a mannequin's ball joint), in the lowest third of the leg, and the knee is then
+//!   read from those sections.
 //! - **Turns**: the thigh about the top of the thigh to stand along up (a lone leg's, whose up
 //!   its own bent shape tilts, is left as it leans, and the straight leg's up found again); the
 //!   shin about the knee to continue it (each the least turn between the two directions); the
 //!   foot up about the ankle's hinge (square to the plane of the ankle, toe tip and back of the
 //!   heel, which pointing keeps) until its heel and ball stand level, where that takes
-//!   [`BENT_DEG`] or more (always, for an ankle from the shin's own sections).
+//!   [`BENT_DEG`] or more (any turn, for an ankle the shin's own sections put higher; none
+//!   where the ball is not below the heel as posed, or the landmarks find no foot).
 //! - **Blend**: each vertex of the leg (below the top of the thigh: the piece at the ankle and
 //!   the pieces along the limb that touch it, a mannequin's foot, shin, knee ball and thigh;
 //!   not the other leg) moves by its bones' turns blended as linear blend skinning blends them,
@@ -34,9 +36,9 @@
 //! [`MAX_FOOT_TURN_DEG`] stands flat, the straightened leg not read as standing around its
 //! straight axis, or not as long as the posed one along its bones (and where no triangle lies
 //! below the thigh top, or a vertex's blend cannot be inverted). The fit then reads the leg as it
-//! is and says what it saw. An error where the shin's own sections show a pointed foot (their
-//! ankle [`POINTED_ANKLE_RISE_M`] or more above the one sections along up found in the foot)
-//! that is not turned back to stand: read as posed, its stocking would end in the foot, bare.
+//! is and says what it saw. An error instead where the shin's own sections show a pointed foot
+//! (their ankle [`POINTED_ANKLE_RISE_M`] or more above the one sections along up found in the
+//! foot) and any of these fails: read as posed, its stocking would end in the foot, bare.
 
 use nalgebra::{Matrix4, Point3, Rotation3, Translation3, Unit, Vector3};
 use serde::Serialize;
@@ -151,38 +153,64 @@ pub fn straightened(leg: &Leg, side: Side) -> Result<Option<(RestPose, Bend)>, S
     };
     let rise = |s: &ShinSections| s.ankle.centre.coords.dot(&up) - landmarks.ankle.s;
     let pointed = shin.as_ref().filter(|s| {
-        (rise(s) > POINTED_ANKLE_RISE_M || landmarks.ankle.girth_m < MIN_STANDING_GIRTH_M)
+        (rise(s) >= POINTED_ANKLE_RISE_M || landmarks.ankle.girth_m < MIN_STANDING_GIRTH_M)
             && rise(s) + landmarks.ankle.s - sole_s < ANKLE_SHARE * (landmarks.thigh_top.s - sole_s)
     });
     // Refused only where the foot clearly points down: the shin's ankle well above the one
-    // sections along up found in the foot. A thin ankle alone (a mannequin's ball joint) is
-    // read as posed where it cannot be straightened, as any leg is.
-    match (straighten(leg, side, &landmarks, pointed), pointed) {
-        (Some(straight), _) => Ok(straight),
-        (None, Some(shin)) if rise(shin) > POINTED_ANKLE_RISE_M => Err(format!(
-            "its foot points down (the leg's own sections put its ankle {:.3} m above its \
-             lowest point, {:.3} m around, where sections along up found one {:.3} m around \
-             {:.3} m up, in the foot), and it could not be turned back to stand on its heel and \
-             its ball: fit the leg standing, export the character with its rig, or give the \
-             part to dress with --axis",
-            shin.ankle.centre.coords.dot(&up) - sole_s,
-            shin.ankle.girth_m,
-            landmarks.ankle.girth_m,
-            landmarks.ankle.s - sole_s,
-        )),
-        (None, _) => Ok(None),
-    }
+    // sections along up found in the foot, where the leg read as posed would be dressed to
+    // there. A thin ankle alone (a mannequin's ball joint) is read as posed where it cannot be
+    // straightened, as any leg is.
+    let foot_down = pointed.is_some_and(|s| rise(s) >= POINTED_ANKLE_RISE_M);
+    let unread = match (
+        straighten(leg, side, &landmarks, pointed, foot_down),
+        pointed,
+    ) {
+        (Ok(straight), _) => return Ok(straight),
+        (Err(Unread::NoFoot), _) => return Ok(None),
+        (Err(why), Some(shin)) if foot_down => (why, shin),
+        (Err(_), _) => return Ok(None),
+    };
+    let (why, shin) = unread;
+    let what_failed = match why {
+        Unread::Unlevelled => "it could not be turned back to stand on its heel and its ball",
+        Unread::Joints | Unread::NoFoot => {
+            "straightened at the joints its own sections show, it does not read as a standing leg"
+        }
+    };
+    Err(format!(
+        "its foot points down (the leg's own sections put its ankle {:.3} m above its lowest \
+         point, {:.3} m around, where sections along up found one {:.3} m around {:.3} m up, in \
+         the foot), and {what_failed}: fit the leg standing, export the character with its rig, \
+         or give the part to dress with --axis",
+        shin.ankle.centre.coords.dot(&up) - sole_s,
+        shin.ankle.girth_m,
+        landmarks.ankle.girth_m,
+        landmarks.ankle.s - sole_s,
+    ))
+}
+
+/// Why a leg the shin's own sections found cannot be straightened.
+enum Unread {
+    /// No turn of its foot up to [`MAX_FOOT_TURN_DEG`] stands it on its heel and its ball.
+    Unlevelled,
+    /// Its joints do not straighten it into a leg read as standing, as long along its bones.
+    Joints,
+    /// Below the ankle its own sections found, it goes on along the line to its tip: no foot
+    /// (a thin tube's ankle read high), so nothing to turn back.
+    NoFoot,
 }
 
 /// [`straightened`] once its ankle is known: the landmarks', or the shin's own sections' where
-/// the foot is `pointed`. `Some(None)` where the leg stands straight enough, `None` where it
-/// cannot be read.
+/// they are `pointed` to; `foot_down` where those put it well above the landmarks' (the foot
+/// points down, and must be turned back). `Ok(None)` where the leg stands straight enough; the
+/// error says why it cannot be read.
 fn straighten(
     leg: &Leg,
     side: Side,
     landmarks: &Landmarks,
     pointed: Option<&ShinSections>,
-) -> Option<Option<(RestPose, Bend)>> {
+    foot_down: bool,
+) -> Result<Option<(RestPose, Bend)>, Unread> {
     let up = leg.up;
     let mut bend = match pointed {
         Some(shin) => bend_through(
@@ -190,9 +218,10 @@ fn straighten(
             &Point3::from(landmarks.thigh_top.centre),
             &shin.centres,
             &up,
-        )?,
-        None => bend_of(landmarks, &up)?,
-    };
+        ),
+        None => bend_of(landmarks, &up),
+    }
+    .ok_or(Unread::Joints)?;
     let (ankle, knee, top) = (
         Point3::from(bend.ankle),
         Point3::from(bend.knee),
@@ -215,7 +244,7 @@ fn straighten(
     let below_top: Vec<f64> = (leg.positions.iter()).map(|p| (top - p).dot(&up)).collect();
     let limb = [Point3::from(landmarks.sole), ankle, knee, top];
     let reach = landmarks.thigh_top.girth_m / std::f64::consts::TAU;
-    let member = leg_vertices(leg, &limb, reach, |i| below_top[i] > 0.0)?;
+    let member = leg_vertices(leg, &limb, reach, |i| below_top[i] > 0.0).ok_or(Unread::Joints)?;
     // A foot pointed down is turned back about the ankle until it stands flat: one found by the
     // shin's own sections must be; one whose ankle the sections along up found, where it needs
     // as much turning as a bend straightened.
@@ -229,19 +258,20 @@ fn straighten(
         &shin_turn,
         &thigh_to,
     );
-    let foot = match (levelling, pointed) {
-        (Some(Levelling::Turn(foot)), Some(_)) => Some(foot),
-        (None, Some(_)) => return None,
+    let foot = match levelling {
+        None if pointed.is_some() => return Err(Unread::Unlevelled),
+        Some(Levelling::NoFoot) if foot_down => return Err(Unread::NoFoot),
+        Some(Levelling::Turn(foot)) if foot_down => Some(foot),
         // A leg ending at its ankle (no foot found) has nothing below it to level.
-        (_, None) if landmarks.foot.is_none() => None,
-        (Some(Levelling::Turn(foot)), None) => Some(foot).filter(|f| f.degrees >= BENT_DEG),
-        (_, _) => None,
+        _ if landmarks.foot.is_none() => None,
+        Some(Levelling::Turn(foot)) => Some(foot).filter(|f| f.degrees >= BENT_DEG),
+        _ => None,
     };
     bend.foot_deg = foot.as_ref().map_or(0.0, |f| f.degrees);
     if leaves_mesh(leg, &bend.straight_axis()).is_none()
         && (bend.knee_deg.max(bend.thigh_deg)).max(bend.foot_deg) < BENT_DEG
     {
-        return Some(None);
+        return Ok(None);
     }
     let knee_radius = landmarks.knee.girth_m / std::f64::consts::TAU;
     let knee_band = JointBand {
@@ -258,7 +288,10 @@ fn straighten(
             let on_leg = smoothstep(below_top[i] / HIP_BAND_M);
             let on_shin = knee_band.weight(p);
             let below_knee = match &foot {
-                Some(f) => shin_turn * (1.0 - f.weight(p)) + f.turn * f.weight(p),
+                Some(f) => {
+                    let w = f.weight(p);
+                    shin_turn * (1.0 - w) + f.turn * w
+                }
                 None => shin_turn,
             };
             let leg_matrix = thigh_turn * (1.0 - on_shin) + below_knee * on_shin;
@@ -266,14 +299,14 @@ fn straighten(
         })
         .collect();
     let world = linear_of(leg);
-    let file = world.try_inverse()?;
+    let file = world.try_inverse().ok_or(Unread::Joints)?;
     let mut rest_leg = leg.clone();
     rest_leg.rig = None;
     rest_leg.rest = None;
     let mut pose_from_rest = Vec::with_capacity(leg.positions.len());
     let mut moved = 0.0f64;
     for (p, m) in rest_leg.positions.iter_mut().zip(&rest_from_pose) {
-        let back = m.try_inverse()?;
+        let back = m.try_inverse().ok_or(Unread::Joints)?;
         let rest = m.transform_point(p);
         moved = moved.max((rest - *p).norm());
         *p = rest;
@@ -287,20 +320,21 @@ fn straighten(
     let up = rest_leg.up;
     // Straightened, the leg must read as a standing one, around its straight axis; else the
     // fit reads it as posed, and says what it saw.
-    let standing = find_landmarks(&rest_leg.positions, &rest_leg.triangles, up, side, None).ok()?;
-    let standing_bend = bend_of(&standing, &up)?;
+    let standing = find_landmarks(&rest_leg.positions, &rest_leg.triangles, up, side, None)
+        .map_err(|_| Unread::Joints)?;
+    let standing_bend = bend_of(&standing, &up).ok_or(Unread::Joints)?;
     let standing_axis = standing_bend.straight_axis();
     if leaves_mesh(&rest_leg, &standing_axis).is_some() {
-        return None;
+        return Err(Unread::Joints);
     }
     // The same leg, as long straightened as it was along its bones: else the joints were not
     // the leg's (an ankle read in a pointed foot).
     let along_bones = (knee - ankle).norm() + (top - knee).norm();
     let standing_length = standing_axis.length();
     if (standing_length - along_bones).abs() > SAME_LENGTH * along_bones {
-        return None;
+        return Err(Unread::Joints);
     }
-    Some(Some((
+    Ok(Some((
         RestPose {
             leg: rest_leg,
             pose_from_rest,
@@ -347,8 +381,10 @@ fn shin_sections(leg: &Leg, landmarks: &Landmarks) -> Option<ShinSections> {
 
 /// What levelling a foot found.
 enum Levelling {
-    /// Its ball is not below its heel as posed: it stands (or the leg has no foot).
+    /// Its ball is not below its heel as posed: it stands.
     Stands,
+    /// Nothing below the ankle reaches out of the line to its tip: no foot.
+    NoFoot,
     /// The turn that stands it.
     Turn(FootTurn),
 }
@@ -388,13 +424,18 @@ impl JointBand {
     }
 }
 
+/// A foot's heel lies at least this many of the ankle's radii off the line from the ankle to
+/// its toe tip (an adult's, 3 or more; a tube's, under 1).
+const FOOT_DEPTH: f64 = 2.0;
+
 /// Turns tried for a pointed foot, evenly from 0 to [`MAX_FOOT_TURN_DEG`], before the level
 /// one is narrowed down between two of them.
 const FOOT_TURNS_TRIED: usize = 40;
 
 /// The turn about the ankle that stands the foot flat again: after the shin's turn
 /// (`shin_turn`, rest from pose) its heel and the ball of its foot (the lowest of its vertices
-/// behind the ankle and of those over [`BALL_SHARE`] of the way to the toe tip) are level along
+/// under [`HEEL_SHARE`] of the way along the foot's line to the toe tip, as posed, and of those
+/// over [`BALL_SHARE`] of it) are level along
 /// `rest_up`. The foot turns up about the ankle's hinge, square to the shin and to the plane of
 /// the ankle, the toe tip and the back of the heel; the least turn that raises the ball, below
 /// the heel as posed, to its level is taken ([`Levelling::Stands`] where the ball is not below
@@ -421,8 +462,8 @@ fn foot_turn(
     let reach = (toe - ankle).norm();
     let along = |p: &Point3<f64>| (p - ankle).dot(&to_toe);
     let half = (ankle_girth / std::f64::consts::TAU).max(MIN_JOINT_BAND_M);
-    // The leg's vertices that may move with the foot: below the knee, as the shin's turn
-    // leaves them.
+    // The leg's vertices that may move with the foot: those under two of the ankle's radii
+    // above it along the shin.
     let lower: Vec<&Point3<f64>> = (leg.positions.iter().zip(member))
         .filter(|&(p, &m)| m && (p - ankle).dot(shin_up) < 2.0 * half)
         .map(|(p, _)| p)
@@ -435,9 +476,23 @@ fn foot_turn(
     let heel_back = (lower.iter())
         .filter(|p| along(p).abs() < HEEL_SHARE * reach)
         .max_by(|a, b| off_line(a).total_cmp(&off_line(b)))?;
+    // A foot reaches out of the line to its toe: its heel lies well off it. A leg that goes on
+    // below its ankle along that line (a tube, a stump) has no foot to turn.
+    if off_line(heel_back) < FOOT_DEPTH * half {
+        return Some(Levelling::NoFoot);
+    }
     let hinge = (*heel_back - ankle).cross(&to_toe);
     // Square to the shin, as an ankle's hinge is.
     let hinge = hinge - shin_up * hinge.dot(shin_up);
+    // Turned forwards about it, the toe rises towards the shin. Where the foot's line is far
+    // enough from the shin's to say which way that is (a foot near standing, whose shin front
+    // could lie further from the foot's line than a small heel), the hinge agrees with it.
+    let lifts = to_toe.cross(shin_up);
+    let hinge = if lifts.norm() > 0.5 && hinge.dot(&lifts) < 0.0 {
+        -hinge
+    } else {
+        hinge
+    };
     let ankle_then = shin_turn.transform_point(ankle);
     let hinge = Unit::try_new(shin_turn.transform_vector(&hinge), 1e-9)?;
     let turned = |degrees: f64| {
@@ -487,8 +542,10 @@ fn foot_turn(
     if below(0) != Some(true) {
         return Some(Levelling::Stands);
     }
-    let level = (1..=FOOT_TURNS_TRIED).find(|&k| below(k) != Some(true))?;
-    below(level)?;
+    // The first turn tried not below level; one the foot cannot be read at ends the search.
+    let level = (1..=FOOT_TURNS_TRIED)
+        .find(|&k| below(k) != Some(true))
+        .filter(|&k| below(k).is_some())?;
     let (mut lo, mut hi) = ((level - 1) as f64 * step, level as f64 * step);
     for _ in 0..30 {
         let mid = (lo + hi) / 2.0;
