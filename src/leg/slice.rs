@@ -129,11 +129,6 @@ impl<'a> Slicer<'a> {
         merged_across_pieces(loops, &self.piece, &self.up, s)
     }
 
-    /// `p` in the plane's 2-D frame.
-    pub fn flat(&self, p: &Point3<f64>) -> [f64; 2] {
-        [p.coords.dot(&self.u), p.coords.dot(&self.v)]
-    }
-
     /// The girth of `l`: the perimeter of its convex hull in the plane, metres.
     pub fn girth(&self, l: &Loop) -> f64 {
         girth_in(l, &self.u, &self.v)

@@ -36,9 +36,10 @@
 //! [`MAX_FOOT_TURN_DEG`] stands flat, the straightened leg not read as standing around its
 //! straight axis, or not as long as the posed one along its bones (and where no triangle lies
 //! below the thigh top, or a vertex's blend cannot be inverted). The fit then reads the leg as it
-//! is and says what it saw. An error instead where the shin's own sections show a pointed foot
-//! (their ankle [`POINTED_ANKLE_RISE_M`] or more above the one sections along up found in the
-//! foot) and any of these fails: read as posed, its stocking would end in the foot, bare.
+//! is and says what it saw. An error instead where the shin's own sections put the ankle
+//! [`POINTED_ANKLE_RISE_M`] or more above the one sections along up found (the foot points
+//! down) and the foot below it cannot be levelled or the straightened leg is not read as
+//! standing: read as posed, its stocking would end in the foot, toes bare.
 
 use nalgebra::{Matrix4, Point3, Rotation3, Translation3, Unit, Vector3};
 use serde::Serialize;
@@ -94,6 +95,12 @@ const HEEL_SHARE: f64 = 0.3;
 /// The furthest a pointed foot is turned back up, degrees: a dancer's, on point, is about 90
 /// (the ankle's 50 and the foot's arch), which the levelling reads a few degrees over.
 pub const MAX_FOOT_TURN_DEG: f64 = 100.0;
+/// Turns tried for a pointed foot, evenly from 0 to [`MAX_FOOT_TURN_DEG`], before the level
+/// one is narrowed down between two of them.
+const FOOT_TURNS_TRIED: usize = 40;
+/// A foot's heel lies at least this many of the ankle's radii off the line from the ankle to
+/// its toe tip (an adult's, 3 or more; a tube's, under 1).
+const FOOT_DEPTH: f64 = 2.0;
 
 /// How the geometry's joints straightened a leg (`report.json`'s `details.pose.bend`).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
@@ -152,7 +159,7 @@ pub fn straightened(leg: &Leg, side: Side) -> Result<Option<(RestPose, Bend)>, S
         None
     };
     let rise = |s: &ShinSections| s.ankle.centre.coords.dot(&up) - landmarks.ankle.s;
-    let pointed = shin.as_ref().filter(|s| {
+    let shin_ankle = shin.as_ref().filter(|s| {
         (rise(s) >= POINTED_ANKLE_RISE_M || landmarks.ankle.girth_m < MIN_STANDING_GIRTH_M)
             && rise(s) + landmarks.ankle.s - sole_s < ANKLE_SHARE * (landmarks.thigh_top.s - sole_s)
     });
@@ -160,22 +167,13 @@ pub fn straightened(leg: &Leg, side: Side) -> Result<Option<(RestPose, Bend)>, S
     // sections along up found in the foot, where the leg read as posed would be dressed to
     // there. A thin ankle alone (a mannequin's ball joint) is read as posed where it cannot be
     // straightened, as any leg is.
-    let foot_down = pointed.is_some_and(|s| rise(s) >= POINTED_ANKLE_RISE_M);
-    let unread = match (
-        straighten(leg, side, &landmarks, pointed, foot_down),
-        pointed,
-    ) {
-        (Ok(straight), _) => return Ok(straight),
-        (Err(Unread::NoFoot), _) => return Ok(None),
-        (Err(why), Some(shin)) if foot_down => (why, shin),
-        (Err(_), _) => return Ok(None),
+    let foot_down = shin_ankle.is_some_and(|s| rise(s) >= POINTED_ANKLE_RISE_M);
+    let why = match straighten(leg, side, &landmarks, shin_ankle, foot_down) {
+        Ok(straight) => return Ok(straight),
+        Err(why) => why,
     };
-    let (why, shin) = unread;
-    let what_failed = match why {
-        Unread::Unlevelled => "it could not be turned back to stand on its heel and its ball",
-        Unread::Joints | Unread::NoFoot => {
-            "straightened at the joints its own sections show, it does not read as a standing leg"
-        }
+    let (Some(what_failed), Some(shin), true) = (why.refusal(), shin_ankle, foot_down) else {
+        return Ok(None);
     };
     Err(format!(
         "its foot points down (the leg's own sections put its ankle {:.3} m above its lowest \
@@ -200,19 +198,36 @@ enum Unread {
     NoFoot,
 }
 
-/// [`straightened`] once its ankle is known: the landmarks', or the shin's own sections' where
-/// they are `pointed` to; `foot_down` where those put it well above the landmarks' (the foot
-/// points down, and must be turned back). `Ok(None)` where the leg stands straight enough; the
+impl Unread {
+    /// What failed, for the refusal of a foot pointed down; `None` where there is no foot to
+    /// refuse, and the leg is read as posed.
+    fn refusal(&self) -> Option<&'static str> {
+        match self {
+            Unread::Unlevelled => {
+                Some("it could not be turned back to stand on its heel and its ball")
+            }
+            Unread::Joints => Some(
+                "straightened at the joints its own sections show, it does not read as a \
+                 standing leg",
+            ),
+            Unread::NoFoot => None,
+        }
+    }
+}
+
+/// [`straightened`] once its ankle is known: the landmarks', or `shin_ankle`, the shin's own
+/// sections', where those are used; `foot_down` where they put it well above the landmarks'
+/// (the foot points down, and must be turned back). `Ok(None)` where the leg stands straight enough; the
 /// error says why it cannot be read.
 fn straighten(
     leg: &Leg,
     side: Side,
     landmarks: &Landmarks,
-    pointed: Option<&ShinSections>,
+    shin_ankle: Option<&ShinSections>,
     foot_down: bool,
 ) -> Result<Option<(RestPose, Bend)>, Unread> {
     let up = leg.up;
-    let mut bend = match pointed {
+    let mut bend = match shin_ankle {
         Some(shin) => bend_through(
             &shin.ankle.centre,
             &Point3::from(landmarks.thigh_top.centre),
@@ -245,10 +260,10 @@ fn straighten(
     let limb = [Point3::from(landmarks.sole), ankle, knee, top];
     let reach = landmarks.thigh_top.girth_m / std::f64::consts::TAU;
     let member = leg_vertices(leg, &limb, reach, |i| below_top[i] > 0.0).ok_or(Unread::Joints)?;
-    // A foot pointed down is turned back about the ankle until it stands flat: one found by the
-    // shin's own sections must be; one whose ankle the sections along up found, where it needs
-    // as much turning as a bend straightened.
-    let ankle_girth = pointed.map_or(landmarks.ankle.girth_m, |s| s.ankle.girth_m);
+    // A foot pointed down is turned back about the ankle until it stands flat: one the shin's
+    // own sections show pointed must be (unless it has no foot below); otherwise only where it
+    // needs as much turning as a bend straightened.
+    let ankle_girth = shin_ankle.map_or(landmarks.ankle.girth_m, |s| s.ankle.girth_m);
     let levelling = foot_turn(
         leg,
         &member,
@@ -259,7 +274,7 @@ fn straighten(
         &thigh_to,
     );
     let foot = match levelling {
-        None if pointed.is_some() => return Err(Unread::Unlevelled),
+        None if shin_ankle.is_some() => return Err(Unread::Unlevelled),
         Some(Levelling::NoFoot) if foot_down => return Err(Unread::NoFoot),
         Some(Levelling::Turn(foot)) if foot_down => Some(foot),
         // A leg ending at its ankle (no foot found) has nothing below it to level.
@@ -288,10 +303,7 @@ fn straighten(
             let on_leg = smoothstep(below_top[i] / HIP_BAND_M);
             let on_shin = knee_band.weight(p);
             let below_knee = match &foot {
-                Some(f) => {
-                    let w = f.weight(p);
-                    shin_turn * (1.0 - w) + f.turn * w
-                }
+                Some(f) => f.blended(&shin_turn, p),
                 None => shin_turn,
             };
             let leg_matrix = thigh_turn * (1.0 - on_shin) + below_knee * on_shin;
@@ -400,11 +412,13 @@ struct FootTurn {
 }
 
 impl FootTurn {
-    /// How much of vertex `p` (posed) moves with the foot: its band's weight where the foot's
-    /// turn takes it. Weighed at rest, as a rig's weights are painted: a pointed foot's heel,
-    /// raised to the ankle's height as posed, is the foot's wholly.
-    fn weight(&self, p: &Point3<f64>) -> f64 {
-        self.band.weight(&self.turn.transform_point(p))
+    /// Rest from pose for vertex `p` (posed) below the knee: `shin_turn` and the foot's turn
+    /// blended by the band's weight where the foot's turn takes `p`. Weighed at rest, as a rig's
+    /// weights are painted: a pointed foot's heel, raised to the ankle's height as posed, is the
+    /// foot's wholly.
+    fn blended(&self, shin_turn: &Matrix4<f64>, p: &Point3<f64>) -> Matrix4<f64> {
+        let w = self.band.weight(&self.turn.transform_point(p));
+        shin_turn * (1.0 - w) + self.turn * w
     }
 }
 
@@ -424,23 +438,15 @@ impl JointBand {
     }
 }
 
-/// A foot's heel lies at least this many of the ankle's radii off the line from the ankle to
-/// its toe tip (an adult's, 3 or more; a tube's, under 1).
-const FOOT_DEPTH: f64 = 2.0;
-
-/// Turns tried for a pointed foot, evenly from 0 to [`MAX_FOOT_TURN_DEG`], before the level
-/// one is narrowed down between two of them.
-const FOOT_TURNS_TRIED: usize = 40;
-
 /// The turn about the ankle that stands the foot flat again: after the shin's turn
 /// (`shin_turn`, rest from pose) its heel and the ball of its foot (the lowest of its vertices
 /// under [`HEEL_SHARE`] of the way along the foot's line to the toe tip, as posed, and of those
-/// over [`BALL_SHARE`] of it) are level along
-/// `rest_up`. The foot turns up about the ankle's hinge, square to the shin and to the plane of
-/// the ankle, the toe tip and the back of the heel; the least turn that raises the ball, below
-/// the heel as posed, to its level is taken ([`Levelling::Stands`] where the ball is not below
-/// the heel as posed). `None` where no turn up to [`MAX_FOOT_TURN_DEG`] levels them, or the
-/// foot has no toe or heel to level.
+/// over [`BALL_SHARE`] of it) are level along `rest_up`. The foot turns up about the ankle's
+/// hinge, square to the shin and to the plane of the ankle, the toe tip and the back of the
+/// heel; the least turn that raises the ball, below the heel as posed, to its level is taken
+/// ([`Levelling::Stands`] where the ball is not below the heel as posed, [`Levelling::NoFoot`]
+/// where the heel lies under [`FOOT_DEPTH`] ankle radii off the line to the toe). `None` where
+/// no turn up to [`MAX_FOOT_TURN_DEG`] levels them, or the foot has no toe or heel to level.
 fn foot_turn(
     leg: &Leg,
     member: &[bool],
@@ -527,9 +533,11 @@ fn foot_turn(
         let lowest = |part: &[&Point3<f64>]| {
             (part.iter())
                 .map(|p| {
-                    let w = foot_turn.weight(p);
-                    let rested = (shin_turn * (1.0 - w) + foot_turn.turn * w).transform_point(p);
-                    rested.coords.dot(rest_up)
+                    foot_turn
+                        .blended(shin_turn, p)
+                        .transform_point(p)
+                        .coords
+                        .dot(rest_up)
                 })
                 .min_by(f64::total_cmp)
         };

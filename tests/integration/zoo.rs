@@ -1008,9 +1008,9 @@ const STRIDES: [(f64, f64, f64); 7] = [
 fn the_stride_zoo_table() {
     // Each left leg of the zoo, cut or in pieces, posed without a rig at five strides (knee,
     // hip degrees) and on a foot pointed 45° (a high heel's) and 70° (a dancer's), fitted at
-    // the defaults: the table ZOO.md's "Strides without a rig" has. Not
-    // every stride fits yet (the table says which); none may exit 0 with yarn inside the leg
-    // or short of the posed toe.
+    // the defaults: the table ZOO.md's "Strides without a rig" has. Not every stride fits yet
+    // (the table says which); none may exit 0 with yarn inside the leg or short of the posed
+    // toe.
     let mut rows = vec![
         "| form / knee° / hip° / foot° | outcome | bend read (knee°, thigh°, foot°) | yarn to the toe tip, mm \
          | seconds |"
