@@ -104,6 +104,12 @@ pub const JUMP_SPAN_M: f64 = 0.02;
 pub const MIN_LEG_GIRTH_M: f64 = 0.08;
 /// A foot reaches this many ankle radii from the ankle's centre line.
 pub const FOOT_REACH: f64 = 2.0;
+/// A standing foot's toe tip lies no higher above the sole than this share of its reach forward
+/// of the ankle (an adult's, 2 cm over 15–20).
+pub const TOE_LOW_SHARE: f64 = 1.0 / 3.0;
+/// How far from a run of sections through two pieces or more the narrowest section may lie and
+/// still be that seam's joint, metres ([`at_the_seam`]).
+pub const SEAM_NEAR_M: f64 = 0.02;
 /// How far above a leg's open end its skin is looked for again, metres: skin that goes on
 /// around the same centre within this was a hole, not a cut.
 pub const HOLE_PROBE_M: f64 = 0.15;
@@ -229,8 +235,23 @@ impl RigAgreement {
 }
 
 impl Landmarks {
-    /// The stance the character is pictured in ([`Stance::pictured`]): glTF's facing, +Z, where
-    /// its feet do not say.
+    /// Whether the leg stands on a foot: an ankle no thinner than a standing leg's
+    /// ([`MIN_STANDING_GIRTH_M`]) above a foot whose toe tip lies low and forward, no higher
+    /// above the sole than [`TOE_LOW_SHARE`] of its reach across up from the ankle. A hand or a
+    /// head read as a leg's end does not: its "ankle" is a finger or a neck, and its furthest
+    /// point from it is as high as it is far.
+    pub fn stands_on_a_foot(&self) -> bool {
+        let up = Vector3::from(self.up);
+        self.ankle.girth_m >= MIN_STANDING_GIRTH_M
+            && self.foot.is_some_and(|foot| {
+                let toe = Vector3::from(foot.toe_tip);
+                let rise = toe.dot(&up) - self.sole_s();
+                let from_ankle = toe - Vector3::from(self.ankle.centre);
+                let reach = (from_ankle - up * from_ankle.dot(&up)).norm();
+                rise <= TOE_LOW_SHARE * reach
+            })
+    }
+
     pub fn stance(&self) -> Stance {
         let up = Vector3::from(self.up);
         let facing = self
@@ -277,12 +298,17 @@ pub struct BodyUp {
     /// The mean girth of its thicker end over its slimmer one's; infinite where only one end
     /// has a closed section (the other is an open cut, the top).
     pub ends_ratio: f64,
+    /// True where up was taken the other way from the slimmer end, because only read this way
+    /// up do the legs found stand on a foot (arms raised over the head: hands and forearms
+    /// slimmer than the shins).
+    pub on_its_feet: bool,
 }
 
 impl BodyUp {
-    /// True when the ends differ enough to overrule glTF's +Y ([`CLEAR_ENDS_RATIO`]).
+    /// True when the shape says which way is up clearly enough to overrule glTF's +Y: its ends
+    /// differ by [`CLEAR_ENDS_RATIO`] or more, or it stands on its feet only one way up.
     pub fn clear(&self) -> bool {
-        self.ends_ratio >= CLEAR_ENDS_RATIO
+        self.on_its_feet || self.ends_ratio >= CLEAR_ENDS_RATIO
     }
 }
 
@@ -341,11 +367,31 @@ pub fn anatomical_up(positions: &[Point3<f64>], triangles: &[[u32; 3]]) -> Optio
                 BodyUp {
                     up,
                     ends_ratio: ratio,
+                    on_its_feet: false,
                 },
             ));
         }
     }
-    best.map(|(_, body)| body)
+    let body = best.map(|(_, body)| body)?;
+    // The slimmer end is the feet's, unless the arms are raised over the head: then hands and
+    // forearms end the body slimmer than its shins. The landmarks tell them apart, as a foot
+    // reaches forward from its ankle and a hand does not: where only the other way up has a
+    // leg standing on a foot, the body stands that way.
+    if !on_a_foot(positions, triangles, &body.up) && on_a_foot(positions, triangles, &-body.up) {
+        return Some(BodyUp {
+            up: -body.up,
+            on_its_feet: true,
+            ..body
+        });
+    }
+    Some(body)
+}
+
+/// Whether read with `up` the mesh has a leg, either side, whose landmarks find a foot.
+fn on_a_foot(positions: &[Point3<f64>], triangles: &[[u32; 3]], up: &Vector3<f64>) -> bool {
+    [Side::Left, Side::Right].into_iter().any(|side| {
+        find_landmarks(positions, triangles, *up, side, None).is_ok_and(|l| l.stands_on_a_foot())
+    })
 }
 
 /// `axis` pointed away from its slimmer end (the mean girth of the closed sections in each end
@@ -576,32 +622,6 @@ pub fn find_landmarks(
                 .min_by(|&a, &b| leftness(&seeds[a]).total_cmp(&leftness(&seeds[b]))),
         })
         .unwrap_or(0);
-    // One leg standing where a body has two: the other is lifted (a stride, a sit, a kneel).
-    // Its side is told against the body's centre; dressing it for the other would be a
-    // stocking on the wrong leg.
-    if seeds.len() == 1 && by_rig.is_none() {
-        let off_centre = leftness(&seeds[0]) - area_centroid(positions, triangles).dot(&left);
-        let standing = if off_centre > 0.0 {
-            Side::Left
-        } else {
-            Side::Right
-        };
-        if standing != side && off_centre.abs() > LIFTED_LEG_OFF_CENTRE_M {
-            return Err(format!(
-                "the only leg standing at the lowest point is the character's {} ({:.2} m from \
-                 the body's centre): its {} leg does not reach down (lifted in a stride, a sit \
-                 or a kneel), and a leg whose foot does not stand is read only with its rig: \
-                 export the character with its skin, fit it standing, dress the {} leg \
-                 (--side {}), or give the part to dress with --axis",
-                standing.name(),
-                off_centre.abs(),
-                side.name(),
-                standing.name(),
-                standing.name()
-            )
-            .into());
-        }
-    }
     // Up from the seeds: the chosen leg and its nearest neighbour, until they join or end.
     let other = (0..seeds.len()).filter(|&i| i != chosen).min_by(|&a, &b| {
         let d = |i: usize| {
@@ -649,6 +669,32 @@ pub fn find_landmarks(
     let top = *profile
         .last()
         .ok_or("the leg has no closed cross-section")?;
+    // One leg standing where a body has two: the other is lifted (a stride, a sit, a kneel).
+    // Its side is told by the top of its thigh against the body's centre (a foot stood on alone
+    // is under the centre); dressing it for the other would be a stocking on the wrong leg.
+    if seeds.len() == 1 && by_rig.is_none() {
+        let off_centre = leftness(&top) - area_centroid(positions, triangles).dot(&left);
+        let standing = if off_centre > 0.0 {
+            Side::Left
+        } else {
+            Side::Right
+        };
+        if standing != side && off_centre.abs() > LIFTED_LEG_OFF_CENTRE_M {
+            return Err(format!(
+                "the only leg standing at the lowest point is the character's {} ({:.2} m from \
+                 the body's centre): its {} leg does not reach down (lifted in a stride, a sit \
+                 or a kneel), and a leg whose foot does not stand is read only with its rig: \
+                 export the character with its skin, fit it standing, dress the {} leg \
+                 (--side {}), or give the part to dress with --axis",
+                standing.name(),
+                off_centre.abs(),
+                side.name(),
+                standing.name(),
+                standing.name()
+            )
+            .into());
+        }
+    }
     let leg_height = top.s - sole_s;
     if leg_height < 0.15 {
         // Beside a leg on its foot that rises a leg's length, a short one is lifted or bent out
@@ -714,6 +760,7 @@ pub fn find_landmarks(
     let span = top.s - ankle.s;
     let knee = narrowest(ankle.s + 0.35 * span, ankle.s + 0.7 * span)
         .unwrap_or(profile[profile.len() / 2]);
+    let (ankle, knee) = (at_the_seam(&profile, ankle), at_the_seam(&profile, knee));
     profile.retain(|r| r.s >= ankle.s);
     let rig = rig.and_then(|r| RigAgreement::of(r, &ankle, &knee, &up));
     Ok(Landmarks {
@@ -730,6 +777,21 @@ pub fn find_landmarks(
         profile,
         rig,
     })
+}
+
+/// A limb in pieces bends where its pieces meet: a mannequin's joint is the run of sections
+/// through two pieces or more (where one passes into the next, with the ball inside), and the
+/// narrowest section near it is set by how much wider one piece was made than the other, not
+/// by the joint. Where `found` lies in such a run of `profile`, or within [`SEAM_NEAR_M`] of
+/// it, the joint is the run's middle section; elsewhere (a limb modelled whole), `found`.
+fn at_the_seam(profile: &[Ring], found: Ring) -> Ring {
+    let seamed = |r: &Ring| r.pieces.count_ones() >= 2;
+    (profile.chunk_by(|a, b| seamed(a) == seamed(b)))
+        .filter(|run| seamed(&run[0]))
+        .find(|run| {
+            (run[0].s - SEAM_NEAR_M..=run[run.len() - 1].s + SEAM_NEAR_M).contains(&found.s)
+        })
+        .map_or(found, |run| run[run.len() / 2])
 }
 
 /// The centre of the surface `triangles`, each weighed by its area.
@@ -1096,6 +1158,42 @@ mod tests {
                 assert!(stance.facing.dot(&forward) > 0.97, "{stance:?}");
             }
         }
+    }
+
+    #[test]
+    fn a_body_with_its_arms_raised_stands_on_its_feet_not_its_hands() {
+        // Box legs with feet (0.4 m around), a trunk and head, and arms 0.2 m around raised
+        // 0.7 m over the shoulders: the end with the hands is the slimmer one, and only read
+        // with +Y up does a leg stand on a foot.
+        let (positions, triangles) = box_body(true);
+        let body = anatomical_up(&positions, &triangles).unwrap();
+        assert!(body.up.dot(&Vector3::y()) > 0.99, "{body:?}");
+        assert!(body.on_its_feet && body.clear(), "{body:?}");
+        // Upside down, the same body is read the same way up.
+        let flipped: Vec<Point3<f64>> = (positions.iter())
+            .map(|p| Point3::new(p.x, -p.y, -p.z))
+            .collect();
+        let body = anatomical_up(&flipped, &triangles).unwrap();
+        assert!(body.up.dot(&-Vector3::y()) > 0.99, "{body:?}");
+        // Its arms down, the slimmer end is the feet's, as it always was.
+        let (positions, triangles) = box_body(false);
+        let body = anatomical_up(&positions, &triangles).unwrap();
+        assert!(body.up.dot(&Vector3::y()) > 0.99, "{body:?}");
+        assert!(!body.on_its_feet && body.clear(), "{body:?}");
+    }
+
+    /// [`legs_with_feet`] under a trunk and a head, with arms 0.2 m around hanging at its sides
+    /// or `raised` 0.7 m over its shoulders.
+    fn box_body(raised: bool) -> (Vec<Point3<f64>>, Vec<[u32; 3]>) {
+        let (mut positions, mut triangles) = legs_with_feet(0.0, 0.0);
+        let mut add = |lo, hi| add_box(&mut positions, &mut triangles, lo, hi);
+        add([-0.22, 0.78, -0.1], [0.22, 1.4, 0.1]);
+        add([-0.1, 1.38, -0.1], [0.1, 1.65, 0.1]);
+        let (low, high) = if raised { (1.25, 2.1) } else { (0.7, 1.4) };
+        for x in [-0.27, 0.27] {
+            add([x - 0.025, low, -0.025], [x + 0.025, high, 0.025]);
+        }
+        (positions, triangles)
     }
 
     /// Two legs 0.8 m tall, 0.3 m apart, the left one (+X) standing at y = 0 and the right one
