@@ -1030,6 +1030,93 @@ fn a_body_on_one_foot_is_dressed_up_to_its_crotch_not_its_head() {
 }
 
 // ---------------------------------------------------------------------------------------------
+// A second body model, posed from photographs (samples/mhr/).
+
+#[test]
+fn a_body_with_its_arms_raised_is_read_feet_down_and_dressed_to_the_toe_on_either_leg() {
+    // MHR's subject 2: feet apart, knees a little bent, both arms over the head, so the hands
+    // end the body's slimmer end. Also written upside down, as a camera's frame (+Y down) has
+    // it: up is found from the feet either way.
+    let dir = tempfile::tempdir().unwrap();
+    let upright = sample("mhr/arms_raised.glb");
+    let mut meshes = read_glb_meshes(&upright);
+    for p in meshes.iter_mut().flat_map(|m| m.positions.iter_mut()) {
+        *p = Point3::new(p.x, -p.y, -p.z);
+    }
+    let upside_down = write_raw_meshes(dir.path(), "upside_down.glb", &meshes);
+    for (path, axis) in [(&upright, "+y"), (&upside_down, "-y")] {
+        let out = knitfit(
+            dir.path(),
+            &["plan", "--leg", path.to_str().unwrap(), "--json"],
+        );
+        assert!(out.status.success(), "{axis}: {}", stderr(&out));
+        let plan: Value = serde_json::from_slice(&out.stdout).unwrap();
+        assert_eq!(plan["leg"]["up_axis"], axis);
+        assert_eq!(plan["leg"]["up_axis_from"], "anatomy");
+        assert_eq!(plan["landmarks"]["legs_found"], 2, "{axis}");
+    }
+    // Each leg straightened at its bent knee, dressed to its toe, on its own side.
+    for (side, sign) in [("left", 1.0), ("right", -1.0)] {
+        let scene = scene_for(&upright, json!({ "side": side }), json!({}));
+        let (run, out) = run_scene(&scene, "100x100", &["--tolerance", "3e-3"]);
+        assert!(out.status.success(), "{side}: {}", stderr(&out));
+        let r = read_fit_report(&run.path().join("out"));
+        assert_eq!(r.details.tube.bottom, TubeBottom::Toe, "{side}");
+        assert_eq!(r.metrics.max_penetration_m, Some(0.0), "{side}");
+        assert!(r.details.checks.passed(), "{side}: {:?}", r.details.checks);
+        let bend = r
+            .details
+            .pose
+            .as_ref()
+            .and_then(|p| p.bend)
+            .expect("straightened");
+        assert!(bend.knee_deg > 20.0, "{side}: {bend:?}");
+        assert!(
+            r.details.axis.bottom[0] * sign > 0.0,
+            "{side}: {:?}",
+            r.details.axis
+        );
+    }
+}
+
+#[test]
+fn a_body_standing_on_one_leg_is_not_dressed_on_it_for_the_lifted_side() {
+    // MHR's subject 1 stands on its left foot, under its centre, its right knee raised: the
+    // standing leg is the left by its thigh, and the right is refused as lifted.
+    let dir = tempfile::tempdir().unwrap();
+    let body = sample("mhr/one_leg.glb");
+    let plan = |side: &str| {
+        let args = [
+            "plan",
+            "--leg",
+            body.to_str().unwrap(),
+            "--side",
+            side,
+            "--json",
+        ];
+        knitfit(dir.path(), &args)
+    };
+    let right = plan("right");
+    assert_eq!(right.status.code(), Some(2));
+    let said = stderr(&right);
+    assert!(
+        said.contains("the only leg standing") && said.contains("character's left"),
+        "{said}"
+    );
+    let left = plan("left");
+    assert!(left.status.success(), "{}", stderr(&left));
+    let plan: Value = serde_json::from_slice(&left.stdout).unwrap();
+    assert_eq!(plan["leg"]["up_axis"], "+y");
+    assert_eq!(plan["landmarks"]["legs_found"], 1);
+    assert!(
+        plan["landmarks"]["thigh_top"]["centre"]["m"][0]
+            .as_f64()
+            .unwrap()
+            > 0.05
+    );
+}
+
+// ---------------------------------------------------------------------------------------------
 // 4. A messy export, dressed to the toe.
 
 #[test]
