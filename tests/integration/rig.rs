@@ -304,9 +304,12 @@ enum Pose {
     Kneeling,
     /// The foot pointed 45° (a high heel).
     FootPointed,
+    /// Both arms raised over the head (the legs at rest): the hands, not the feet, end the
+    /// body's slimmer end.
+    ArmsRaised,
 }
 
-const POSES: [Pose; 10] = [
+const POSES: [Pose; 11] = [
     Pose::Rest,
     Pose::LegsApart,
     Pose::HipFlexed40,
@@ -317,6 +320,7 @@ const POSES: [Pose; 10] = [
     Pose::Sitting,
     Pose::Kneeling,
     Pose::FootPointed,
+    Pose::ArmsRaised,
 ];
 
 impl Pose {
@@ -338,6 +342,11 @@ impl Pose {
             Pose::Sitting => vec![(hip, 0, -90.0), (knee, 0, 90.0)],
             Pose::Kneeling => vec![(hip, 0, -20.0), (knee, 0, 110.0)],
             Pose::FootPointed => vec![(foot, 0, 45.0)],
+            // From the rest's A-pose, 47° below level, to 78° above it.
+            Pose::ArmsRaised => vec![
+                ("mixamorig:LeftArm", 2, 125.0),
+                ("mixamorig:RightArm", 2, -125.0),
+            ],
         }
     }
 }
@@ -613,6 +622,28 @@ fn a_posed_leg_without_its_rig_is_refused_saying_so_not_dressed_on_the_other_leg
             "{pose:?}: {err}"
         );
         assert!(err.contains("rig"), "{pose:?}: {err}");
+    }
+}
+
+#[test]
+fn arms_raised_over_the_head_do_not_turn_the_character_upside_down() {
+    // The hands end the slimmer end of the body, which read up from the slimmer end before:
+    // the arm was taken for a leg. Rigged or baked, as exported or Z up, up is the feet's.
+    for rigging in [Rigging::Rigged, Rigging::Baked] {
+        for (frame, axis) in [(RigFrame::AsExported, "+y"), (RigFrame::ZUp, "+z")] {
+            let dir = tempfile::tempdir().unwrap();
+            let (file, _) = posed_file(dir.path(), Pose::ArmsRaised, rigging, frame);
+            let out = knitfit(
+                dir.path(),
+                &["plan", "--leg", file.to_str().unwrap(), "--json"],
+            );
+            let case = format!("{rigging:?} {frame:?}");
+            assert_eq!(out.status.code(), Some(0), "{case}: {}", stderr(&out));
+            let plan: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+            assert_eq!(plan["leg"]["up_axis"], axis, "{case}");
+            assert_eq!(plan["landmarks"]["legs_found"], 2, "{case}");
+            assert!(!plan["landmarks"]["toe_tip"].is_null(), "{case}");
+        }
     }
 }
 
