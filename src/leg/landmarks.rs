@@ -10,9 +10,10 @@
 //! - **Up** ([`anatomical_up`]): of the principal axes nearly as long as the longest (a T-pose's
 //!   span matches its height), the one whose ends differ most in girth, pointed away from the
 //!   slimmer end (feet and calves are slimmer than thighs, hips, or a head and shoulders).
-//!   Only where the ends differ by [`CLEAR_ENDS_RATIO`] or more does the shape overrule glTF's
-//!   +Y ([`BodyUp::clear`]): a limb's ends differ by 1.4 to 3.3 in the samples; a part as wide
-//!   at both ends says nothing.
+//!   Only where the ends differ by [`CLEAR_ENDS_RATIO`] or more (a limb's, 1.4 to 3.3) does the
+//!   shape overrule glTF's +Y ([`BodyUp::clear`]). Raised arms make the hands the slimmer end:
+//!   where only read the other way up does a leg stand on a foot
+//!   ([`Landmarks::stands_on_a_foot`]), up is that way ([`BodyUp::on_its_feet`]).
 //! - **The legs**: the closed loops of the section [`SEED_HEIGHT_M`] above the lowest point, each
 //!   followed up and down from slice to slice: the loop that encloses the last centre, or else
 //!   the nearest within [`MAX_STEP_M`]. Following stops where the mesh is cut, or where two legs'
@@ -27,25 +28,26 @@
 //!   characters do. The pictures' views are taken from it ([`Landmarks::stance`]). A kneeling
 //!   figure, its toes pointing back, is taken to face backwards.
 //!   Where the file's rig names the legs ([`super::rig`]), its leg on the side asked for is the
-//!   one whose section stands under its ankle joint. A lone standing leg more than
-//!   [`LIFTED_LEG_OFF_CENTRE_M`] to the other side of the body's centre is that side's: the leg
-//!   asked for is lifted, and is refused as such rather than the other dressed.
+//!   one whose section stands under its ankle joint. A lone standing leg whose thigh's top is
+//!   over [`LIFTED_LEG_OFF_CENTRE_M`] to the other side of the body's centre is that side's:
+//!   the leg asked for is lifted, and refused as such rather than the other dressed.
 //! - **Ankle**: the smallest girth between the foot and a third of the way up; **knee**: the
-//!   smallest between 35 % and 70 % of the way from ankle to thigh top; **toe**: the foot's
-//!   vertex furthest from the ankle's centre line; a foot is there when that reaches more than
-//!   [`FOOT_REACH`] ankle radii; **sole**: the lowest vertex within the foot's reach (or under
-//!   the leg's lowest section). Toe and sole are taken only from vertices nearer the leg's own
-//!   centre line than another leg's: the other foot is within reach, and may be lower.
+//!   smallest between 35 % and 70 % of the way from ankle to thigh top; either, within
+//!   [`SEAM_NEAR_M`] of sections through two pieces (a mannequin's joint), is their middle;
+//!   **toe**: the foot's vertex furthest from the ankle's centre line; a foot is there when that
+//!   reaches more than [`FOOT_REACH`] ankle radii; **sole**: the lowest vertex within the foot's
+//!   reach (or under the leg's lowest section). Toe and sole are taken only from vertices nearer
+//!   the leg's own centre line than another leg's: the other foot is within reach, and may be
+//!   lower.
 //!
 //! The sections are of the skin without a flat cap over the cut ([`super::caps`]): a leg closed
 //! at its cut is read as the open cut.
 //!
 //! Why this holds on character exports: girths are convex-hull perimeters of loops, so folds,
 //! dents and small self-intersections do not move them; loops are walked on the cleaned mesh
-//! ([`super::clean`]), so repeated faces and debris are gone; following a loop by enclosure
-//! keeps to one limb when a hand, the other leg or an eye is in the same plane; and the
-//! orientation comes from the shape, not the file's axes, so a Z-up, lying or moved character
-//! gives the same landmarks.
+//! ([`super::clean`]), without repeated faces and debris; following a loop by enclosure keeps
+//! to one limb when a hand, the other leg or an eye is in the same plane; and the orientation
+//! comes from the shape, not the file's axes, so a Z-up, lying or moved character reads alike.
 
 use nalgebra::{Matrix3, Point3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
@@ -56,8 +58,9 @@ use super::slice::{piece_bit, Loop, Slicer};
 use super::Side;
 use crate::base::Stance;
 
-/// A lone standing leg this far to one side of the body's centre is that side's leg, metres: a
-/// leg alone is centred on itself, a body standing on one leg is about a hip's half-width off.
+/// A lone standing leg whose thigh's top is this far to one side of the body's centre is that
+/// side's leg, metres: a leg alone is centred on itself, a body's thigh is about a hip's
+/// half-width off (0.11 m on MHR's body standing on one leg, whose foot is 7 mm off).
 pub const LIFTED_LEG_OFF_CENTRE_M: f64 = 0.05;
 /// Narrowest and widest a standing leg's section just above its sole can be, metres: a child's
 /// ankle is about 0.14 m around, an adult's foot under 0.35 m there; an ear is 0.09 m, a head 8
@@ -108,7 +111,7 @@ pub const FOOT_REACH: f64 = 2.0;
 /// of the ankle (an adult's, 2 cm over 15–20).
 pub const TOE_LOW_SHARE: f64 = 1.0 / 3.0;
 /// How far from a run of sections through two pieces or more the narrowest section may lie and
-/// still be that seam's joint, metres ([`at_the_seam`]).
+/// still be that seam's joint, metres.
 pub const SEAM_NEAR_M: f64 = 0.02;
 /// How far above a leg's open end its skin is looked for again, metres: skin that goes on
 /// around the same centre within this was a hole, not a cut.
