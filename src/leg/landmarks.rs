@@ -28,9 +28,9 @@
 //!   characters do. The pictures' views are taken from it ([`Landmarks::stance`]). A kneeling
 //!   figure, its toes pointing back, is taken to face backwards.
 //!   Where the file's rig names the legs ([`super::rig`]), its leg on the side asked for is the
-//!   one whose section stands under its ankle joint. A lone standing leg whose thigh's top is
-//!   over [`LIFTED_LEG_OFF_CENTRE_M`] to the other side of the body's centre is that side's:
-//!   the leg asked for is lifted, and refused as such rather than the other dressed.
+//!   one whose section stands under its ankle joint. A lone standing leg with a section over
+//!   [`LIFTED_LEG_OFF_CENTRE_M`] to the other side of the body's centre is that side's: the leg
+//!   asked for is lifted, and refused as such rather than the other dressed.
 //! - **Ankle**: the smallest girth between the foot and a third of the way up; **knee**: the
 //!   smallest between 35 % and 70 % of the way from ankle to thigh top; either, within
 //!   [`SEAM_NEAR_M`] of sections through two pieces (a mannequin's joint), is their middle;
@@ -58,8 +58,8 @@ use super::slice::{piece_bit, Loop, Slicer};
 use super::Side;
 use crate::base::Stance;
 
-/// A lone standing leg whose thigh's top is this far to one side of the body's centre is that
-/// side's leg, metres: a leg alone is centred on itself, a body's thigh is about a hip's
+/// A lone standing leg whose section furthest from the body's centre is this far to one side
+/// is that side's leg, metres: a leg alone is centred on itself, a body's thigh is about a hip's
 /// half-width off (0.11 m on MHR's body standing on one leg, whose foot is 7 mm off).
 pub const LIFTED_LEG_OFF_CENTRE_M: f64 = 0.05;
 /// Narrowest and widest a standing leg's section just above its sole can be, metres: a child's
@@ -673,10 +673,16 @@ pub fn find_landmarks(
         .last()
         .ok_or("the leg has no closed cross-section")?;
     // One leg standing where a body has two: the other is lifted (a stride, a sit, a kneel).
-    // Its side is told by the top of its thigh against the body's centre (a foot stood on alone
-    // is under the centre); dressing it for the other would be a stocking on the wrong leg.
+    // Its side is told by its section furthest from the body's centre: a foot stood on alone is
+    // under the centre, and its thigh is off to its side; a thigh followed up to where a lifted
+    // one joins it, level with the hip, ends in the pelvis, and its foot is off to its side.
+    // Dressing it for the other side would be a stocking on the wrong leg.
     if seeds.len() == 1 && by_rig.is_none() {
-        let off_centre = leftness(&top) - area_centroid(positions, triangles).dot(&left);
+        let centre = area_centroid(positions, triangles).dot(&left);
+        let off_centre = (profile.iter())
+            .map(|r| leftness(r) - centre)
+            .max_by(|a, b| a.abs().total_cmp(&b.abs()))
+            .unwrap_or(0.0);
         let standing = if off_centre > 0.0 {
             Side::Left
         } else {
