@@ -58,6 +58,9 @@ use super::slice::{piece_bit, Loop, Slicer};
 use super::Side;
 use crate::base::Stance;
 
+/// The file holds more than the leg standing alone (a body, a lifted leg) where it rises this
+/// far above that leg's top, metres: more than a thigh's cut slanted 40°, less than a torso.
+pub const BODY_ABOVE_M: f64 = 0.15;
 /// A lone standing leg whose section furthest from the body's centre is this far to one side
 /// is that side's leg, metres: a leg alone is centred on itself, a body's thigh is about a hip's
 /// half-width off (0.11 m on MHR's body standing on one leg, whose foot is 7 mm off).
@@ -676,8 +679,10 @@ pub fn find_landmarks(
     // Its side is told by its section furthest from the body's centre: a foot stood on alone is
     // under the centre, and its thigh is off to its side; a thigh followed up to where a lifted
     // one joins it, level with the hip, ends in the pelvis, and its foot is off to its side.
-    // Dressing it for the other side would be a stocking on the wrong leg.
-    if seeds.len() == 1 && by_rig.is_none() {
+    // Dressing it for the other side would be a stocking on the wrong leg. A leg alone, with
+    // nothing of the file higher than its top but the slant of its cut, has no body's centre to
+    // be off (its own lean can be).
+    if seeds.len() == 1 && by_rig.is_none() && hi - top.s > BODY_ABOVE_M {
         let centre = area_centroid(positions, triangles).dot(&left);
         let off_centre = (profile.iter())
             .map(|r| leftness(r) - centre)

@@ -75,6 +75,9 @@ pub const LOWEST_ANKLE_M: f64 = 0.05;
 /// metres, where those cut a pointed foot: a standing leg's two ankles are within a centimetre
 /// or two.
 pub const POINTED_ANKLE_RISE_M: f64 = 0.04;
+/// The highest a standing leg's ankle lies above its lowest point, metres (an adult's, 7–15 cm):
+/// one higher, with no foot reaching out below it, has its foot pointed down under it.
+pub const HIGHEST_STANDING_ANKLE_M: f64 = 0.2;
 /// An ankle lies in this lowest share of the leg from the sole to the top of the thigh, as the
 /// landmarks look for it.
 const ANKLE_SHARE: f64 = 1.0 / 3.0;
@@ -167,23 +170,36 @@ pub fn straightened(leg: &Leg, side: Side) -> Result<Option<(RestPose, Bend)>, S
     // sections along up found in the foot, where the leg read as posed would be dressed to
     // there. A thin ankle alone (a mannequin's ball joint) is read as posed where it cannot be
     // straightened, as any leg is.
-    let foot_down = shin_ankle.is_some_and(|s| rise(s) >= POINTED_ANKLE_RISE_M);
+    // A foot pointed nearly straight down hangs under an ankle the sections along up find
+    // where it is: too high above the leg's lowest point for a standing ankle, and the foot too
+    // nearly under it to reach out as one.
+    let hanging = landmarks.foot.is_none() && landmarks.ankle.s - sole_s > HIGHEST_STANDING_ANKLE_M;
+    let foot_down = hanging || shin_ankle.is_some_and(|s| rise(s) >= POINTED_ANKLE_RISE_M);
     let why = match straighten(leg, side, &landmarks, shin_ankle, foot_down) {
         Ok(straight) => return Ok(straight),
         Err(why) => why,
     };
-    let (Some(what_failed), Some(shin), true) = (why.refusal(), shin_ankle, foot_down) else {
+    let (Some(what_failed), true) = (why.refusal(), foot_down) else {
         return Ok(None);
     };
+    let seen = match shin_ankle {
+        Some(shin) => format!(
+            "the leg's own sections put its ankle {:.3} m above its lowest point, {:.3} m \
+             around, where sections along up found one {:.3} m around {:.3} m up, in the foot",
+            shin.ankle.centre.coords.dot(&up) - sole_s,
+            shin.ankle.girth_m,
+            landmarks.ankle.girth_m,
+            landmarks.ankle.s - sole_s,
+        ),
+        None => format!(
+            "it hangs {:.3} m below its ankle, {:.3} m around",
+            landmarks.ankle.s - sole_s,
+            landmarks.ankle.girth_m,
+        ),
+    };
     Err(format!(
-        "its foot points down (the leg's own sections put its ankle {:.3} m above its lowest \
-         point, {:.3} m around, where sections along up found one {:.3} m around {:.3} m up, in \
-         the foot), and {what_failed}: fit the leg standing, export the character with its rig, \
-         or give the part to dress with --axis",
-        shin.ankle.centre.coords.dot(&up) - sole_s,
-        shin.ankle.girth_m,
-        landmarks.ankle.girth_m,
-        landmarks.ankle.s - sole_s,
+        "its foot points down ({seen}), and {what_failed}: fit the leg standing, export the \
+         character with its rig, or give the part to dress with --axis"
     ))
 }
 
@@ -274,7 +290,7 @@ fn straighten(
         &thigh_to,
     );
     let foot = match levelling {
-        None if shin_ankle.is_some() => return Err(Unread::Unlevelled),
+        None if shin_ankle.is_some() || foot_down => return Err(Unread::Unlevelled),
         Some(Levelling::NoFoot) if foot_down => return Err(Unread::NoFoot),
         Some(Levelling::Turn(foot)) if foot_down => Some(foot),
         // A leg ending at its ankle (no foot found) has nothing below it to level.
