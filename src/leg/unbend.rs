@@ -12,14 +12,15 @@
 //!   ([`super::centreline`]); their narrowest above the heel is the ankle where it lies
 //!   [`POINTED_ANKLE_RISE_M`] or more higher, or where the landmarks' is thinner than a standing
 //!   leg's (a mannequin's ball joint), in the lowest third of the leg, and the knee is then
-//!   read from those sections.
+//!   read from those sections. An ankle found over [`HIGHEST_STANDING_ANKLE_M`] above the
+//!   lowest point with no foot reaching out from it has its foot hanging under it, pointed.
 //! - **Turns**: the thigh about the top of the thigh to stand along up (a lone leg's, whose up
 //!   its own bent shape tilts, is left as it leans, and the straight leg's up found again); the
 //!   shin about the knee to continue it (each the least turn between the two directions); the
 //!   foot up about the ankle's hinge (square to the plane of the ankle, toe tip and back of the
 //!   heel, which pointing keeps) until its heel and ball stand level, where that takes
-//!   [`BENT_DEG`] or more (any turn, for an ankle the shin's own sections put higher; none
-//!   where the ball is not below the heel as posed, or the landmarks find no foot).
+//!   [`BENT_DEG`] or more (any turn, for an ankle the shin's own sections put higher or a foot
+//!   hanging; none where the ball is not below the heel as posed, or no foot is found).
 //! - **Blend**: each vertex of the leg (below the top of the thigh: the piece at the ankle and
 //!   the pieces along the limb that touch it, a mannequin's foot, shin, knee ball and thigh;
 //!   not the other leg) moves by its bones' turns blended as linear blend skinning blends them,
@@ -37,8 +38,8 @@
 //! straight axis, or not as long as the posed one along its bones (and where no triangle lies
 //! below the thigh top, or a vertex's blend cannot be inverted). The fit then reads the leg as it
 //! is and says what it saw. An error instead where the shin's own sections put the ankle
-//! [`POINTED_ANKLE_RISE_M`] or more above the one sections along up found (the foot points
-//! down) and the foot below it cannot be levelled or the straightened leg is not read as
+//! [`POINTED_ANKLE_RISE_M`] or more above the one sections along up found, or the foot hangs
+//! (it points down), and the foot cannot be levelled or the straightened leg is not read as
 //! standing: read as posed, its stocking would end in the foot, toes bare.
 
 use nalgebra::{Matrix4, Point3, Rotation3, Translation3, Unit, Vector3};
