@@ -25,7 +25,8 @@ strides=$?
   echo
   echo "## Posed characters"
   echo
-  echo "The rigged MakeHuman woman (\`samples/rigged/\`) posed by her joint nodes, exported with her"
+  echo "The rigged MakeHuman woman (\`samples/rigged/\`) posed by her joint nodes (her legs, or both"
+  echo "arms raised over her head), exported with her"
   echo "skin (rigged) or as the posed mesh alone (baked), her armature as exported, turned to Z up,"
   echo "scaled to centimetres (read with \`--units cm\`) or turned 120° about up"
   echo "(\`tests/integration/rig.rs\`, [decision 0077](decisions/0077-rigged-legs-are-fitted-at-rest-and-carried-into-the-pose.md))."
@@ -34,8 +35,9 @@ strides=$?
   echo
   echo "## Strides without a rig"
   echo
-  echo "Each left leg of the zoo (cut open, closed, slanted, in pieces, the whole mannequin's with"
-  echo "its trunk and right leg still; the procedural leg closed, open, slanted, in pieces) posed"
+  echo "Each left leg of the zoo (of both body models: cut open, closed, slanted, in pieces, the"
+  echo "whole mannequin's with its trunk and right leg still; the procedural leg closed, open,"
+  echo "slanted, in pieces) posed"
   echo "as a stride with no rig, its knee bent back and its hip flexed forward, or its foot"
   echo "pointed down, by the degrees named (a piece turned whole, a mesh across a joint blended over"
   echo "4 cm), fitted at the defaults (\`zoo::the_stride_zoo_table\`; the bend read is"

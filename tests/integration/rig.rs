@@ -556,7 +556,7 @@ fn posed_variant(pose: Pose, rigging: Rigging, frame: RigFrame) -> (String, bool
 }
 
 #[test]
-#[ignore = "the posed zoo, 80 fits: the long profile (docs/TESTING.md)"]
+#[ignore = "the posed zoo, 88 fits: the long profile (docs/TESTING.md)"]
 fn the_posed_zoo_fits_every_pose_the_skin_bends_cleanly() {
     let only = std::env::var("KNITFIT_ZOO_ONLY").unwrap_or_default();
     let mut rows = vec![

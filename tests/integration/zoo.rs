@@ -1076,7 +1076,7 @@ const STRIDES: [(f64, f64, f64); 7] = [
 ];
 
 #[test]
-#[ignore = "the stride zoo, 63 fits at the defaults: the long profile (docs/TESTING.md)"]
+#[ignore = "the stride zoo, 98 fits at the defaults: the long profile (docs/TESTING.md)"]
 fn the_stride_zoo_table() {
     // Each left leg of the zoo, cut or in pieces, posed without a rig at five strides (knee,
     // hip degrees) and on a foot pointed 45° (a high heel's) and 70° (a dancer's), fitted at
