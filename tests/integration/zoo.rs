@@ -1064,6 +1064,30 @@ fn a_foot_pointed_down_without_a_rig_is_turned_back_to_stand_and_dressed_to_its_
     }
 }
 
+#[test]
+fn a_slim_foot_hanging_under_its_ankle_is_turned_back_not_dressed_to_the_ankle() {
+    // MHR's left leg closed at its cut, its foot pointed 70°: the foot is slim enough to hang
+    // under the ankle, so sections along up find the ankle where it is, 24.5 cm above the toe
+    // tip, and no foot reaching out from it. It was dressed to the ankle, exit 0, 24 cm short
+    // of the toe; the foot is now turned back about its hinge before the fit (the plan says).
+    let (meshes, source) = formed(Form::MhrLeftLegClosed);
+    let (posed, _) = strided(&meshes, source, (0.0, 0.0, 70.0));
+    let dir = tempfile::tempdir().unwrap();
+    let leg = write_raw_meshes(dir.path(), "leg.glb", &posed);
+    let out = knitfit(
+        dir.path(),
+        &["plan", "--leg", leg.to_str().unwrap(), "--json"],
+    );
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let plan: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let foot = plan["leg"]["straightened"]["foot_deg"].as_f64();
+    assert!(foot.is_some_and(|f| (f - 70.0).abs() < 10.0), "{plan}");
+    assert!(
+        !plan["landmarks"]["toe_tip"].is_null(),
+        "the rest pose has its foot"
+    );
+}
+
 /// The stride zoo's poses: knee, hip and foot degrees.
 const STRIDES: [(f64, f64, f64); 7] = [
     (30.0, 0.0, 0.0),
