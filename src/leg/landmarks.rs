@@ -258,6 +258,8 @@ impl Landmarks {
             })
     }
 
+    /// The stance the character is pictured in ([`Stance::pictured`]): glTF's facing, +Z, where
+    /// its feet do not say.
     pub fn stance(&self) -> Stance {
         let up = Vector3::from(self.up);
         let facing = self
@@ -1194,6 +1196,38 @@ mod tests {
         let body = anatomical_up(&positions, &triangles).unwrap();
         assert!(body.up.dot(&Vector3::y()) > 0.99, "{body:?}");
         assert!(!body.on_its_feet && body.clear(), "{body:?}");
+    }
+
+    #[test]
+    fn a_joint_found_near_where_two_pieces_overlap_is_their_middle() {
+        // Sections every 2.5 mm up a limb, through two pieces between 0.48 and 0.52 m.
+        let profile: Vec<Ring> = (0..=400)
+            .map(|k| {
+                let s = k as f64 * 0.0025;
+                Ring {
+                    s,
+                    centre: [0.0, s, 0.0],
+                    girth_m: 0.3,
+                    gap_m: f64::INFINITY,
+                    pieces: if (0.48..=0.52).contains(&s) {
+                        0b11
+                    } else {
+                        0b01
+                    },
+                }
+            })
+            .collect();
+        let at = |s: f64| profile[(s / 0.0025).round() as usize];
+        // Found 1.5 cm below the seam (the narrower piece's section below the wider one): the
+        // seam's middle. Found 5 cm away: where it was found.
+        assert!((at_the_seam(&profile, at(0.465)).s - 0.5).abs() < 0.003);
+        assert!((at_the_seam(&profile, at(0.5)).s - 0.5).abs() < 0.003);
+        assert_eq!(at_the_seam(&profile, at(0.43)).s, at(0.43).s);
+        // A limb in one piece keeps what was found.
+        let whole: Vec<Ring> = (profile.iter())
+            .map(|r| Ring { pieces: 0b01, ..*r })
+            .collect();
+        assert_eq!(at_the_seam(&whole, at(0.465)).s, at(0.465).s);
     }
 
     /// [`legs_with_feet`] under a trunk and a head, with arms 0.2 m around hanging at its sides

@@ -141,8 +141,8 @@ impl Bend {
 /// the pose; `None` where it stands straight enough or cannot be read.
 ///
 /// Errors: a foot seen pointed down (the shin's own sections put its ankle
-/// [`POINTED_ANKLE_RISE_M`] or more above where sections along up cut the foot) that is not
-/// turned back to stand: read as posed, its stocking would end in the foot, open, with the
+/// [`POINTED_ANKLE_RISE_M`] or more above where sections along up cut the foot, or it hangs
+/// under an ankle over [`HIGHEST_STANDING_ANKLE_M`] up) that is not turned back to stand: read as posed, its stocking would end in the foot, open, with the
 /// toes bare. The message says what was seen and what to do.
 pub fn straightened(leg: &Leg, side: Side) -> Result<Option<(RestPose, Bend)>, String> {
     let up = leg.up;
@@ -167,14 +167,14 @@ pub fn straightened(leg: &Leg, side: Side) -> Result<Option<(RestPose, Bend)>, S
         (rise(s) >= POINTED_ANKLE_RISE_M || landmarks.ankle.girth_m < MIN_STANDING_GIRTH_M)
             && rise(s) + landmarks.ankle.s - sole_s < ANKLE_SHARE * (landmarks.thigh_top.s - sole_s)
     });
-    // Refused only where the foot clearly points down: the shin's ankle well above the one
-    // sections along up found in the foot, where the leg read as posed would be dressed to
-    // there. A thin ankle alone (a mannequin's ball joint) is read as posed where it cannot be
-    // straightened, as any leg is.
     // A foot pointed nearly straight down hangs under an ankle the sections along up find
     // where it is: too high above the leg's lowest point for a standing ankle, and the foot too
     // nearly under it to reach out as one.
     let hanging = landmarks.foot.is_none() && landmarks.ankle.s - sole_s > HIGHEST_STANDING_ANKLE_M;
+    // Refused only where the foot clearly points down: hanging, or the shin's ankle well above
+    // the one sections along up found in the foot, where the leg read as posed would be dressed
+    // to there. A thin ankle alone (a mannequin's ball joint) is read as posed where it cannot
+    // be straightened, as any leg is.
     let foot_down = hanging || shin_ankle.is_some_and(|s| rise(s) >= POINTED_ANKLE_RISE_M);
     let why = match straighten(leg, side, &landmarks, shin_ankle, foot_down) {
         Ok(straight) => return Ok(straight),
@@ -204,7 +204,7 @@ pub fn straightened(leg: &Leg, side: Side) -> Result<Option<(RestPose, Bend)>, S
     ))
 }
 
-/// Why a leg the shin's own sections found cannot be straightened.
+/// Why a leg whose joints were read cannot be straightened.
 enum Unread {
     /// No turn of its foot up to [`MAX_FOOT_TURN_DEG`] stands it on its heel and its ball.
     Unlevelled,
@@ -233,9 +233,9 @@ impl Unread {
 }
 
 /// [`straightened`] once its ankle is known: the landmarks', or `shin_ankle`, the shin's own
-/// sections', where those are used; `foot_down` where they put it well above the landmarks'
-/// (the foot points down, and must be turned back). `Ok(None)` where the leg stands straight enough; the
-/// error says why it cannot be read.
+/// sections', where those are used; `foot_down` where the foot points down (hanging, or the
+/// shin's ankle well above the landmarks') and must be turned back. `Ok(None)` where the leg
+/// stands straight enough; the error says why it cannot be read.
 fn straighten(
     leg: &Leg,
     side: Side,
