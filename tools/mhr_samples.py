@@ -15,7 +15,9 @@ point at y = 0:
 - samples/mhr/body.glb: the rest body (T-pose);
 - samples/mhr/arms_raised.glb: subject 2, standing with its feet apart, knees a little bent and
   both arms raised over the head;
-- samples/mhr/one_leg.glb: subject 1, standing on its left leg, the right knee raised, arms up.
+- samples/mhr/one_leg.glb: subject 1, standing on its left leg, the right knee raised, arms up;
+- samples/mhr/kneeling.glb: subject 0, kneeling, its hands bent flat over its head (read upside
+  down, the hands look like feet).
 
 Run (from the repository root; the MHR checkout at commit 5deda6a69f30019915ded6299c7aab74acaca57f):
     python3 -m venv tools/.venv
@@ -72,6 +74,7 @@ def main():
     write(args.out / "body.glb", rest / 100.0, triangles)
     write(args.out / "arms_raised.glb", posed(args.mhr, 2), triangles)
     write(args.out / "one_leg.glb", posed(args.mhr, 1), triangles)
+    write(args.out / "kneeling.glb", posed(args.mhr, 0), triangles)
 
 
 if __name__ == "__main__":

@@ -84,9 +84,25 @@ pub fn place(
                 place.side,
                 leg.rig.as_ref(),
             )
-            .map_err(|no| Error::Leg {
-                path: leg.path.clone(),
-                message: format!("cannot find the leg's landmarks: {}", advised(&no, leg)),
+            .map_err(|no| {
+                // Read only where up is in doubt: turning it over is advice only if that way
+                // up shows a leg.
+                let leg_the_other_way = no.up_in_doubt
+                    && find_landmarks(
+                        &leg.positions,
+                        &leg.triangles,
+                        -leg.up,
+                        place.side,
+                        leg.rig.as_ref(),
+                    )
+                    .is_ok();
+                Error::Leg {
+                    path: leg.path.clone(),
+                    message: format!(
+                        "cannot find the leg's landmarks: {}",
+                        advised(&no, leg, leg_the_other_way)
+                    ),
+                }
             })
         })?),
     };
@@ -118,10 +134,20 @@ pub fn place(
 
 /// What was seen instead of a leg, and where up is in doubt, the way out that fits how up was
 /// chosen ([`Leg::up_chosen`]): an up `auto` chose can be overruled by naming the file's axis;
-/// a given one can be left to the anatomy. Never the advice to do what the user already did.
-fn advised(no: &NoLandmarks, leg: &Leg) -> String {
+/// a given one can be left to the anatomy. Never the advice to do what the user already did,
+/// nor to turn up over where `leg_the_other_way` says that shows no leg either (a kneeling
+/// body: its hands read as feet one way up, its shins lying on the floor the other).
+fn advised(no: &NoLandmarks, leg: &Leg, leg_the_other_way: bool) -> String {
     if !no.up_in_doubt {
         return no.seen.clone();
+    }
+    if !leg_the_other_way {
+        return format!(
+            "{}; nor does the other way up show a leg: a character that kneels, sits or lies \
+             is read only with its rig (export it with its skin, or fit it standing); else give \
+             the part to dress with --axis",
+            no.seen
+        );
     }
     match leg.up_from {
         UpFrom::Anatomy | UpFrom::Convention => format!(
@@ -234,7 +260,7 @@ mod tests {
         // Up found from the anatomy: name the file's own up axis, not "auto" again.
         leg.up_axis = UpAxis::PosZ;
         leg.up_from = UpFrom::Anatomy;
-        let found = advised(&upside_down, &leg);
+        let found = advised(&upside_down, &leg, true);
         assert!(
             found.starts_with("the leg found narrows upwards: "),
             "{found}"
@@ -247,7 +273,7 @@ mod tests {
         // Up given: leaving it to the anatomy is a way out.
         leg.up_axis = UpAxis::NegY;
         leg.up_from = UpFrom::Given;
-        let given = advised(&upside_down, &leg);
+        let given = advised(&upside_down, &leg, true);
         assert!(given.contains("gives it as the file's -y"), "{given}");
         assert!(
             given.contains("\"auto\" to find it from the anatomy"),
@@ -257,7 +283,7 @@ mod tests {
         // is what gave it.
         leg.up_axis = UpAxis::PosY;
         leg.up_from = UpFrom::Convention;
-        let convention = advised(&upside_down, &leg);
+        let convention = advised(&upside_down, &leg, true);
         assert!(
             convention.contains("which took +y, glTF's convention"),
             "{convention}"
@@ -267,8 +293,15 @@ mod tests {
             "{convention}"
         );
         assert!(!convention.contains("or \"auto\""), "{convention}");
+        // Where the other way up shows no leg either, turning it over is no way out.
+        let neither = advised(&upside_down, &leg, false);
+        assert!(
+            neither.contains("nor does the other way up show a leg"),
+            "{neither}"
+        );
+        assert!(!neither.contains("up may be the wrong way"), "{neither}");
         // What does not put up in doubt is said as seen.
         let other = NoLandmarks::from("no closed cross-section");
-        assert_eq!(advised(&other, &leg), "no closed cross-section");
+        assert_eq!(advised(&other, &leg, true), "no closed cross-section");
     }
 }

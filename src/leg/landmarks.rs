@@ -13,7 +13,8 @@
 //!   Only where the ends differ by [`CLEAR_ENDS_RATIO`] or more (a limb's, 1.4 to 3.3) does the
 //!   shape overrule glTF's +Y ([`BodyUp::clear`]). Raised arms make the hands the slimmer end:
 //!   where only read the other way up does a leg stand on a foot
-//!   ([`Landmarks::stands_on_a_foot`]), up is that way ([`BodyUp::on_its_feet`]).
+//!   ([`Landmarks::stands_on_a_foot`]), up is that way ([`BodyUp::on_its_feet`]); a "leg"
+//!   shorter than [`MIN_LEG_LENGTH_PER_GIRTH`] of its top's girth is an arm, not a leg.
 //! - **The legs**: the closed loops of the section [`SEED_HEIGHT_M`] above the lowest point, each
 //!   followed up and down from slice to slice: the loop that encloses the last centre, or else
 //!   the nearest within [`MAX_STEP_M`]. Following stops where the mesh is cut, or where two legs'
@@ -40,8 +41,7 @@
 //!   the leg's own centre line than another leg's: the other foot is within reach, and may be
 //!   lower.
 //!
-//! The sections are of the skin without a flat cap over the cut ([`super::caps`]): a leg closed
-//! at its cut is read as the open cut.
+//! Sections skip a flat cap over the cut ([`super::caps`]): a leg closed there reads as open.
 //!
 //! Why this holds on character exports: girths are convex-hull perimeters of loops, so folds,
 //! dents and small self-intersections do not move them; loops are walked on the cleaned mesh
@@ -108,6 +108,11 @@ pub const GIRTH_JUMP: f64 = 1.5;
 pub const JUMP_SPAN_M: f64 = 0.02;
 /// Smallest girth of a loop that can be a leg, metres.
 pub const MIN_LEG_GIRTH_M: f64 = 0.08;
+/// A leg on its foot reaches from its sole to the top of its thigh at least this share of the
+/// girth there: the samples' and the zoo's adults 1.2–1.5, a heavy thigh's (0.8 m around on a
+/// 0.75 m leg) 0.9. An arm read upside down, its hand taken for a foot and its shoulders with
+/// the head for a crotch, reaches half of it.
+pub const MIN_LEG_LENGTH_PER_GIRTH: f64 = 0.7;
 /// A foot reaches this many ankle radii from the ankle's centre line.
 pub const FOOT_REACH: f64 = 2.0;
 /// A standing foot's toe tip lies no higher above the sole than this share of its reach forward
@@ -749,6 +754,18 @@ pub fn find_landmarks(
             seen: format!(
                 "the leg found is only {leg_height:.3} m from its lowest point to the top of its \
                  thigh"
+            ),
+            up_in_doubt: true,
+        });
+    }
+    // A leg is longer than its thigh is around; an arm over a head read upside down is not.
+    if foot.is_some() && leg_height < MIN_LEG_LENGTH_PER_GIRTH * top.girth_m {
+        return Err(NoLandmarks {
+            seen: format!(
+                "the leg found is {leg_height:.3} m from its sole to the top of its thigh, \
+                 which is {:.3} m around: too short for a leg on its foot (an arm with its hand \
+                 read as a foot?)",
+                top.girth_m
             ),
             up_in_doubt: true,
         });

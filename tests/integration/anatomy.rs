@@ -1116,6 +1116,37 @@ fn a_body_standing_on_one_leg_is_not_dressed_on_it_for_the_lifted_side() {
     );
 }
 
+#[test]
+fn a_kneeling_body_with_its_hands_over_its_head_is_refused_not_dressed_on_an_arm() {
+    // MHR's subject 0 kneels, its hands bent flat over its head: its slimmer end is its hands,
+    // which read upside down as feet on 0.32 m "legs" (the arms, the head between them for a
+    // crotch), and the right way up its shins lie on the floor. Neither way up stands a leg: a
+    // refusal that says so, never a stocking on an arm, whether it ends at the toe or the ankle.
+    let dir = tempfile::tempdir().unwrap();
+    let body = sample("mhr/kneeling.glb");
+    for side in ["left", "right"] {
+        for bottom in [None, Some("ankle")] {
+            let mut args = vec!["plan", "--leg", body.to_str().unwrap(), "--side", side];
+            args.extend(bottom.iter().flat_map(|b| ["--bottom", b]));
+            let out = knitfit(dir.path(), &args);
+            assert_eq!(
+                out.status.code(),
+                Some(2),
+                "{side} {bottom:?}: {}",
+                stderr(&out)
+            );
+            let said = stderr(&out);
+            assert!(
+                said.contains("too short for a leg on its foot")
+                    && said.contains("nor does the other way up show a leg")
+                    && !said.contains("up may be the wrong way"),
+                "{side} {bottom:?}: {said}"
+            );
+            assert_eq!(said.lines().count(), 1, "{said}");
+        }
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // 4. A messy export, dressed to the toe.
 
