@@ -15,9 +15,9 @@
 //!   where only read the other way up does a leg stand on a foot
 //!   ([`Landmarks::stands_on_a_foot`]), up is that way ([`BodyUp::on_its_feet`]); a "leg"
 //!   shorter than [`MIN_LEG_LENGTH_PER_GIRTH`] of its top's girth is an arm, not a leg.
-//! - **The legs**: the closed loops of the section [`SEED_HEIGHT_M`] above the lowest point, each
-//!   followed up and down from slice to slice: the loop that encloses the last centre, or else
-//!   the nearest within [`MAX_STEP_M`]. Following stops where the mesh is cut, or where two legs'
+//! - **The legs**: the closed loops [`SEED_HEIGHT_M`] above the lowest point (a foot cut there at
+//!   its sole is read from higher up), followed up and down: the loop enclosing the last centre, or
+//!   else the nearest within [`MAX_STEP_M`]. Following stops where the mesh is cut, or where two legs'
 //!   loops become one (the crotch), or a leg's girth jumps there once it has risen a shin's
 //!   length. Loops thinner than an ankle that meet within [`TOES_JOIN_M`] are the toes of one
 //!   foot standing on them (a stride's back foot); two that overlap as circles of their girths
@@ -106,6 +106,10 @@ pub const CLEAR_ENDS_RATIO: f64 = 1.2;
 pub const GIRTH_JUMP: f64 = 1.5;
 /// See [`GIRTH_JUMP`], metres.
 pub const JUMP_SPAN_M: f64 = 0.02;
+/// A leg whose seed lies less than this above its lowest section, metres, was cut near its
+/// sole (a flat foot beside one on its toes, lower; a standing one's seed is [`SEED_HEIGHT_M`]
+/// up): its foot is read from a seed's height higher.
+const FLAT_FOOT_BELOW_SEED_M: f64 = 0.04;
 /// Smallest girth of a loop that can be a leg, metres.
 pub const MIN_LEG_GIRTH_M: f64 = 0.08;
 /// A leg on its foot reaches from its sole to the top of its thigh at least this share of the
@@ -602,7 +606,21 @@ pub fn find_landmarks(
             low.reverse();
             low.push(seeds[i]);
             let on_limb = on_pieces(&slicer, &low);
-            foot(positions, &up, &low, &seeds, i, on_limb)
+            let near_its_sole = seeds[i].s - low[0].s < FLAT_FOOT_BELOW_SEED_M;
+            let along_a_foot = seeds[i].girth_m > MAX_STANDING_GIRTH_M;
+            foot(positions, &up, &low, &seeds, i, on_limb).or_else(|| {
+                // A flat foot beside one on its toes, a few centimetres lower, is first cut near
+                // its sole or along its length, with no foot below the section: it is read from
+                // its section a seed's height higher, as a standing pair's is.
+                (near_its_sole || along_a_foot).then_some(())?;
+                let top = seeds[i].s + SEED_HEIGHT_M;
+                let higher = heights(seeds[i].s, top, SLICE_STEP_M).skip(1);
+                let above = follow(&slicer, &[seeds[i]], higher, false).rings[0].clone();
+                let ankle = *above.last().filter(|r| r.s >= top - SLICE_STEP_M)?;
+                (ankle.girth_m <= MAX_STANDING_GIRTH_M).then_some(())?;
+                low.extend(above);
+                foot(positions, &up, &low, &seeds, i, on_pieces(&slicer, &low))
+            })
         })
         .collect();
     let soles: Vec<Option<f64>> = down.rings.iter().map(|r| Some(r.last()?.s)).collect();
