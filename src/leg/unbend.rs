@@ -142,8 +142,9 @@ impl Bend {
 ///
 /// Errors: a foot seen pointed down (the shin's own sections put its ankle
 /// [`POINTED_ANKLE_RISE_M`] or more above where sections along up cut the foot, or it hangs
-/// under an ankle over [`HIGHEST_STANDING_ANKLE_M`] up) that is not turned back to stand: read as posed, its stocking would end in the foot, open, with the
-/// toes bare. The message says what was seen and what to do.
+/// under an ankle over [`HIGHEST_STANDING_ANKLE_M`] up) that is not turned back to stand: read
+/// as posed, its stocking would end in the foot, open, with the toes bare. The message says
+/// what was seen and what to do.
 pub fn straightened(leg: &Leg, side: Side) -> Result<Option<(RestPose, Bend)>, String> {
     let up = leg.up;
     let Ok(landmarks) = find_landmarks(&leg.positions, &leg.triangles, up, side, leg.rig.as_ref())

@@ -909,6 +909,19 @@ fn the_ci_subset_covers_every_value_of_every_axis_once_each_variant() {
         .all(|f| subset.iter().filter(|v| v.frame == *f).count() >= 6));
 }
 
+/// A turn of `degrees` about the line through `pivot` along X (the body's left): a joint's
+/// bend in the sagittal plane, positive turning +Z (forward) down.
+fn turn_about(pivot: &Point3<f64>, degrees: f64) -> nalgebra::IsometryMatrix3<f64> {
+    let turn = Rotation3::from_axis_angle(&Vector3::x_axis(), degrees.to_radians());
+    nalgebra::Translation3::from(pivot.coords) * turn * nalgebra::Translation3::from(-pivot.coords)
+}
+
+/// The weight across a joint's 4 cm band: 0 to 1, smooth at both ends.
+fn smoothstep(x: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    x * x * (3.0 - 2.0 * x)
+}
+
 /// `meshes` (a left leg, cut or in pieces, or a mannequin) in a mannequin's stride: the foot
 /// pointed `foot_deg` down about its ankle (2 cm under the ankle's section), the shin and foot
 /// turned `knee_deg` back about the knee, then the whole leg `hip_deg` forward about the top of
@@ -927,25 +940,15 @@ fn strided(
     let top = Point3::from(source.truth.thigh_top.centre.m);
     // The pieces of the left leg, by their centre: all but a mannequin's trunk and right leg.
     let on_the_leg = |c: &Vector3<f64>| c.y < top.y && c.x > top.x - 0.1;
-    let about = |pivot: &Point3<f64>, degrees: f64| {
-        let turn = Rotation3::from_axis_angle(&Vector3::x_axis(), degrees.to_radians());
-        nalgebra::Translation3::from(pivot.coords)
-            * turn
-            * nalgebra::Translation3::from(-pivot.coords)
-    };
     let (pointed, bent, flexed) = (
-        about(&ankle, foot_deg),
-        about(&knee, knee_deg),
-        about(&top, -hip_deg),
+        turn_about(&ankle, foot_deg),
+        turn_about(&knee, knee_deg),
+        turn_about(&top, -hip_deg),
     );
     let pose = |p: &Point3<f64>, on_shin: f64, on_foot: f64| {
         let p = Point3::from(p.coords * (1.0 - on_foot) + (pointed * p).coords * on_foot);
         let at_knee = p.coords * (1.0 - on_shin) + (bent * p).coords * on_shin;
         flexed * Point3::from(at_knee)
-    };
-    let smooth = |x: f64| {
-        let x = x.clamp(0.0, 1.0);
-        x * x * (3.0 - 2.0 * x)
     };
     let posed = (meshes.iter())
         .map(|m| {
@@ -973,8 +976,8 @@ fn strided(
                         ),
                         false => pose(
                             p,
-                            smooth((knee.y - p.y + 0.02) / 0.04),
-                            smooth((ankle.y - p.y + 0.02) / 0.04),
+                            smoothstep((knee.y - p.y + 0.02) / 0.04),
+                            smoothstep((ankle.y - p.y + 0.02) / 0.04),
                         ),
                     })
                     .collect(),
@@ -1095,13 +1098,7 @@ fn a_slim_foot_hanging_under_its_ankle_is_turned_back_not_dressed_to_the_ankle()
 fn foot_pointed(meshes: &[RawMesh], source: &Source, side: f64, degrees: f64) -> Vec<RawMesh> {
     let truth = source.truth.ankle.centre.m;
     let pivot = Point3::new(side * truth[0], truth[1] - 0.02, truth[2]);
-    let turn = nalgebra::Translation3::from(pivot.coords)
-        * Rotation3::from_axis_angle(&Vector3::x_axis(), degrees.to_radians())
-        * nalgebra::Translation3::from(-pivot.coords);
-    let smooth = |x: f64| {
-        let x = x.clamp(0.0, 1.0);
-        x * x * (3.0 - 2.0 * x)
-    };
+    let turn = turn_about(&pivot, degrees);
     (meshes.iter())
         .map(|m| {
             let n = m.positions.len() as f64;
@@ -1120,7 +1117,8 @@ fn foot_pointed(meshes: &[RawMesh], source: &Source, side: f64, degrees: f64) ->
             let weight = |p: &Point3<f64>| match piece {
                 true => f64::from(u8::from(centre.y < pivot.y - 0.01)),
                 false => {
-                    smooth((pivot.y - p.y + 0.02) / 0.04) * f64::from(u8::from(side * p.x > 0.0))
+                    smoothstep((pivot.y - p.y + 0.02) / 0.04)
+                        * f64::from(u8::from(side * p.x > 0.0))
                 }
             };
             RawMesh {
